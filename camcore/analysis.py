@@ -1,0 +1,141 @@
+"""One pass from a design to every result of the paper: the analysis pipeline.
+
+design -> motion program -> face contacts and profile -> forces -> stress -> checks
+(-> optional independent geometric verification). Everything is vectorized over
+the cam-angle grid; the same code path serves all four followers.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import checks, forces, motion, profile
+from .contact import contact_stress
+from .model import Design, FollowerKind
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """Results over the cam-angle grid theta (N points); per-face arrays are (n_faces, N).
+
+    SI units throughout: metres, radians, newtons, pascals.
+    """
+
+    design: Design
+    geo: profile.Geometry
+    prog: motion.Program
+    in_contact: np.ndarray  # (F, N) bool
+    point_world: np.ndarray  # (F, N, 2) contact point of each face in the world frame
+    point_body: np.ndarray  # (F, N, 2) the same point in the cam frame
+    normal: np.ndarray  # (F, N, 2) unit common normal (cam -> follower), world frame
+    pressure_angle: np.ndarray  # (F, N) [rad], signed (see camcore.profile)
+    rho: np.ndarray  # (F, N) cam radius of curvature at the contact point [m] (Eq. 21)
+    part: np.ndarray  # (F, N) profile segment the contact point lies on
+    Ft: np.ndarray  # (N,) total load on the follower [N] (Eq. 29)
+    guide: forces.GuideSolution  # F1, F2, mode per angle
+    FN: np.ndarray  # (F, N) contact force at each face [N], 0 where not touching
+    stress: np.ndarray  # (F, N) Hertz stress [Pa] (Eq. 42)
+    profile: profile.Polyline
+    stations: np.ndarray  # (6,) cam angles of stations 0-5 [rad]
+    violations: list[checks.Violation] = field(default_factory=list)
+    lift_error: float | None = None  # max |lift - S| [m] of the geometric check
+
+    @property
+    def theta(self) -> np.ndarray:
+        return self.prog.theta
+
+    @property
+    def n_contacts(self) -> np.ndarray:
+        return self.in_contact.sum(axis=0)
+
+    @property
+    def valid(self) -> bool:
+        return not self.violations
+
+    def primary(self, per_face: np.ndarray) -> np.ndarray:
+        """A per-face quantity at the face that touches (the rise face when both do)."""
+        return np.where(self.in_contact[0], per_face[0], per_face[-1])
+
+
+def stations(design: Design, geo: profile.Geometry) -> np.ndarray:
+    """Cam angles of stations 0-5 [rad] (Sec. 4, Fig. 4; station 3 with the sign fixed).
+
+    0: 0; 1: beta_r; 2: beta_r + 2 psi_h; 3: beta_r + beta_h - 2 psi_h;
+    4: beta_r + beta_h; 5: beta_r + beta_h + beta_f.
+    """
+    t1, t2, t3, _ = motion.boundaries_rad(design)
+    return np.array([0.0, t1, t1 + 2 * geo.psi_h, t2 - 2 * geo.psi_h, t2, t3])
+
+
+def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None) -> Analysis:
+    """Run the paper's whole method on ``design``.
+
+    Parameters
+    ----------
+    design : the design (validated pydantic model).
+    verify : also run the independent geometric check (camcore.verify).
+    theta : cam angles [rad]; default: the design's grid (0 .. 2 pi at its resolution,
+        with every segment boundary on the grid).
+    """
+    th = motion.theta_grid(design) if theta is None else np.asarray(theta, dtype=float)
+    geo = profile.geometry(design)
+    prog = motion.program(design, th)
+    contacts = [profile.face_contact(geo, f, prog) for f in geo.faces]
+    normal = np.stack([c.normal for c in contacts])
+    point_world = np.stack([c.point for c in contacts])
+    point_body = np.stack([profile.to_body(prog.theta, p) for p in point_world])
+    rho = np.stack([profile.curvature_radius(geo, f, prog) for f in geo.faces])
+    windows = profile.contact_windows(geo, prog, design)
+    parts = profile.profile_part(geo, prog)
+
+    Ft = forces.total_load(design, prog.S, prog.A)
+    both = windows.all(axis=0) & (len(geo.faces) == 2)
+    lead = np.where(windows[0], 0, len(geo.faces) - 1)  # the touching face when only one
+    idx = np.arange(th.size)
+    x_c = np.array([f.x_c for f in geo.faces])[lead]
+    one = forces.one_contact(design, Ft, normal[lead, idx], x_c, geo.r, prog.S, prog.V)
+    two = forces.two_contacts(Ft, normal[0])
+    guide = forces.GuideSolution(
+        *(np.where(both, getattr(two, k), getattr(one, k))
+          for k in ("F1", "F2", "FN", "mode", "side1", "side2"))
+    )
+    FN = np.where(windows, guide.FN[None, :], 0.0)
+    touching = windows.any(axis=0)
+    guide = forces.GuideSolution(
+        np.where(touching, guide.F1, 0.0), np.where(touching, guide.F2, 0.0),
+        np.where(touching, guide.FN, 0.0), guide.mode, guide.side1, guide.side2,
+    )
+    stress = contact_stress(design, FN, rho)
+    poly = profile.assemble(prog, point_body, windows, parts)
+
+    result = Analysis(
+        design=design, geo=geo, prog=prog, in_contact=windows, point_world=point_world,
+        point_body=point_body, normal=normal,
+        pressure_angle=np.stack([c.pressure_angle for c in contacts]), rho=rho, part=parts,
+        Ft=Ft, guide=guide, FN=FN, stress=stress, profile=poly, stations=stations(design, geo),
+    )
+    lift_error = None
+    if verify:
+        from .verify import max_lift_error
+
+        lift_error = max_lift_error(result)
+    violations = checks.run_all(result, lift_error)
+    return _replace(result, violations=violations, lift_error=lift_error)
+
+
+def _replace(a: Analysis, **kw) -> Analysis:
+    from dataclasses import replace
+
+    return replace(a, **kw)
+
+
+def compare(design: Design, verify: bool = False) -> dict[FollowerKind, Analysis]:
+    """The same design with each of the four followers (Table 1, Figs. 11-13)."""
+    return {k: analyze(design.with_kind(k), verify=verify) for k in FollowerKind}
+
+
+def deg(x) -> np.ndarray:
+    return np.asarray(x) * (180.0 / math.pi)

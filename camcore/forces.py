@@ -1,0 +1,108 @@
+"""Follower forces with guide friction (Section 5, Eqs. 29-41).
+
+One contact (rise, fall, and the one-contact dwell windows): the unknowns are the
+guide reactions F1 (lower end of the guide), F2 (upper end) and the contact force
+F_N. Each guide reaction presses on the stem from one wall; which wall is the
+contact *mode* of Fig. 6. With side s_i = +1 for the right wall (reaction in -X)
+and -1 for the left wall, friction opposing the follower's velocity (sign sv),
+and moments taken about the face centre C (through which F_N acts):
+
+    sum F_x:  -s1 F1 - s2 F2 + n_x F_N = 0                                 (Eqs. 33, 39)
+    sum F_y:  -sv mu (F1 + F2) + n_y F_N = F_t                              (Eqs. 34, 40)
+    sum M_C:  sum_i [ s_i arm_i - sv mu (s_i d/2 - x_c) ] F_i = -x_c F_t     (Eqs. 35, 41)
+
+with arm_1 = l1 - r, arm_2 = l1 + l2 - r. Mode (a) of Fig. 6 is (s1, s2) = (+1, -1),
+for which these are Eqs. 33-35 (rise, x_c = e, sv = +1) and Eqs. 39-41 (fall,
+x_c = -e, sv = -1) term by term. Modes are tried in the order (a) (+1,-1),
+(b) (-1,+1), (c) (+1,+1), (d) (-1,-1) until F1, F2 >= 0, as the paper prescribes;
+if none qualifies the guide self-locks (reported as a violation, mode -1).
+
+Two contacts (double followers in a dwell): Eqs. 36-38 give F1 = F2 = 0 and
+F_N = F_t / (2 cos psi) at each contact.
+
+Choices where the paper is silent (documented in the README, changeable in the
+design): weight adds to the load (Eq. 29 with g along the follower axis), the
+overhang shrinks as the follower rises (l1 = l1_0 - S), and friction is zero while
+the follower is at rest (sv = 0 when V = 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .model import MM, Design, omega_rad_s
+
+MODES = ((1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0))
+MODE_NAMES = ("a", "b", "c", "d")
+
+
+def total_load(design: Design, S: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """F_t = M (g + a) + k s with a = A omega^2 and s = S + s_p  [N] (Eqs. 29-30)."""
+    d = design.dynamics
+    M = d.mass_g * 1e-3
+    a = A * omega_rad_s(design) ** 2
+    return M * (d.gravity_m_s2 + a) + d.spring_rate_N_per_m * (S + d.preload_mm * MM)
+
+
+@dataclass(frozen=True)
+class GuideSolution:
+    F1: np.ndarray  # [N], >= 0 in the chosen mode
+    F2: np.ndarray  # [N]
+    FN: np.ndarray  # [N] contact force per contact
+    mode: np.ndarray  # index into MODES, -1 where no mode has F1, F2 >= 0 (self-locking)
+    side1: np.ndarray  # s1 of the chosen mode (+1 right wall, -1 left wall, 0 none)
+    side2: np.ndarray
+
+
+def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d):
+    """(F1, F2, FN) of the 3x3 equilibrium for guide sides (s1, s2), batched over angles."""
+    N = Ft.shape[0]
+    M = np.zeros((N, 3, 3))
+    M[:, 0] = np.stack([-s1 + 0 * Ft, -s2 + 0 * Ft, normal[:, 0]], -1)
+    M[:, 1] = np.stack([-mu_sv, -mu_sv, normal[:, 1]], -1)
+    M[:, 2, 0] = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c)
+    M[:, 2, 1] = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c)
+    b = np.stack([0 * Ft, Ft, -x_c * Ft], -1)
+    det = np.linalg.det(M)
+    ok = np.abs(det) > 1e-12 * np.abs(M).max(axis=(1, 2)) ** 3
+    M[~ok] = np.eye(3)  # singular (cannot happen for a physical guide); marked invalid below
+    x = np.linalg.solve(M, b[..., None])[..., 0]
+    x[~ok] = np.nan
+    return x.T
+
+
+def one_contact(design: Design, Ft, normal, x_c: float, r: float, S, V) -> GuideSolution:
+    """Solve Eqs. 33-35 / 39-41 in the modes of Fig. 6 and keep the first with F1, F2 >= 0."""
+    dyn = design.dynamics
+    d = dyn.guide_width_mm * MM
+    l1 = dyn.overhang_mm * MM - (S if dyn.overhang_shrinks else 0.0)
+    arm1, arm2 = l1 - r, l1 + dyn.guide_length_mm * MM - r
+    mu_sv = dyn.guide_friction * np.sign(V)  # no friction while the follower is at rest
+    tol = 1e-9 * (np.abs(Ft) + 1.0)
+    out = np.full((3, Ft.shape[0]), np.nan)
+    mode = np.full(Ft.shape[0], -1, dtype=np.int8)
+    for k, (s1, s2) in enumerate(MODES):
+        F1, F2, FN = _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d)
+        ok = (mode < 0) & np.isfinite(FN) & (F1 >= -tol) & (F2 >= -tol)
+        out[:, ok] = np.stack([F1, F2, FN])[:, ok]
+        mode[ok] = k
+    jam = mode < 0
+    if jam.any():
+        # Self-locking guide: no mode balances with friction. Keep finite numbers (the
+        # frictionless solution, whose signed guide forces pick the walls) and let the
+        # checks report the violation.
+        F1, F2, FN = _solve_mode(1.0, -1.0, 0 * mu_sv, normal, Ft, x_c, arm1, arm2, d)
+        out[:, jam] = np.stack([np.abs(F1), np.abs(F2), FN])[:, jam]
+    sides = np.array(MODES + ((0.0, 0.0),))[mode]
+    return GuideSolution(
+        np.maximum(out[0], 0.0), np.maximum(out[1], 0.0), out[2], mode, sides[:, 0], sides[:, 1]
+    )
+
+
+def two_contacts(Ft, normal) -> GuideSolution:
+    """Eqs. 36-38: symmetric dwell contact, F1 = F2 = 0 and F_N = F_t / (2 cos psi)."""
+    zero = np.zeros_like(Ft)
+    FN = Ft / (2.0 * normal[:, 1])
+    return GuideSolution(zero, zero.copy(), FN, np.full(Ft.shape, 4, np.int8), zero, zero)

@@ -1,0 +1,291 @@
+"""The design model: one typed pydantic object is the single source of truth.
+
+Every field carries its unit in its name (``_mm``, ``_deg``, ``_rpm``, ``_g``,
+``_GPa``, ``_N_per_m``). Computation happens in SI inside camcore; the helpers
+at the bottom of this module convert at that edge.
+
+Geometry that the equations cannot even be evaluated for (a negative radius,
+angles that do not fit in 360 deg, an offset too large for the square root in
+Eq. 3, ...) is rejected here with a ``pydantic.ValidationError`` naming the
+field and the limit. Design *limits* of a computable design (curvature,
+pressure angle, dwell-arc size, jump) are not validation errors: the analysis
+reports them as violations, so the user can still see the design.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from enum import Enum
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+SCHEMA_VERSION = 1
+MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd files
+
+
+class FollowerKind(str, Enum):
+    """The four translating followers of the paper's Fig. 9."""
+
+    single_roller = "single_roller"
+    double_roller = "double_roller"
+    single_concave = "single_concave"
+    double_concave = "double_concave"
+
+    @property
+    def is_double(self) -> bool:
+        return self in (FollowerKind.double_roller, FollowerKind.double_concave)
+
+    @property
+    def is_roller(self) -> bool:
+        return self in (FollowerKind.single_roller, FollowerKind.double_roller)
+
+    @property
+    def label(self) -> str:
+        return self.value.replace("_", " ")
+
+
+class MotionLaw(str, Enum):
+    """Normalized rise laws (see camcore.motion)."""
+
+    cycloidal = "cycloidal"
+    simple_harmonic = "simple_harmonic"
+    poly_345 = "poly_345"
+    poly_4567 = "poly_4567"
+    modified_trapezoid = "modified_trapezoid"
+    modified_sine = "modified_sine"
+
+
+class _Part(BaseModel):
+    model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
+
+
+class Motion(_Part):
+    """Motion program: rise, high dwell, fall; the low dwell is the rest of 360 deg."""
+
+    lift_mm: float = Field(15.0, gt=0, le=1000, description="total lift h [mm]")
+    rise_deg: float = Field(100.0, gt=0, lt=360, description="rise angle beta_r [deg]")
+    high_dwell_deg: float = Field(70.0, ge=0, lt=360, description="high dwell beta_h [deg]")
+    fall_deg: float = Field(130.0, gt=0, lt=360, description="fall angle beta_f [deg]")
+    rise_law: MotionLaw = MotionLaw.cycloidal
+    fall_law: MotionLaw = MotionLaw.cycloidal
+
+    @property
+    def low_dwell_deg(self) -> float:
+        """beta_l = 360 - beta_r - beta_h - beta_f [deg]."""
+        return 360.0 - self.rise_deg - self.high_dwell_deg - self.fall_deg
+
+    @model_validator(mode="after")
+    def _fits_in_a_turn(self) -> Motion:
+        if self.low_dwell_deg < -1e-9:
+            raise ValueError(
+                f"rise_deg + high_dwell_deg + fall_deg = "
+                f"{360 - self.low_dwell_deg:g} deg exceeds 360 deg by "
+                f"{-self.low_dwell_deg:g} deg (the low dwell beta_l must be >= 0, Eq. 27)"
+            )
+        return self
+
+
+class Follower(_Part):
+    """Translating follower. Radii are signed as in the paper: r_f < 0 is concave."""
+
+    kind: FollowerKind = FollowerKind.double_concave
+    roller_radius_mm: float = Field(8.0, gt=0, le=1000, description="roller radius r_c [mm]")
+    face_radius_mm: float = Field(
+        -250.0, lt=0, ge=-100000, description="face radius r_f [mm], negative = concave"
+    )
+    offset_mm: float = Field(
+        10.0,
+        ge=0,
+        le=1000,
+        description="offset e of each face/roller of a double follower [mm]; "
+        "single followers run on the stem centreline (e = 0), as in the paper",
+    )
+
+    @property
+    def radius_mm(self) -> float:
+        """Signed radius of the active kind: r_c > 0 for rollers, r_f < 0 for faces."""
+        return self.roller_radius_mm if self.kind.is_roller else self.face_radius_mm
+
+    @property
+    def effective_offset_mm(self) -> float:
+        return self.offset_mm if self.kind.is_double else 0.0
+
+
+class Cam(_Part):
+    """The disk cam. It turns clockwise, as in the paper."""
+
+    base_radius_mm: float = Field(80.0, gt=0, le=10000, description="base radius r_b [mm]")
+    width_mm: float = Field(15.0, gt=0, le=10000, description="cam and contact width w [mm]")
+    speed_rpm: float = Field(1200.0, gt=0, le=100000, description="cam speed [rpm]")
+
+
+class Dynamics(_Part):
+    """Spring, mass and guide of the follower (Section 5, Eqs. 29-41)."""
+
+    mass_g: float = Field(108.0, gt=0, le=1e7, description="effective follower mass M [g]")
+    spring_rate_N_per_m: float = Field(6772.5, ge=0, le=1e9, description="spring rate k [N/m]")
+    preload_mm: float = Field(5.0, ge=0, le=1e4, description="initial compression s_p [mm]")
+    guide_friction: float = Field(0.1, ge=0, le=1.0, description="guide friction mu [-]")
+    guide_width_mm: float = Field(8.0, gt=0, le=1e4, description="stem/guide width d [mm]")
+    guide_length_mm: float = Field(80.0, gt=0, le=1e5, description="guide length l2 [mm]")
+    overhang_mm: float = Field(30.0, ge=0, le=1e5, description="initial overhang l1 [mm]")
+    gravity_m_s2: float = Field(
+        9.81, ge=0, le=1000, description="g along the follower axis; 0 drops weight from Eq. 29"
+    )
+    overhang_shrinks: bool = Field(
+        True, description="l1 = l1_0 - S (the stem slides further into the guide as it rises)"
+    )
+
+
+class Material(_Part):
+    """Elastic constants for the Hertz stress (Eq. 42)."""
+
+    cam_E_GPa: float = Field(210.0, gt=0, le=2000, description="Young's modulus E1 of the cam")
+    cam_nu: float = Field(0.29, ge=0, lt=0.5, description="Poisson's ratio nu1 of the cam")
+    follower_E_GPa: float = Field(210.0, gt=0, le=2000, description="E2 of the follower")
+    follower_nu: float = Field(0.29, ge=0, lt=0.5, description="nu2 of the follower")
+
+
+class Limits(_Part):
+    """User-set design limits (not from the paper)."""
+
+    max_pressure_angle_deg: float = Field(30.0, gt=0, lt=90, description="max |phi| [deg]")
+    resolution_deg: float = Field(
+        0.1, ge=0.005, le=5.0, description="cam-angle step of the analysis [deg]"
+    )
+
+
+class Design(_Part):
+    """A complete disk-cam design. Save with :func:`save_design`, load with :func:`load_design`."""
+
+    schema_version: Literal[1] = SCHEMA_VERSION
+    name: str = Field("untitled", max_length=200)
+    motion: Motion = Motion()
+    follower: Follower = Follower()
+    cam: Cam = Cam()
+    dynamics: Dynamics = Dynamics()
+    material: Material = Material()
+    limits: Limits = Limits()
+
+    @model_validator(mode="after")
+    def _equations_can_be_evaluated(self) -> Design:
+        """Geometry for which Eqs. 3 and 20 have no real answer is not a design."""
+        f, rb, h = self.follower, self.cam.base_radius_mm, self.motion.lift_mm
+        r, e = f.radius_mm, f.effective_offset_mm
+        if not f.kind.is_roller and -r <= rb:
+            raise ValueError(
+                f"follower.face_radius_mm: |r_f| = {-r:g} mm must exceed the base radius "
+                f"r_b = {rb:g} mm (a concave face must wrap the cam, Eq. 3)"
+            )
+        reach = abs(r + rb)
+        if e >= reach:
+            raise ValueError(
+                f"follower.offset_mm: e = {e:g} mm must be below |r + r_b| = {reach:g} mm "
+                f"(the square root in Eq. 3 needs (r + r_b)^2 - e^2 > 0)"
+            )
+        if not f.kind.is_roller:
+            l0 = math.sqrt(reach**2 - e**2)
+            if h >= l0:
+                raise ValueError(
+                    f"motion.lift_mm: h = {h:g} mm must stay below L(0) = {l0:.3f} mm, the "
+                    f"distance of the face centre below the cam axis (Eq. 3 needs L > 0)"
+                )
+        return self
+
+    @model_validator(mode="before")
+    @classmethod
+    def _known_schema(cls, data):
+        if isinstance(data, dict) and "schema_version" in data:
+            v = data["schema_version"]
+            if v != SCHEMA_VERSION:
+                raise ValueError(
+                    f"schema_version: this program reads version {SCHEMA_VERSION}, "
+                    f"the file says {v!r}"
+                )
+        return data
+
+    def with_kind(self, kind: FollowerKind | str) -> Design:
+        """The same design with another follower kind (the comparison of Table 1)."""
+        return self.model_copy(
+            update={"follower": self.follower.model_copy(update={"kind": FollowerKind(kind)})}
+        )
+
+
+class DesignError(ValueError):
+    """A design file or value that cannot be used; the message says why, in one line."""
+
+
+def design_from_json(text: str | bytes) -> Design:
+    """Parse a design JSON document, turning every failure into a one-line DesignError."""
+    from pydantic import ValidationError
+
+    if len(text) > MAX_DESIGN_BYTES:
+        raise DesignError(f"design file is {len(text)} bytes; the limit is {MAX_DESIGN_BYTES}")
+    try:
+        data = json.loads(text)
+    except (ValueError, RecursionError) as exc:
+        raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None
+    if not isinstance(data, dict):
+        raise DesignError(f"a design is a JSON object, got {type(data).__name__}")
+    try:
+        return Design.model_validate(data)
+    except ValidationError as exc:
+        raise DesignError(format_validation_error(exc)) from None
+
+
+def format_validation_error(exc) -> str:
+    """One line per problem: 'field.path: message'."""
+    parts = []
+    for err in exc.errors()[:8]:
+        loc = ".".join(str(p) for p in err["loc"])
+        msg = err["msg"].removeprefix("Value error, ")
+        parts.append(f"{loc}: {msg}" if loc else msg)
+    return "; ".join(parts)
+
+
+def load_design(path: str | Path) -> Design:
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > MAX_DESIGN_BYTES:
+            raise DesignError(f"{path}: {size} bytes; a design file is at most {MAX_DESIGN_BYTES}")
+        text = path.read_bytes()
+    except OSError as exc:
+        raise DesignError(f"cannot read {path}: {exc.strerror}") from None
+    return design_from_json(text)
+
+
+def design_to_json(design: Design) -> str:
+    return design.model_dump_json(indent=2)
+
+
+def save_design(design: Design, path: str | Path) -> None:
+    Path(path).write_text(design_to_json(design) + "\n")
+
+
+PRESET_DIR = Path(__file__).resolve().parent.parent / "static" / "presets"
+
+
+def preset_names() -> list[str]:
+    return sorted(p.stem for p in PRESET_DIR.glob("*.json"))
+
+
+def load_preset(name: str) -> Design:
+    path = PRESET_DIR / f"{name}.json"
+    if not path.is_file():
+        raise DesignError(f"no preset {name!r}; presets: {', '.join(preset_names())}")
+    return load_design(path)
+
+
+# --- SI conversion at the edge -------------------------------------------------------
+
+MM = 1e-3
+DEG = math.pi / 180.0
+
+
+def omega_rad_s(design: Design) -> float:
+    """Cam angular speed omega_2 [rad/s] (the magnitude; the cam turns clockwise)."""
+    return design.cam.speed_rpm * 2.0 * math.pi / 60.0
