@@ -208,10 +208,13 @@ class Design(_Part):
         return data
 
     def with_kind(self, kind: FollowerKind | str) -> Design:
-        """The same design with another follower kind (the comparison of Table 1)."""
-        return self.model_copy(
-            update={"follower": self.follower.model_copy(update={"kind": FollowerKind(kind)})}
-        )
+        """The same design with another follower kind (the comparison of Table 1).
+
+        Re-validated: an offset that suits a roller may not suit a concave face.
+        """
+        data = self.model_dump()
+        data["follower"]["kind"] = FollowerKind(kind)
+        return Design.model_validate(data)
 
 
 class DesignError(ValueError):

@@ -225,6 +225,7 @@ class Polyline:
 
     points: np.ndarray  # (M, 2)
     part: np.ndarray  # (M,) RISE / HIGH / FALL / LOW: the profile segment of each vertex
+    theta: np.ndarray  # (M,) cam angle [rad] at which the vertex is a contact point
 
     @property
     def area(self) -> float:
@@ -259,7 +260,7 @@ def assemble(prog: Program, body_points: np.ndarray, windows: np.ndarray,
     polar = np.mod(np.arctan2(P[:, 1], P[:, 0]) - a0, 2 * math.pi)
     on_arc = (part == HIGH) | (part == LOW)
     order = np.lexsort((np.where(on_arc, polar, theta), part))
-    P, part = P[order], part[order]
+    P, part, theta = P[order], part[order], theta[order]
     step = np.hypot(*np.diff(P, axis=0, append=P[:1]).T)
     keep = step > 1e-12 * max(1.0, float(np.abs(P).max()))
-    return Polyline(P[keep], part[keep])
+    return Polyline(P[keep], part[keep], theta[keep])

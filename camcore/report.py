@@ -1,0 +1,160 @@
+"""Key numbers of an analysis in engineering units: the machine-readable contract
+of ``camcore report --json`` (also used by the app and the tests), and the text
+tables of ``camcore report`` and ``camcore compare``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .analysis import Analysis, analyze, compare
+from .model import Design, FollowerKind
+from .motion import FALL, HIGH, RISE
+
+R2D = 180.0 / math.pi
+
+# The paper's Table 1 (max F_N in the high dwell [N]) and its stress bounds (Fig. 13)
+PAPER_TABLE1_N = {
+    FollowerKind.single_roller: 133.496,
+    FollowerKind.double_roller: 67.297,
+    FollowerKind.single_concave: 129.161,
+    FollowerKind.double_concave: 67.297,
+}
+
+
+def _max(x: np.ndarray, mask: np.ndarray | None = None) -> float | None:
+    x = x if mask is None else x[..., mask]
+    return float(np.max(x)) if x.size else None
+
+
+def _range_mm(a: Analysis, part: int) -> list[float] | None:
+    m = a.in_contact & (a.part == part)
+    if not m.any():
+        return None
+    rho = a.rho[m] * 1e3
+    return [float(rho.min()), float(rho.max())]
+
+
+def summary(a: Analysis) -> dict:
+    """The report of one analysis as a JSON-ready dict (see README for the keys)."""
+    seg = a.prog.segment
+    high = seg == HIGH
+    two = high & (a.n_contacts == 2)
+    phi = np.abs(a.pressure_angle) * R2D
+    on = a.in_contact
+    return {
+        "design": a.design.name,
+        "follower": a.design.follower.kind.value,
+        "valid": a.valid,
+        "violations": [v.as_dict() for v in a.violations],
+        "dwell_radius_mm": a.geo.dwell_radius * 1e3,
+        "psi_h_deg": a.geo.psi_h * R2D,
+        "psi_l_deg": a.geo.psi_l * R2D,
+        "stations_deg": [float(s) for s in a.stations * R2D],
+        "pressure_angle_max_deg": {
+            "rise": _max(phi[on & (a.part == RISE)]),
+            "fall": _max(phi[on & (a.part == FALL)]),
+        },
+        "curvature_radius_mm": {"rise": _range_mm(a, RISE), "fall": _range_mm(a, FALL)},
+        "contact_force_max_N": {
+            "cycle": _max(a.guide.FN),
+            "high_dwell": _max(a.guide.FN, high),
+            "high_dwell_two_contact": _max(a.guide.FN, two),
+        },
+        "guide_force_max_N": {"F1": _max(a.guide.F1), "F2": _max(a.guide.F2)},
+        "contact_stress_max_MPa": {
+            "cycle": _max(a.stress) / 1e6,
+            "high_dwell": _max(a.stress[:, high]) / 1e6 if high.any() else None,
+        },
+        "total_load_high_dwell_N": _max(a.Ft, high),
+        "profile": {
+            "area_mm2": a.profile.area * 1e6,
+            "perimeter_mm": a.profile.perimeter * 1e3,
+            "vertices": int(a.profile.points.shape[0]),
+        },
+        "verification": {
+            "max_lift_error_mm": None if a.lift_error is None else a.lift_error * 1e3
+        },
+    }
+
+
+def _fmt(x, nd=3) -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, list):
+        return " .. ".join(_fmt(v, nd) for v in x)
+    return f"{x:.{nd}f}"
+
+
+def report_text(s: dict) -> str:
+    """A readable table of one summary."""
+    rows = [
+        ("follower", s["follower"]),
+        ("valid", "yes" if s["valid"] else "NO"),
+        ("high-dwell radius R (Eq. 20)", f"{_fmt(s['dwell_radius_mm'], 4)} mm"),
+        ("psi_h / psi_l (Eqs. 23, 25)",
+         f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg"),
+        ("stations 0-5", " ".join(f"{v:.3f}" for v in s["stations_deg"]) + " deg"),
+        ("max pressure angle rise / fall",
+         f"{_fmt(s['pressure_angle_max_deg']['rise'], 2)} / "
+         f"{_fmt(s['pressure_angle_max_deg']['fall'], 2)} deg"),
+        ("rho rise (min .. max)", f"{_fmt(s['curvature_radius_mm']['rise'], 2)} mm"),
+        ("rho fall (min .. max)", f"{_fmt(s['curvature_radius_mm']['fall'], 2)} mm"),
+        ("max F_N cycle / high dwell", f"{_fmt(s['contact_force_max_N']['cycle'])} / "
+         f"{_fmt(s['contact_force_max_N']['high_dwell'])} N"),
+        ("max F_N two-contact high dwell",
+         f"{_fmt(s['contact_force_max_N']['high_dwell_two_contact'])} N"),
+        ("max F1 / F2", f"{_fmt(s['guide_force_max_N']['F1'])} / "
+         f"{_fmt(s['guide_force_max_N']['F2'])} N"),
+        ("max stress cycle / high dwell", f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
+         f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa"),
+        ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
+         f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
+        ("geometric check max |lift - S|",
+         f"{s['verification']['max_lift_error_mm']:.3g} mm"
+         if s["verification"]["max_lift_error_mm"] is not None else "-"),
+    ]
+    w = max(len(k) for k, _ in rows)
+    lines = [f"{s['design']}", ""] + [f"  {k:<{w}}  {v}" for k, v in rows]
+    for v in s["violations"]:
+        lines.append(f"  ! {v['equation']}: {v['message']}")
+    return "\n".join(lines)
+
+
+def compare_rows(design: Design) -> list[dict]:
+    """Table 1 quantities and the stress maxima for the four followers."""
+    rows = []
+    for kind, a in compare(design, verify=True).items():
+        s = summary(a)
+        rows.append({
+            "follower": kind.value,
+            "valid": s["valid"],
+            "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
+            "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
+            "paper_table1_N": PAPER_TABLE1_N[kind],
+            "FN_cycle_N": s["contact_force_max_N"]["cycle"],
+            "F1_max_N": s["guide_force_max_N"]["F1"],
+            "F2_max_N": s["guide_force_max_N"]["F2"],
+            "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
+            "stress_high_dwell_MPa": s["contact_stress_max_MPa"]["high_dwell"],
+            "max_lift_error_mm": s["verification"]["max_lift_error_mm"],
+        })
+    return rows
+
+
+def compare_text(rows: list[dict]) -> str:
+    head = ("follower", "FN dwell", "FN 2-contact", "Table 1", "FN cycle", "|F1|max",
+            "|F2|max", "sigma max", "sigma dwell")
+    keys = ("FN_high_dwell_N", "FN_high_dwell_two_contact_N", "paper_table1_N", "FN_cycle_N",
+            "F1_max_N", "F2_max_N", "stress_max_MPa", "stress_high_dwell_MPa")
+    lines = ["  ".join(f"{h:>14}" for h in head),
+             "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa"))]
+    for r in rows:
+        lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 3):>14}" for k in keys))
+    return "\n".join(lines)
+
+
+def analyze_summary(design: Design) -> dict:
+    return summary(analyze(design))
