@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import json
 import math
-from enum import Enum
+from enum import StrEnum
 from pathlib import Path
 from typing import Literal
 
@@ -26,7 +26,7 @@ SCHEMA_VERSION = 1
 MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd files
 
 
-class FollowerKind(str, Enum):
+class FollowerKind(StrEnum):
     """The four translating followers of the paper's Fig. 9."""
 
     single_roller = "single_roller"
@@ -47,7 +47,7 @@ class FollowerKind(str, Enum):
         return self.value.replace("_", " ")
 
 
-class MotionLaw(str, Enum):
+class MotionLaw(StrEnum):
     """Normalized rise laws (see camcore.motion)."""
 
     cycloidal = "cycloidal"
