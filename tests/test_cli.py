@@ -1,0 +1,140 @@
+"""The command line contract: report --json keys, compare, export files, errors."""
+
+import io
+import json
+import math
+import subprocess
+import sys
+
+import ezdxf
+import numpy as np
+import pytest
+import trimesh
+
+from camcore.cli import main
+from camcore.model import FollowerKind, load_preset, preset_names
+
+KEYS = {
+    "follower", "valid", "violations", "dwell_radius_mm", "psi_h_deg", "psi_l_deg",
+    "stations_deg", "pressure_angle_max_deg", "curvature_radius_mm", "contact_force_max_N",
+    "guide_force_max_N", "contact_stress_max_MPa", "profile", "verification",
+}
+
+
+def run_json(capsys, *args):
+    assert main(list(args)) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+@pytest.mark.parametrize("kind", [k.value for k in FollowerKind])
+def test_report_json_contract(capsys, kind):
+    s = run_json(capsys, "report", "--preset", "paper_example", "--follower", kind, "--json")
+    assert KEYS <= s.keys()
+    assert s["follower"] == kind and s["valid"] is True and s["violations"] == []
+    assert len(s["stations_deg"]) == 6
+    assert set(s["pressure_angle_max_deg"]) == {"rise", "fall"}
+    assert len(s["curvature_radius_mm"]["rise"]) == 2
+    assert set(s["contact_force_max_N"]) >= {"cycle", "high_dwell"}
+    assert set(s["guide_force_max_N"]) == {"F1", "F2"}
+    assert set(s["contact_stress_max_MPa"]) == {"cycle", "high_dwell"}
+    assert s["verification"]["max_lift_error_mm"] < 1e-6
+    # the cam lies between the base circle (r_b = 80 mm) and the dwell circle
+    assert math.pi * 80**2 < s["profile"]["area_mm2"] < math.pi * s["dwell_radius_mm"] ** 2
+    assert 2 * math.pi * 80 < s["profile"]["perimeter_mm"] < 2 * math.pi * s["dwell_radius_mm"]
+
+
+def test_report_from_file_and_text(tmp_path, capsys):
+    path = tmp_path / "d.json"
+    path.write_text(load_preset("paper_example").model_dump_json())
+    assert main(["report", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "double_concave" in out and "Eq. 20" in out
+
+
+def test_violations_are_reported_with_equation(capsys):
+    s = run_json(capsys, "report", "--preset", "paper_example", "--json")
+    assert s["valid"]
+    d = load_preset("paper_example").model_dump()
+    d["motion"]["high_dwell_deg"] = 10  # below 4 psi_h = 14.8 deg
+    d["cam"]["speed_rpm"] = 6000  # the spring cannot hold the follower
+    from camcore.analysis import analyze
+    from camcore.model import Design
+
+    a = analyze(Design.model_validate(d))
+    codes = {v.code: v for v in a.violations}
+    assert codes["high_dwell_arc"].equation == "Eq. 28"
+    assert codes["high_dwell_arc"].amount == pytest.approx(4 * math.degrees(a.geo.psi_h) - 10)
+    assert codes["jump"].equation == "Eqs. 29-41" and codes["jump"].ranges_deg
+
+
+def test_compare_table(capsys):
+    rows = run_json(capsys, "compare", "--preset", "paper_example", "--json")
+    assert [r["follower"] for r in rows] == [k.value for k in FollowerKind]
+    assert main(["compare", "--preset", "paper_example"]) == 0
+    assert "Table 1" in capsys.readouterr().out
+
+
+def test_export_files(tmp_path, capsys):
+    out = {ext: tmp_path / f"cam.{ext}" for ext in ("stl", "dxf", "csv", "json")}
+    assert main(["export", "--preset", "paper_example", "--stl", str(out["stl"]),
+                 "--dxf", str(out["dxf"]), "--csv", str(out["csv"]),
+                 "--json", str(out["json"])]) == 0
+    assert capsys.readouterr().out.count("wrote") == 4
+    s = run_json(capsys, "report", "--preset", "paper_example", "--json")
+    mesh = trimesh.load(out["stl"], file_type="stl")
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume == pytest.approx(s["profile"]["area_mm2"] * 15.0, rel=1e-6)
+    assert mesh.bounds[1][2] - mesh.bounds[0][2] == pytest.approx(15.0)
+    doc = ezdxf.readfile(out["dxf"])
+    poly = [e for e in doc.modelspace() if e.dxftype() == "LWPOLYLINE"][0]
+    pts = np.array([p[:2] for p in poly.get_points()])
+    assert poly.closed and np.hypot(*pts.T).min() == pytest.approx(80.0, abs=1e-6)
+    rows = out["csv"].read_text().splitlines()
+    assert rows[0].startswith("cam_angle_deg,x_mm,y_mm")
+    assert len(rows) - 1 == s["profile"]["vertices"]
+    assert json.loads(out["json"].read_text()) == json.loads(
+        load_preset("paper_example").model_dump_json()
+    )
+
+
+@pytest.mark.parametrize("args, message", [
+    (["report", "/no/such/file.json"], "cannot read"),
+    (["report"], "give a design file or --preset"),
+    (["report", "--preset", "nope"], "no preset 'nope'"),
+    (["export", "--preset", "paper_example"], "nothing to export"),
+])
+def test_errors_are_one_line(args, message):
+    proc = subprocess.run([sys.executable, "-m", "camcore.cli", *args],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert message in proc.stderr and "Traceback" not in proc.stderr
+    assert len(proc.stderr.strip().splitlines()) == 1
+
+
+def test_invalid_value_names_field(tmp_path):
+    d = load_preset("paper_example").model_dump()
+    d["cam"]["base_radius_mm"] = -5
+    p = tmp_path / "bad.json"
+    p.write_text(json.dumps(d))
+    proc = subprocess.run([sys.executable, "-m", "camcore.cli", "report", str(p)],
+                          capture_output=True, text=True)
+    assert proc.returncode == 2 and "cam.base_radius_mm" in proc.stderr
+    assert "Traceback" not in proc.stderr
+
+
+def test_presets_all_load_and_verify():
+    from camcore.analysis import analyze
+
+    assert "paper_example" in preset_names()
+    for name in preset_names():
+        a = analyze(load_preset(name))
+        assert a.lift_error < 1e-9, name
+
+
+def test_stl_bytes_roundtrip():
+    from camcore import export
+    from camcore.analysis import analyze
+
+    a = analyze(load_preset("paper_example"), verify=False)
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight

@@ -1,0 +1,176 @@
+"""Profile synthesis against the paper's own equations, closed forms, and geometry."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from camcore import profile
+from camcore.analysis import analyze
+from camcore.model import Design, FollowerKind, load_preset
+from camcore.motion import FALL, RISE, program, theta_grid
+from camcore.verify import follower_lift
+
+PAPER = load_preset("paper_example")
+KINDS = list(FollowerKind)
+
+
+def paper_eq12_eq19(theta, S, V, rf, rb, e):
+    """Eqs. 3, 5, 12 (rise, face S1) and 13, 19 (fall, face S2), transcribed as printed."""
+    L = math.sqrt((rf + rb) ** 2 - e**2) - S  # Eq. 3
+    phi_r = np.arctan((V + e) / L)  # Eq. 5
+    xr = L * np.sin(theta) + e * np.cos(theta) + rf * np.sin(phi_r + theta)  # Eq. 12
+    yr = -L * np.cos(theta) + e * np.sin(theta) - rf * np.cos(phi_r + theta)
+    phi_f = np.arctan((e - V) / L)  # Eq. 13
+    xf = L * np.sin(theta) - e * np.cos(theta) - rf * np.sin(phi_f - theta)  # Eq. 19
+    yf = -L * np.cos(theta) - e * np.sin(theta) - rf * np.cos(phi_f - theta)
+    return np.stack([xr, yr], -1), np.stack([xf, yf], -1), phi_r, phi_f
+
+
+def test_double_concave_reproduces_eqs_12_and_19():
+    a = analyze(PAPER, verify=False)
+    p = a.prog
+    rise, fall, phi_r, phi_f = paper_eq12_eq19(p.theta, p.S, p.V, -0.250, 0.080, 0.010)
+    r, f = p.segment == RISE, p.segment == FALL
+    np.testing.assert_allclose(a.point_body[0][r], rise[r], atol=1e-13)
+    np.testing.assert_allclose(a.point_body[1][f], fall[f], atol=1e-13)
+    # pressure angle: Eq. 5 on the rise; the fall is reported with the textbook sign (-Eq. 13)
+    np.testing.assert_allclose(a.pressure_angle[0][r], phi_r[r], atol=1e-13)
+    np.testing.assert_allclose(a.pressure_angle[1][f], -phi_f[f], atol=1e-13)
+
+
+def test_dwell_radius_eq20_and_psi_eqs23_25():
+    rf, rb, e, h = -250.0, 80.0, 10.0, 15.0
+    R = abs(rf) - math.sqrt((rf + rb) ** 2 - 2 * h * math.sqrt((rf + rb) ** 2 - e**2) + h**2)
+    g = profile.geometry(PAPER)
+    assert g.dwell_radius * 1e3 == pytest.approx(R, rel=1e-12)
+    assert g.psi_h == pytest.approx(math.asin(e / (-R - rf)), rel=1e-12)  # Eq. 23
+    assert g.psi_l == pytest.approx(math.asin(e / (-rf - rb)), rel=1e-12)  # Eq. 25
+    # the synthesized high-dwell arc has radius R, the low-dwell arc r_b
+    a = analyze(PAPER, verify=False)
+    radius = np.hypot(*a.profile.points.T) * 1e3
+    assert radius.max() == pytest.approx(R, abs=1e-9)
+    assert radius.min() == pytest.approx(rb, abs=1e-9)
+
+
+def test_roller_dwell_radius_is_pitch_minus_roller():
+    """Single roller, e = 0: R = r_b + h (the pitch circle grows by h)."""
+    d = PAPER.with_kind(FollowerKind.single_roller)
+    assert profile.geometry(d).dwell_radius == pytest.approx(0.095, abs=1e-15)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_geometric_check_is_exact_on_paper_example(kind):
+    a = analyze(PAPER.with_kind(kind))
+    assert a.lift_error < 1e-9  # metres: below 1e-6 mm
+    assert a.valid, [v.message for v in a.violations]
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.double_roller])
+def test_geometric_check_catches_swapped_faces(monkeypatch, kind):
+    original = profile.geometry
+
+    def swapped(design):
+        g = original(design)
+        return dataclasses.replace(g, faces=g.faces[::-1])
+
+    monkeypatch.setattr(profile, "geometry", swapped)
+    a = analyze(PAPER.with_kind(kind))
+    assert a.lift_error > 1e-4  # metres: a tenth of a millimetre or more
+    assert "geometric_check" in [v.code for v in a.violations]
+
+
+def test_geometric_check_catches_wrong_rotation_sense():
+    """A cam synthesized for counter-clockwise rotation fails when run clockwise."""
+    a = analyze(PAPER.with_kind(FollowerKind.single_roller), verify=False)
+    mirrored = a.profile.points * np.array([-1.0, 1.0])
+    faces = [(f.r, f.x_c) for f in a.geo.faces]
+    lift = follower_lift(mirrored[::-1], a.theta, faces, a.geo.r_b)
+    assert np.max(np.abs(lift - a.prog.S)) > 1e-3
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.double_roller])
+def test_stations_from_geometry(kind):
+    """Which faces touch, found by lowering each face alone onto the finished cam,
+    agrees with the synthesized contact windows - and with station 3 at
+    beta_r + beta_h - 2 psi_h (the paper prints + 2 psi_h, which puts it after station 4)."""
+    a = analyze(PAPER.with_kind(kind), verify=False)
+    pts = a.profile.points
+    per_face = [follower_lift(pts, a.theta, [(f.r, f.x_c)], a.geo.r_b) for f in a.geo.faces]
+    touching = np.stack([np.abs(lf - a.prog.S) < 1e-13 for lf in per_face])
+    np.testing.assert_array_equal(touching, a.in_contact)
+    deg = np.degrees(a.stations)
+    psi_h = math.degrees(a.geo.psi_h)
+    np.testing.assert_allclose(deg, [0, 100, 100 + 2 * psi_h, 170 - 2 * psi_h, 170, 300])
+    assert np.all(np.diff(deg) > 0)
+    both = a.theta[touching.all(0) & (a.prog.segment == 1)]
+    assert math.degrees(both.min()) == pytest.approx(deg[2], abs=0.1)
+    assert math.degrees(both.max()) == pytest.approx(deg[3], abs=0.1)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_curvature_matches_finite_differences(kind):
+    """Eq. 21 with exact derivatives agrees with a fine finite-difference estimate."""
+    d = PAPER.with_kind(kind)
+    g = profile.geometry(d)
+    th = np.radians(np.linspace(5, 95, 901))
+    p = program(d, th)
+    for face in g.faces[:1]:
+        rho = profile.curvature_radius(g, face, p)
+        hstep = 1e-5
+        pts = []
+        for k in (-1, 0, 1):
+            t = th + k * hstep
+            pts.append(profile.to_body(t, profile.face_contact(g, face, program(d, t)).point))
+        d1 = (pts[2] - pts[0]) / (2 * hstep)
+        d2 = (pts[2] - 2 * pts[1] + pts[0]) / hstep**2
+        rho_fd = np.hypot(*d1.T) ** 3 / (d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0])
+        np.testing.assert_allclose(rho, rho_fd, rtol=1e-4)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_curvature_parallel_curve_identity(kind):
+    """The profile is the offset of the pitch curve (locus of the face centre) by r:
+    rho = sigma * rho_pitch - r. The pitch curve needs only S, V, A (no jerk), so this
+    checks the jerk terms of Eq. 21 independently."""
+    d = PAPER.with_kind(kind)
+    g = profile.geometry(d)
+    th = theta_grid(d)
+    p = program(d, th)
+    for face in g.faces:
+        yc = g.y0 + p.S
+        C = np.stack([face.x_c + 0 * yc, yc], -1)
+        dC = np.stack([0 * yc, p.V], -1)
+        ddC = np.stack([0 * yc, p.A], -1)
+        J = np.array([[0.0, -1.0], [1.0, 0.0]])
+        c1 = C @ J.T + dC
+        c2 = -C + 2 * dC @ J.T + ddC
+        rho_pitch = np.hypot(*c1.T) ** 3 / (c1[:, 0] * c2[:, 1] - c1[:, 1] * c2[:, 0])
+        rho = profile.curvature_radius(g, face, p)
+        np.testing.assert_allclose(rho, g.sigma * rho_pitch - g.r, rtol=1e-9, atol=1e-12)
+
+
+def test_dwell_curvature_is_arc_radius():
+    a = analyze(PAPER, verify=False)
+    high = a.in_contact & (a.part == 1)
+    low = a.in_contact & (a.part == 3)
+    np.testing.assert_allclose(a.rho[high], a.geo.dwell_radius, rtol=1e-9)
+    np.testing.assert_allclose(a.rho[low], 0.080, rtol=1e-9)
+
+
+def test_profile_area_and_star_shape():
+    for kind in KINDS:
+        a = analyze(PAPER.with_kind(kind), verify=False)
+        assert a.profile.is_star_shaped()
+        # the cam lies between the base circle and the dwell circle
+        assert math.pi * 0.080**2 < a.profile.area < math.pi * a.geo.dwell_radius**2
+
+
+def test_offset_too_large_is_rejected():
+    from pydantic import ValidationError
+
+    data = PAPER.model_dump()
+    data["follower"]["offset_mm"] = 171.0  # |r_f + r_b| = 170
+    with pytest.raises(ValidationError, match="offset_mm"):
+        Design.model_validate(data)
