@@ -57,20 +57,22 @@ class GuideSolution:
 
 
 def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d):
-    """(F1, F2, FN) of the 3x3 equilibrium for guide sides (s1, s2), batched over angles."""
-    N = Ft.shape[0]
-    M = np.zeros((N, 3, 3))
-    M[:, 0] = np.stack([-s1 + 0 * Ft, -s2 + 0 * Ft, normal[:, 0]], -1)
-    M[:, 1] = np.stack([-mu_sv, -mu_sv, normal[:, 1]], -1)
-    M[:, 2, 0] = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c)
-    M[:, 2, 1] = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c)
-    b = np.stack([0 * Ft, Ft, -x_c * Ft], -1)
-    det = np.linalg.det(M)
-    ok = np.abs(det) > 1e-12 * np.abs(M).max(axis=(1, 2)) ** 3
-    M[~ok] = np.eye(3)  # singular (cannot happen for a physical guide); marked invalid below
-    x = np.linalg.solve(M, b[..., None])[..., 0]
-    x[~ok] = np.nan
-    return x.T
+    """(F1, F2, FN) of the equilibrium for guide sides (s1, s2), batched over angles.
+
+    n_y > 0 always (the normal points into the follower), so sum F_y gives
+    F_N = (F_t + mu_sv (F1 + F2)) / n_y; substituting into sum F_x leaves two linear
+    equations in F1, F2 with the moment balance, solved by Cramer's rule.
+    """
+    t = normal[:, 0] / normal[:, 1]
+    a, b = t * mu_sv - s1, t * mu_sv - s2
+    m1 = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c)
+    m2 = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c)
+    det = a * m2 - b * m1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        F1 = Ft * (b * x_c - t * m2) / det
+        F2 = Ft * (t * m1 - a * x_c) / det
+    FN = (Ft + mu_sv * (F1 + F2)) / normal[:, 1]
+    return np.stack([F1, F2, FN])
 
 
 def one_contact(design: Design, Ft, normal, x_c: float, r: float, S, V) -> GuideSolution:
