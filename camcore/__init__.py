@@ -1,0 +1,23 @@
+"""camcore: disk cams with translating followers, after Chuang, Hsu & Chang.
+
+Data flows one way: ``Design`` (camcore.model) -> ``analyze`` (camcore.analysis)
+-> summaries (camcore.report) and exports (camcore.export). Modules, one concept each:
+
+- model    : the pydantic design model (units in field names), JSON load/save, presets
+- motion   : motion laws and the displacement program S(theta) with V, A, J
+- profile  : profile synthesis by instant centres (Eqs. 1-21), signed radii for all followers
+- forces   : follower forces with guide friction and the four guide-contact modes (Eqs. 29-41)
+- contact  : Hertz line-contact stress (Eq. 42)
+- checks   : design limits as violations (Eqs. 22, 27, 28, pressure angle, jump, ...)
+- verify   : independent geometric check of the finished profile
+- analysis : the pipeline tying these together
+- report, export, cli : numbers, files and the command line
+"""
+
+from .analysis import Analysis, analyze, compare
+from .model import Design, DesignError, FollowerKind, MotionLaw, load_design, load_preset
+
+__all__ = [
+    "Analysis", "Design", "DesignError", "FollowerKind", "MotionLaw",
+    "analyze", "compare", "load_design", "load_preset",
+]

@@ -7,8 +7,7 @@ the cam-angle grid; the same code path serves all four followers.
 
 from __future__ import annotations
 
-import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -92,22 +91,9 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     parts = profile.profile_part(geo, prog)
 
     Ft = forces.total_load(design, prog.S, prog.A)
-    both = windows.all(axis=0) & (len(geo.faces) == 2)
-    lead = np.where(windows[0], 0, len(geo.faces) - 1)  # the touching face when only one
-    idx = np.arange(th.size)
-    x_c = np.array([f.x_c for f in geo.faces])[lead]
-    one = forces.one_contact(design, Ft, normal[lead, idx], x_c, geo.r, prog.S, prog.V)
-    two = forces.two_contacts(Ft, normal[0])
-    guide = forces.GuideSolution(
-        *(np.where(both, getattr(two, k), getattr(one, k))
-          for k in ("F1", "F2", "FN", "mode", "side1", "side2"))
-    )
+    x_c = np.array([f.x_c for f in geo.faces])
+    guide = forces.follower_forces(design, Ft, windows, normal, x_c, geo.r, prog.S, prog.V)
     FN = np.where(windows, guide.FN[None, :], 0.0)
-    touching = windows.any(axis=0)
-    guide = forces.GuideSolution(
-        np.where(touching, guide.F1, 0.0), np.where(touching, guide.F2, 0.0),
-        np.where(touching, guide.FN, 0.0), guide.mode, guide.side1, guide.side2,
-    )
     stress = contact_stress(design, FN, rho)
     poly = profile.assemble(prog, point_body, windows, parts)
 
@@ -123,19 +109,9 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
 
         lift_error = max_lift_error(result)
     violations = checks.run_all(result, lift_error)
-    return _replace(result, violations=violations, lift_error=lift_error)
-
-
-def _replace(a: Analysis, **kw) -> Analysis:
-    from dataclasses import replace
-
-    return replace(a, **kw)
+    return replace(result, violations=violations, lift_error=lift_error)
 
 
 def compare(design: Design, verify: bool = False) -> dict[FollowerKind, Analysis]:
     """The same design with each of the four followers (Table 1, Figs. 11-13)."""
     return {k: analyze(design.with_kind(k), verify=verify) for k in FollowerKind}
-
-
-def deg(x) -> np.ndarray:
-    return np.asarray(x) * (180.0 / math.pi)

@@ -36,6 +36,7 @@ from .model import MM, Design, omega_rad_s
 
 MODES = ((1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0))
 MODE_NAMES = ("a", "b", "c", "d")
+TWO_CONTACTS = 4  # mode code of a two-contact dwell (Eqs. 36-38); -1 = self-locking
 
 
 def total_load(design: Design, S: np.ndarray, A: np.ndarray) -> np.ndarray:
@@ -75,7 +76,7 @@ def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d):
     return np.stack([F1, F2, FN])
 
 
-def one_contact(design: Design, Ft, normal, x_c: float, r: float, S, V) -> GuideSolution:
+def one_contact(design: Design, Ft, normal, x_c, r: float, S, V) -> GuideSolution:
     """Solve Eqs. 33-35 / 39-41 in the modes of Fig. 6 and keep the first with F1, F2 >= 0."""
     dyn = design.dynamics
     d = dyn.guide_width_mm * MM
@@ -107,4 +108,26 @@ def two_contacts(Ft, normal) -> GuideSolution:
     """Eqs. 36-38: symmetric dwell contact, F1 = F2 = 0 and F_N = F_t / (2 cos psi)."""
     zero = np.zeros_like(Ft)
     FN = Ft / (2.0 * normal[:, 1])
-    return GuideSolution(zero, zero.copy(), FN, np.full(Ft.shape, 4, np.int8), zero, zero)
+    mode = np.full(Ft.shape, TWO_CONTACTS, np.int8)
+    return GuideSolution(zero, zero.copy(), FN, mode, zero, zero)
+
+
+def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V) -> GuideSolution:
+    """Guide and contact forces at each cam angle for the faces in contact.
+
+    in_contact, normal : (n_faces, N) and (n_faces, N, 2); x_c : (n_faces,) [m].
+    Both faces touching: Eqs. 36-38. One face: Eqs. 33-35 / 39-41 with that face's
+    normal and centre. No face (a broken high dwell, Eq. 28): all forces zero.
+    """
+    lead = np.where(in_contact[0], 0, in_contact.shape[0] - 1)
+    idx = np.arange(Ft.size)
+    one = one_contact(design, Ft, normal[lead, idx], x_c[lead], r, S, V)
+    two = two_contacts(Ft, normal[0])
+    both = in_contact.all(axis=0) & (in_contact.shape[0] == 2)
+    touching = in_contact.any(axis=0)
+
+    def pick(name):
+        return np.where(both, getattr(two, name), getattr(one, name))
+
+    F1, F2, FN = (np.where(touching, pick(k), 0.0) for k in ("F1", "F2", "FN"))
+    return GuideSolution(F1, F2, FN, pick("mode"), pick("side1"), pick("side2"))

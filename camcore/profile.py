@@ -46,10 +46,6 @@ class Face:
     r: float
     x_c: float
 
-    @property
-    def sigma(self) -> float:
-        return 1.0 if self.r > 0 else -1.0
-
 
 @dataclass(frozen=True)
 class Geometry:
@@ -65,14 +61,6 @@ class Geometry:
     dwell_radius: float  # R of the high-dwell arc [m] (Eq. 20)
     psi_h: float  # [rad] (Eq. 23)
     psi_l: float  # [rad] (Eq. 25)
-
-    @property
-    def rise_face(self) -> Face:
-        return self.faces[0]
-
-    @property
-    def fall_face(self) -> Face:
-        return self.faces[-1]
 
 
 def geometry(design: Design) -> Geometry:
@@ -118,7 +106,6 @@ def psi(e: float, radius: float, r: float) -> float:
 class FaceContact:
     """Where one face would touch the cam at each cam angle (world frame, metres)."""
 
-    centre_y: np.ndarray  # Y_C
     normal: np.ndarray  # (N, 2) unit common normal n, pointing from cam into follower
     point: np.ndarray  # (N, 2) contact point A = C - r n (Eqs. 10, 18)
     pressure_angle: np.ndarray  # phi [rad], signed, atan((V + x_c)/|Y_C|) (Eqs. 5, 13)
@@ -129,10 +116,10 @@ def face_contact(geo: Geometry, face: Face, prog: Program) -> FaceContact:
     yc = geo.y0 + prog.S
     ux, uy = face.x_c + prog.V, yc
     m = np.hypot(ux, uy)
-    n = face.sigma * np.stack([ux, uy], axis=-1) / m[:, None]
+    n = geo.sigma * np.stack([ux, uy], axis=-1) / m[:, None]
     point = np.stack([face.x_c - face.r * n[:, 0], yc - face.r * n[:, 1]], axis=-1)
-    phi = np.arctan2(face.sigma * n[:, 0], n[:, 1])
-    return FaceContact(yc, n, point, phi)
+    phi = np.arctan2(geo.sigma * n[:, 0], n[:, 1])
+    return FaceContact(n, point, phi)
 
 
 def to_body(theta: np.ndarray, world: np.ndarray) -> np.ndarray:
@@ -165,7 +152,7 @@ def curvature_radius(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
     ddm = (np.sum(du * du, -1, keepdims=True) + np.sum(u * ddu, -1, keepdims=True)) / m - (
         udu**2 / m**3
     )
-    s = face.sigma
+    s = geo.sigma
     n = s * u / m
     dn = s * (du / m - u * dm / m**2)
     ddn = s * (ddu / m - 2 * du * dm / m**2 - u * ddm / m**2 + 2 * u * dm**2 / m**3)
