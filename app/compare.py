@@ -1,0 +1,100 @@
+"""The compare tab: the four followers on the current design (Table 1, Figs. 11, 13)."""
+
+from __future__ import annotations
+
+import numpy as np
+from pydantic import ValidationError
+
+from camcore.analysis import analyze
+from camcore.model import Design, FollowerKind, format_validation_error
+from camcore.report import PAPER_TABLE1_N, summary
+
+from .plots import COLORS, stride_index
+
+KINDS = tuple(FollowerKind)
+
+
+def compute(design: Design) -> dict:
+    """{kind: Analysis | error message} for the four followers."""
+    out: dict = {}
+    for k in KINDS:
+        try:
+            out[k] = analyze(design.with_kind(k), verify=False)
+        except ValidationError as exc:
+            out[k] = format_validation_error(exc)
+    return out
+
+
+def table_markdown(results: dict) -> str:
+    def f(x, nd=2):
+        return "–" if x is None else f"{x:.{nd}f}"
+
+    lines = [
+        "| Follower | F_N high dwell [N] | Table 1 [N] | F_N max cycle [N] | σ_H max [MPa] "
+        "| limits |",
+        "|---|---|---|---|---|---|",
+    ]
+    notes = []
+    for k, a in results.items():
+        if isinstance(a, str):
+            lines.append(f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | not computable |")
+            notes.append(f"- *{k.label}*: {a}")
+            continue
+        s = summary(a)
+        ok = "✔" if s["valid"] else f"⚠ {len(s['violations'])}"
+        fn = s["contact_force_max_N"]
+        dwell = fn["high_dwell_two_contact"] if k.is_double else fn["high_dwell"]
+        lines.append(
+            f"| {k.label} | {f(dwell, 3)} | "
+            f"{PAPER_TABLE1_N[k]:.3f} | {f(s['contact_force_max_N']['cycle'], 2)} | "
+            f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | {ok} |")
+    text = "\n".join(lines)
+    text += ("\n\nTable 1 is the paper's value for its own example (the `paper_example` "
+             "preset). F_N high dwell: the maximum contact force in the high dwell, for double "
+             "followers while both faces touch (the load is shared).")
+    if notes:
+        text += "\n\n" + "\n".join(notes)
+    return text
+
+
+class CompareView:
+    def __init__(self, gui):
+        self.gui = gui
+        self.md = gui.add_markdown("*Computing the four followers…*")
+        ser = ({"label": "θ [°]"},) + tuple(
+            {"label": k.label, "stroke": COLORS[i], "width": 1.5, "scale": "y"}
+            for i, k in enumerate(KINDS))
+        common = dict(scales={"x": {"time": False, "range": (0.0, 360.0)}, "y": {"auto": True}},
+                      height=210, legend={"show": True})
+        zeros = tuple(np.zeros(2) for _ in ser)
+        self.fn = gui.add_uplot(
+            zeros, ser, title="Contact force F_N of the four followers (Fig. 11)",
+            axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "F_N [N]", "size": 52}),
+            **common)
+        self.stress = gui.add_uplot(
+            zeros, ser, title="Contact stress σ_H of the four followers (Fig. 13)",
+            axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "σ_H [MPa]",
+                                                  "size": 52}),
+            **common)
+        self.results: dict = {}
+
+    def update(self, results: dict) -> None:
+        self.results = results
+        self.md.content = table_markdown(results)
+        ok = [a for a in results.values() if not isinstance(a, str)]
+        if not ok:
+            return
+        th = ok[0].theta
+        idx = stride_index(th.size)
+        x = np.degrees(th[idx])
+        fn, st = [x], [x]
+        for a in results.values():
+            if isinstance(a, str):
+                fn.append(np.full(x.shape, np.nan))
+                st.append(np.full(x.shape, np.nan))
+                continue
+            xa = np.degrees(a.theta)
+            fn.append(np.interp(x, xa, a.guide.FN))
+            st.append(np.interp(x, xa, a.stress.max(axis=0) / 1e6))
+        self.fn.data = tuple(fn)
+        self.stress.data = tuple(st)

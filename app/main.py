@@ -1,0 +1,114 @@
+"""Entry point: ``camdesigner [--host 127.0.0.1] [--port 8080]``.
+
+Starts a viser server; every browser tab gets its own Session (design, analysis,
+animation), created on connect and freed on disconnect.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ctypes
+import ctypes.util
+import threading
+import time
+
+import viser
+
+from .session import Session
+
+
+def _load_malloc_trim():
+    try:
+        return ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim
+    except (OSError, AttributeError):  # not glibc
+        return None
+
+
+_MALLOC_TRIM = _load_malloc_trim()
+
+
+def _trim_heap() -> None:
+    """Give the memory a closed tab freed back to the OS. glibc keeps freed blocks in
+    per-thread arenas (viser's callbacks run on a 32-thread pool), so without this the
+    server's RSS crept up by ~0.3 MB per tab opened and closed, forever."""
+    if _MALLOC_TRIM is not None:
+        _MALLOC_TRIM(0)
+
+
+class App:
+    """The server and the live sessions, by client id."""
+
+    def __init__(self, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False,
+                 animate: bool = True):
+        self.server = viser.ViserServer(host=host, port=port, label="Disk-cam designer",
+                                        verbose=verbose)
+        self.server.gui.configure_theme(control_width="large", show_share_button=False,
+                                        brand_color=(40, 90, 160))
+        self.server.scene.set_up_direction("+y")  # the follower moves along +Y
+        self.sessions: dict[int, Session] = {}
+        self._gone: set[int] = set()  # left while their Session was still being built
+        self._lock = threading.Lock()
+        self.animate = animate
+        self.server.on_client_connect(self._connect)
+        self.server.on_client_disconnect(self._disconnect)
+
+    @property
+    def port(self) -> int:
+        return self.server.get_port()
+
+    def _connect(self, client) -> None:
+        # viser runs connect and disconnect callbacks on its thread pool: a tab closed
+        # while its Session is built gets its disconnect first; close that Session.
+        try:
+            s = Session(client, animate=self.animate)
+        except BaseException:
+            with self._lock:
+                self._gone.discard(client.client_id)
+            raise
+        with self._lock:
+            gone = client.client_id in self._gone
+            self._gone.discard(client.client_id)
+            if not gone:
+                self.sessions[client.client_id] = s
+        if gone:
+            s.close()
+
+    def _disconnect(self, client) -> None:
+        with self._lock:
+            s = self.sessions.pop(client.client_id, None)
+            if s is None:
+                self._gone.add(client.client_id)
+        if s is not None:
+            s.close()
+            del s
+            _trim_heap()
+
+    def stop(self) -> None:
+        with self._lock:
+            sessions, self.sessions = list(self.sessions.values()), {}
+        for s in sessions:
+            s.close()
+        self.server.stop()
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(prog="camdesigner", description=__doc__.splitlines()[0])
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free "
+                   "one is used if it is busy)")
+    args = p.parse_args(argv)
+    app = App(args.host, args.port)
+    host = "localhost" if args.host in ("127.0.0.1", "0.0.0.0") else args.host
+    print(f"Disk-cam designer running at http://{host}:{app.port}  (Ctrl-C to stop)",
+          flush=True)
+    try:
+        while True:
+            time.sleep(1.0)
+    except KeyboardInterrupt:
+        print("\nstopping…", flush=True)
+    finally:
+        app.stop()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,169 @@
+"""Live curves (uPlot) of one tab: motion, pressure angle, curvature, forces, stress.
+
+Every plot has the cam angle [deg] on x, units on every axis, a vertical marker
+at the current cam angle (two extra x samples at that angle carry the marker
+series) and, where a design limit is broken, red shading over those angles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+MAX_POINTS = 720
+X_AXIS = {"label": "cam angle θ [°]", "size": 36}
+RED_FILL = "rgba(220,20,30,0.18)"
+NONE = "rgba(0,0,0,0)"
+MARK = "rgba(0,0,0,0.55)"
+COLORS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b")
+
+
+def stride_index(n: int, max_points: int = MAX_POINTS) -> np.ndarray:
+    step = max(1, int(np.ceil(n / max_points)))
+    idx = np.arange(0, n, step)
+    return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
+
+
+def violation_mask(a, codes: set[str] | None, theta_deg: np.ndarray) -> np.ndarray:
+    m = np.zeros(theta_deg.shape, bool)
+    for v in a.violations:
+        if codes is not None and v.code not in codes:
+            continue
+        for lo, hi in v.ranges_deg:
+            m |= (theta_deg >= lo - 1e-9) & (theta_deg <= hi + 1e-9)
+    return m
+
+
+class Curve:
+    """One uPlot: series (label, unit-scale, colour, y-array function), marker, shading."""
+
+    def __init__(self, gui, title: str, axes: list[tuple[str, str]], series: list[dict],
+                 codes: set[str] | None = None, height: int = 190):
+        self.gui, self.title, self.codes = gui, title, codes
+        self.series_cfg = series  # dicts: label, scale, stroke, dash?, fn(a)->y
+        self.scale0 = axes[0][0]
+        ser = [{"label": "θ [°]"}]
+        for s in series:
+            cfg = {"label": s["label"], "scale": s["scale"], "stroke": s["stroke"],
+                   "width": s.get("width", 1.5)}
+            if "dash" in s:
+                cfg["dash"] = s["dash"]
+            ser.append(cfg)
+        # shading and marker live on their own fixed [0, 1] scales (no axis): they never
+        # disturb the auto-range of the curves
+        ser.append({"label": "limit broken", "scale": "shade", "stroke": NONE,
+                    "fill": RED_FILL, "width": 0, "points": {"show": False}})
+        ser.append({"label": "θ now", "scale": "marker", "stroke": MARK, "width": 1.5,
+                    "points": {"show": False}})
+        ax = [X_AXIS]
+        for j, (scale, label) in enumerate(axes):
+            ax.append({"scale": scale, "label": label, "side": 3 if j == 0 else 1, "size": 52})
+        scales = {"x": {"time": False, "range": (0.0, 360.0)},
+                  "shade": {"auto": False, "range": (0.0, 1.0)},
+                  "marker": {"auto": False, "range": (0.0, 1.0)}}
+        for scale, _ in axes:
+            scales[scale] = {"auto": True}
+        self.nser = len(ser)
+        self.handle = gui.add_uplot(
+            tuple(np.zeros(2) for _ in ser), tuple(ser), title=title, scales=scales,
+            axes=tuple(ax), height=height, legend={"show": True},
+            cursor={"drag": {"x": False, "y": False}})
+        self.x = None
+        self.ys: list[np.ndarray] = []
+
+    def update(self, a, k: int) -> None:
+        idx = stride_index(a.theta.size)
+        self.x = np.degrees(a.theta[idx])
+        self.ys = [np.asarray(s["fn"](a), float)[idx] for s in self.series_cfg]
+        self.shade = violation_mask(a, self.codes, self.x).astype(float)
+        self.marker(float(np.degrees(a.theta[k])))
+
+    def marker(self, theta_deg: float) -> None:
+        if self.x is None:
+            return
+        x = self.x
+        j = int(np.searchsorted(x, theta_deg))
+        xs = np.insert(x, j, [theta_deg, theta_deg])
+        out = [xs]
+        for y in [*self.ys, self.shade]:
+            yi = float(np.interp(theta_deg, x, y))
+            out.append(np.insert(y, j, [yi, yi]))
+        # a spike from below to above the plot area at theta: a vertical line once clipped
+        mk = np.full(xs.shape, -1.0)
+        mk[j + 1] = 2.0
+        out.append(mk)
+        self.handle.data = tuple(out)
+
+
+def _primary_deg(a):
+    return np.degrees(a.primary(a.pressure_angle))
+
+
+def build_curves(gui, a) -> list[Curve]:
+    """The plots of the Curves tab."""
+    lim = a.design.limits.max_pressure_angle_deg
+    f = a.design.follower
+    ref = f.roller_radius_mm if f.kind.is_roller else -f.face_radius_mm
+    ref_label = "r_c" if f.kind.is_roller else "|r_f|"
+
+    def rho_mm(a):
+        r = a.primary(a.rho) * 1e3
+        fl = a.design.follower
+        cap = 3 * (fl.roller_radius_mm if fl.kind.is_roller else -fl.face_radius_mm)
+        cap = max(cap, 2 * a.design.cam.base_radius_mm)
+        return np.clip(np.nan_to_num(r, nan=cap, posinf=cap, neginf=-cap), -cap, cap)
+
+    def limit(a, which):
+        fl = a.design.follower
+        v = fl.roller_radius_mm if fl.kind.is_roller else -fl.face_radius_mm
+        return np.full(a.theta.size, v if which == "rho" else 0.0)
+
+    curves = [
+        Curve(gui, "Displacement S", [("mm", "S [mm]")], [
+            {"label": "S [mm]", "scale": "mm", "stroke": COLORS[0], "fn": lambda a: a.prog.S * 1e3},
+        ], codes=None),
+        Curve(gui, "Velocity V and acceleration A (per radian of cam angle)",
+              [("V", "V [mm/rad]"), ("A", "A [mm/rad²]")], [
+            {"label": "V [mm/rad]", "scale": "V", "stroke": COLORS[1],
+             "fn": lambda a: a.prog.V * 1e3},
+            {"label": "A [mm/rad²]", "scale": "A", "stroke": COLORS[2],
+             "fn": lambda a: a.prog.A * 1e3},
+        ], codes=set()),
+        Curve(gui, "Pressure angle φ", [("deg", "φ [°]")], [
+            {"label": "φ [°]", "scale": "deg", "stroke": COLORS[0], "fn": _primary_deg},
+            {"label": f"+limit {lim:g}°", "scale": "deg", "stroke": "#d62728", "dash": [6, 4],
+             "width": 1, "fn": lambda a: np.full(a.theta.size,
+                                                 a.design.limits.max_pressure_angle_deg)},
+            {"label": "−limit", "scale": "deg", "stroke": "#d62728", "dash": [6, 4], "width": 1,
+             "fn": lambda a: np.full(a.theta.size, -a.design.limits.max_pressure_angle_deg)},
+        ], codes={"pressure_angle"}),
+        Curve(gui, "Radius of curvature ρ of the cam at the contact", [("mm", "ρ [mm]")], [
+            {"label": "ρ [mm]", "scale": "mm", "stroke": COLORS[3], "fn": rho_mm},
+            {"label": f"{ref_label} = {ref:g} mm (limit)", "scale": "mm", "stroke": "#d62728",
+             "dash": [6, 4], "width": 1, "fn": lambda a: limit(a, "rho")},
+        ], codes={"curvature_convex", "curvature_face", "roller_undercut"}),
+        Curve(gui, "Contact force F_N and guide forces F1, F2", [("N", "force [N]")], [
+            {"label": "F_N [N]", "scale": "N", "stroke": COLORS[0], "fn": lambda a: a.guide.FN},
+            {"label": "F1 [N]", "scale": "N", "stroke": COLORS[1], "fn": lambda a: a.guide.F1},
+            {"label": "F2 [N]", "scale": "N", "stroke": COLORS[2], "fn": lambda a: a.guide.F2},
+        ], codes={"jump", "guide_jam", "contact_lost"}),
+        Curve(gui, "Contact (Hertz) stress σ_H", [("MPa", "σ_H [MPa]")], [
+            {"label": "σ_H [MPa]", "scale": "MPa", "stroke": COLORS[4],
+             "fn": lambda a: a.stress.max(axis=0) / 1e6},
+        ], codes={"jump"}),
+    ]
+    return curves
+
+
+def relabel_limits(curves: list[Curve], a) -> None:
+    """Legend labels that carry the current limit values."""
+    f = a.design.follower
+    ref = f.roller_radius_mm if f.kind.is_roller else -f.face_radius_mm
+    ref_label = "r_c" if f.kind.is_roller else "|r_f|"
+    lim = a.design.limits.max_pressure_angle_deg
+    labels = {2: (2, f"+limit {lim:g}°"), 3: (2, f"{ref_label} = {ref:g} mm (limit)")}
+    for ci, (si, text) in labels.items():
+        h = curves[ci].handle
+        ser = list(h.series)
+        if ser[si].get("label") != text:
+            ser[si] = {**ser[si], "label": text}
+            h.series = tuple(ser)

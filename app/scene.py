@@ -1,0 +1,338 @@
+"""The 3D view of one tab: cam solid, follower body, guide, teaching overlays.
+
+Scene units are metres; the cam axis is the scene Z axis and the paper's world X-Y
+plane is the scene X-Y plane (Y up, along the follower's motion). ``build`` makes
+the meshes once per analysis; ``pose`` only moves them (cam frame rotation,
+follower frame translation) and updates the small overlay lines.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import trimesh
+
+from camcore.export import ExportError, cam_mesh
+
+CAM_RGB = (150, 165, 185)
+FOLLOWER_RGB = (205, 110, 30)
+STEM_RGB = (235, 165, 80)
+GUIDE_RGB = (120, 120, 130)
+BAD_RGB = (220, 20, 30)
+EDGE_RGB = (40, 50, 70)
+HIGH_RGB = (30, 150, 60)
+LOW_RGB = (40, 100, 220)
+FORCE_RGB = (20, 160, 40)
+Q_RGB = (200, 0, 200)
+PHI_RGB = (0, 0, 0)
+PAD_T = 0.006  # concave pad thickness [m]
+YOKE_T = 0.006
+
+OVERLAYS = ("contacts", "forces", "instant_centre", "pressure_angle", "arcs")
+
+
+def quat_z(angle: float) -> tuple[float, float, float, float]:
+    return (math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2))
+
+
+def _sector(cx, cy, r_in, r_out, a0, a1, z0, z1, n=48) -> trimesh.Trimesh:
+    """A ring sector about (cx, cy), angles from +Y (clockwise positive), extruded in z."""
+    a = np.linspace(a0, a1, n)
+    inner = np.column_stack([cx + r_in * np.sin(a), cy + r_in * np.cos(a)])
+    outer = np.column_stack([cx + r_out * np.sin(a), cy + r_out * np.cos(a)])
+    ring = np.vstack([inner, outer[::-1]])  # closed polygon, 2n vertices
+    m = ring.shape[0]
+    verts = np.vstack([np.column_stack([ring, np.full(m, z0)]),
+                       np.column_stack([ring, np.full(m, z1)])])
+    faces = []
+    for i in range(n - 1):  # caps as quad strip between inner i and outer i
+        o_i, o_j = m - 1 - i, m - 2 - i
+        faces += [[i, o_i, i + 1], [i + 1, o_i, o_j]]
+        faces += [[m + i, m + i + 1, m + o_i], [m + i + 1, m + o_j, m + o_i]]
+    for i in range(m):  # side walls
+        j = (i + 1) % m
+        faces += [[i, j, m + j], [i, m + j, m + i]]
+    mesh = trimesh.Trimesh(verts, np.array(faces), process=True)
+    mesh.fix_normals()
+    return mesh
+
+
+def _box(x0, x1, y0, y1, z0, z1) -> trimesh.Trimesh:
+    b = trimesh.creation.box(extents=(x1 - x0, y1 - y0, z1 - z0))
+    b.apply_translation(((x0 + x1) / 2, (y0 + y1) / 2, (z0 + z1) / 2))
+    return b
+
+
+def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]:
+    """Meshes of the follower (at zero lift, world frame) and the fixed guide [m]."""
+    d, geo = a.design, a.geo
+    w = d.cam.width_mm * 1e-3
+    z0, z1 = -w / 2, w / 2
+    parts: dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]] = {}
+    tops, xs = [], []
+    for i, f in enumerate(geo.faces):
+        if f.r > 0:  # roller
+            cyl = trimesh.creation.cylinder(radius=f.r, height=w * 0.9, sections=48)
+            cyl.apply_translation((f.x_c, geo.y0, 0.0))
+            parts[f"face{i}"] = (cyl, FOLLOWER_RGB)
+            pin = trimesh.creation.cylinder(radius=f.r * 0.25, height=w * 1.3, sections=16)
+            pin.apply_translation((f.x_c, geo.y0, 0.0))
+            parts[f"pin{i}"] = (pin, GUIDE_RGB)
+            top = geo.y0 + f.r + 0.002
+            plate = _box(f.x_c - f.r * 0.3, f.x_c + f.r * 0.3, geo.y0, top + 1e-4,
+                         z0 - 0.004, z0 - 0.001)
+            parts[f"plate{i}"] = (plate, STEM_RGB)
+            tops.append(top)
+            xs += [f.x_c - f.r, f.x_c + f.r]
+        else:  # concave pad: the useful part of the arc, on its own side of the stem
+            R = -f.r
+            on = a.in_contact[i]
+            px = a.point_world[i, on, 0] if on.any() else np.array([0.0])
+            lo, hi = float(px.min()) - 0.004, float(px.max()) + 0.004
+            if len(geo.faces) == 2:
+                lo, hi = (lo, min(hi, -0.0005)) if i == 0 else (max(lo, 0.0005), hi)
+            a0 = math.asin(max(-1.0, min(1.0, (lo - f.x_c) / R)))
+            a1 = math.asin(max(-1.0, min(1.0, (hi - f.x_c) / R)))
+            pad = _sector(f.x_c, geo.y0, R, R + PAD_T, a0, a1, z0, z1)
+            parts[f"face{i}"] = (pad, FOLLOWER_RGB)
+            ends = [f.x_c + (R + PAD_T) * math.sin(t) for t in (a0, a1)]
+            tops.append(max(geo.y0 + (R + PAD_T) * math.cos(t) for t in (a0, a1)))
+            xs += ends
+    sw = d.dynamics.guide_width_mm * 1e-3
+    y_yoke = max(tops)
+    x_lo, x_hi = min(min(xs), -sw / 2), max(max(xs), sw / 2)
+    parts["yoke"] = (_box(x_lo, x_hi, y_yoke - 1e-4, y_yoke + YOKE_T, z0, z1), STEM_RGB)
+    l1, l2 = d.dynamics.overhang_mm * 1e-3, d.dynamics.guide_length_mm * 1e-3
+    g0 = y_yoke + YOKE_T + l1
+    stem_top = g0 + l2 + max(0.02, 1.2 * geo.h)
+    parts["stem"] = (_box(-sw / 2, sw / 2, y_yoke + YOKE_T - 1e-4, stem_top,
+                          -min(sw, w) / 2, min(sw, w) / 2), STEM_RGB)
+    gw = max(0.006, sw * 0.8)
+    guide = trimesh.util.concatenate([
+        _box(-sw / 2 - gw, -sw / 2 - 2e-4, g0, g0 + l2, z0, z1),
+        _box(sw / 2 + 2e-4, sw / 2 + gw, g0, g0 + l2, z0, z1),
+    ])
+    parts["guide"] = (guide, GUIDE_RGB)
+    return parts
+
+
+def _polyline_segments(p: np.ndarray, closed: bool = False) -> np.ndarray:
+    q = np.vstack([p, p[:1]]) if closed else p
+    return np.stack([q[:-1], q[1:]], axis=1)
+
+
+def _flat(p2: np.ndarray, z: float) -> np.ndarray:
+    return np.column_stack([p2, np.full(len(p2), z)])
+
+
+def _circle(r: float, n: int = 180) -> np.ndarray:
+    t = np.linspace(0, 2 * math.pi, n, endpoint=False)
+    return np.column_stack([r * np.cos(t), r * np.sin(t)])
+
+
+class SceneView:
+    """Scene nodes of one client. All methods are called with the session lock held."""
+
+    def __init__(self, scene, overlays: dict[str, bool] | None = None):
+        self.scene = scene
+        self.a = None
+        self.k = 0
+        self.show = {name: True for name in OVERLAYS} if overlays is None else overlays
+        self.mesh_error: str | None = None
+        self.cam_frame = scene.add_frame("/cam", show_axes=False)
+        self.follower_frame = scene.add_frame("/follower", show_axes=False)
+        self.nodes: dict[str, object] = {}
+        self.builds = 0
+
+    # --- build once per analysis ---------------------------------------------------
+    def build(self, a) -> None:
+        self.a = a
+        self.builds += 1
+        s, d = self.scene, a.design
+        w = d.cam.width_mm * 1e-3
+        zt = w / 2 + 2e-4
+        try:
+            m = cam_mesh(a)
+            verts = np.asarray(m.vertices) * 1e-3 - np.array([0.0, 0.0, w / 2])
+            self.nodes["cam"] = s.add_mesh_simple(
+                "/cam/solid", verts.astype(np.float32), np.asarray(m.faces, dtype=np.uint32),
+                color=CAM_RGB, flat_shading=True)
+            self.mesh_error = None
+        except ExportError as exc:  # an undercut profile: draw its outline only
+            self.mesh_error = str(exc)
+            if "cam" in self.nodes:
+                self.nodes.pop("cam").remove()
+        pts = a.profile.points
+        thick = max(2e-4, 0.004 * a.geo.r_b)
+        self.nodes["outline"] = s.add_line_segments(
+            "/cam/outline", _polyline_segments(_flat(pts, zt), closed=True), EDGE_RGB,
+            thickness=thick * 0.6)
+        self.nodes["hub"] = s.add_line_segments(
+            "/cam/hub", _polyline_segments(_flat(_circle(0.1 * a.geo.r_b, 48), zt), True),
+            EDGE_RGB, thickness=thick * 0.6)
+        self._build_bad(a, zt + 1e-4, thick * 2.5)
+        self._build_arcs(a, zt + 2e-4, thick * 1.5)
+        parts = follower_parts(a)
+        self._face_meshes = [parts[f"face{i}"][0] for i in range(len(a.geo.faces))]
+        for name, (mesh, rgb) in parts.items():
+            parent = "" if name == "guide" else "/follower"
+            self.nodes[name] = s.add_mesh_simple(
+                f"{parent}/{name}", np.asarray(mesh.vertices, np.float32),
+                np.asarray(mesh.faces, np.uint32), color=rgb, flat_shading=False,
+                opacity=0.55 if name == "guide" else None)
+        for name in [n for n in self.nodes if n.startswith(("face", "pin", "plate"))]:
+            if name not in parts:  # e.g. the roller pins after a switch to concave faces
+                self.nodes.pop(name).remove()
+        self._build_face_labels(a)
+        self._build_overlays(a, zt)
+        self.pose(self.k if self.k < a.theta.size else 0)
+
+    def _build_bad(self, a, z, thick) -> None:
+        """Red profile segments over the cam angles where a limit is violated."""
+        mask = np.zeros(a.profile.points.shape[0], bool)
+        th = np.degrees(a.profile.theta)
+        for v in a.violations:
+            for lo, hi in v.ranges_deg:
+                mask |= (th >= lo - 1e-9) & (th <= hi + 1e-9)
+        segs = _polyline_segments(_flat(a.profile.points, z), closed=True)
+        bad = segs[mask & np.roll(mask, -1)]
+        if bad.shape[0] == 0:
+            if "bad" in self.nodes:
+                self.nodes.pop("bad").remove()
+            return
+        self.nodes["bad"] = self.scene.add_line_segments("/cam/bad", bad, BAD_RGB, thickness=thick)
+
+    def _build_arcs(self, a, z, thick) -> None:
+        """Base circle (thin, dashed) and the dwell arcs of the profile (coloured)."""
+        from camcore.motion import HIGH, LOW
+
+        base = _polyline_segments(_flat(_circle(a.geo.r_b, 240), z), True)[::2]
+        segs = _polyline_segments(_flat(a.profile.points, z), closed=True)
+        part = a.profile.part
+        same = part == np.roll(part, -1)
+        high, low = segs[same & (part == HIGH)], segs[same & (part == LOW)]
+        cols = [np.broadcast_to(np.array(c, np.uint8), (len(x), 2, 3))
+                for c, x in ((GUIDE_RGB, base), (HIGH_RGB, high), (LOW_RGB, low))]
+        self.nodes["arcs"] = self.scene.add_line_segments(
+            "/cam/arcs", np.concatenate([base, high, low]), np.concatenate(cols),
+            thickness=thick, visible=self.show["arcs"])
+
+    def _build_face_labels(self, a) -> None:
+        for i in range(2):
+            key = f"label{i}"
+            if i >= len(a.geo.faces):
+                if key in self.nodes:
+                    self.nodes.pop(key).remove()
+                continue
+            f = a.geo.faces[i]
+            mesh = self._face_meshes[i]
+            lo, hi = mesh.bounds[:, 0]
+            y = float(mesh.bounds[1, 1])
+            name = f.name.split(" ")[0] if len(a.geo.faces) == 2 else f.name
+            left = i == 0 and len(a.geo.faces) == 2
+            self.nodes[key] = self.scene.add_label(
+                f"/follower/{key}", name, position=(lo if left else hi, y, 0.0),
+                font_screen_scale=0.8, anchor="bottom-right" if left else "bottom-left")
+
+    def _build_overlays(self, a, zt) -> None:
+        s = self.scene
+        r = 0.03 * a.geo.r_b + 0.5e-3
+        self.fn_scale = 0.5 * a.geo.r_b / max(1e-9, float(np.max(np.abs(a.guide.FN))))
+        for i in range(2):
+            key = f"contact{i}"
+            if i < len(a.geo.faces):
+                self.nodes[key] = s.add_icosphere(f"/ov/{key}", radius=r, color=BAD_RGB,
+                                                  position=(0, 0, zt + r))
+            elif key in self.nodes:
+                self.nodes.pop(key).remove()
+        self.zt = zt + r
+        self.thin = max(3e-4, 0.006 * a.geo.r_b)
+        one = np.zeros((1, 2, 3))
+        self.nodes["forces"] = s.add_line_segments("/ov/forces", one, FORCE_RGB,
+                                                   thickness=self.thin * 1.4)
+        self.nodes["q"] = s.add_icosphere("/ov/q", radius=r * 1.2, color=Q_RGB)
+        self.nodes["q_label"] = s.add_label("/ov/q/label", "I23 = Q", position=(0, -2 * r, 0),
+                                            font_screen_scale=0.8, anchor="top-center")
+        self.nodes["q_lines"] = s.add_line_segments("/ov/q_lines", one, Q_RGB,
+                                                    thickness=self.thin * 0.5)
+        self.nodes["phi"] = s.add_line_segments("/ov/phi", one, PHI_RGB, thickness=self.thin * 0.6)
+        self.nodes["phi_label"] = s.add_label("/ov/phi_label", "φ", font_screen_scale=0.8,
+                                              anchor="center-center")
+
+    # --- per frame -----------------------------------------------------------------
+    def pose(self, k: int) -> None:
+        """Move everything to grid index k: transforms and small overlay lines only."""
+        a = self.a
+        if a is None:
+            return
+        self.k = k
+        th = float(a.theta[k])
+        S = float(a.prog.S[k])
+        self.cam_frame.wxyz = quat_z(-th)  # clockwise cam
+        self.follower_frame.position = (0.0, S, 0.0)
+        on = a.in_contact[:, k]
+        z = self.zt
+        pw = a.point_world[:, k, :]
+        for i in range(len(a.geo.faces)):
+            node = self.nodes[f"contact{i}"]
+            node.position = (float(pw[i, 0]), float(pw[i, 1]), z)
+            node.visible = bool(on[i]) and self.show["contacts"]
+        # force arrows: along the normal (cam -> follower), length ~ F_N
+        segs = []
+        for i in np.flatnonzero(on):
+            p, n = pw[i], a.normal[i, k]
+            L = float(a.FN[i, k]) * self.fn_scale
+            if L <= 0:
+                continue
+            tip = p + n * L
+            head = 0.25 * min(L, 0.3 * a.geo.r_b)
+            side = np.array([-n[1], n[0]])
+            for sgn in (1, -1):
+                segs.append((tip, tip - n * head + sgn * side * head * 0.5))
+            segs.append((p, tip))
+        fz = self.nodes["forces"]
+        if segs:
+            arr = np.array([[[*u, z], [*v, z]] for u, v in segs], np.float32)
+            fz.points = arr
+        fz.visible = bool(segs) and self.show["forces"]
+        # instant centre Q on the X axis at -V, with the common normals through it
+        q = (-float(a.prog.V[k]), 0.0)
+        self.nodes["q"].position = (q[0], q[1], z)
+        self.nodes["q"].visible = self.show["instant_centre"]
+        lines = []
+        for i in np.flatnonzero(on):
+            f = a.geo.faces[i]
+            c = (f.x_c, a.geo.y0 + S)
+            lines.append(((q[0], q[1], z), (float(pw[i, 0]), float(pw[i, 1]), z)))
+            if f.r > 0:
+                lines.append(((q[0], q[1], z), (c[0], c[1], z)))
+        self.nodes["q_lines"].points = np.array(lines, np.float32)
+        self.nodes["q_lines"].visible = self.show["instant_centre"]
+        # pressure angle at the driving face: normal vs. the follower's path (Y)
+        i = 0 if on[0] else len(a.geo.faces) - 1
+        p, n = pw[i], a.normal[i, k]
+        L = 0.45 * a.geo.r_b
+        phi = float(a.pressure_angle[i, k])
+        pts = [((p[0], p[1], z), (p[0], p[1] + L, z)),
+               ((p[0], p[1], z), (p[0] + n[0] * L, p[1] + n[1] * L, z))]
+        t = np.linspace(0, 1, 12)
+        ang0 = math.atan2(n[1], n[0])
+        arc = np.array([(p[0] + 0.6 * L * math.cos(ang0 + (math.pi / 2 - ang0) * u),
+                         p[1] + 0.6 * L * math.sin(ang0 + (math.pi / 2 - ang0) * u), z)
+                        for u in t])
+        pts += [(tuple(arc[j]), tuple(arc[j + 1])) for j in range(len(arc) - 1)]
+        self.nodes["phi"].points = np.array(pts, np.float32)
+        self.nodes["phi"].visible = self.show["pressure_angle"]
+        lab = self.nodes["phi_label"]
+        side = -1.0 if p[0] <= 0 else 1.0  # outside the driving face, clear of the yoke
+        lab.position = (p[0] + side * 0.35 * L, p[1] - 0.05 * L, z)
+        lab.text = f"φ = {math.degrees(phi):.1f}°"
+        lab.visible = self.show["pressure_angle"]
+
+    def set_overlay(self, name: str, on: bool) -> None:
+        self.show[name] = on
+        if name == "arcs" and "arcs" in self.nodes:
+            self.nodes["arcs"].visible = on
+        elif self.a is not None:
+            self.pose(self.k)

@@ -1,0 +1,440 @@
+"""One browser tab: its design, analysis, GUI, 3D view, curves and animation.
+
+Data flows one way: controls -> Design -> camcore.analysis.analyze -> views. All
+state of a tab lives here and is guarded by one re-entrant lock (viser runs plain
+callbacks in a thread pool; programmatic value changes call callbacks inline).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import threading
+import time
+
+import numpy as np
+
+from camcore import export
+from camcore.analysis import analyze
+from camcore.model import (
+    Design,
+    DesignError,
+    design_from_json,
+    load_preset,
+    preset_names,
+)
+from camcore.motion import FALL, HIGH, LOW, RISE
+from camcore.report import summary
+
+from . import compare, plots, state
+from .scene import OVERLAYS, SceneView
+
+DEFAULT_PRESET = "paper_example"
+FPS = 30.0
+SEGMENT = {RISE: "rise", HIGH: "high dwell", FALL: "fall", LOW: "low dwell"}
+OVERLAY_LABELS = {
+    "contacts": "Contact points",
+    "forces": "Contact normals as force arrows (∝ F_N)",
+    "instant_centre": "Instant centre I23 = Q and normals",
+    "pressure_angle": "Pressure angle φ",
+    "arcs": "Base circle and dwell arcs",
+}
+
+
+def slug(name: str) -> str:
+    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
+    return (s or "cam")[:40]
+
+
+class Session:
+    """Everything one client sees. ``client`` is a viser ClientHandle."""
+
+    def __init__(self, client, design: Design | None = None, animate: bool = True):
+        self.client = client
+        self.lock = threading.RLock()
+        self._syncing = False
+        self.closed = threading.Event()
+        self.base = design or load_preset(DEFAULT_PRESET)
+        self.design = self.base
+        self.analysis = None
+        self.error: str | None = None
+        self.verified = False
+        self.gen = 0
+        self.theta_deg = 0.0
+        self.playing = False
+        self.speed = 45.0
+        self.last_download: tuple[str, bytes] | None = None
+        self.timings: list[float] = []  # seconds per re-analysis + redraw
+        self.frames_played = 0  # animation frames drawn by the loop
+        self._wake_anim = threading.Event()
+        self._wake_settle = threading.Event()
+        with self.lock:
+            self._build_gui()
+            self.view = SceneView(client.scene)
+            client.scene.set_up_direction("+y")
+            self._apply(self.base, reset_camera=True)
+        self.threads = []
+        if animate:
+            for target in (self._animate, self._settle):
+                t = threading.Thread(target=target, daemon=True,
+                                     name=f"cam-{target.__name__}-{id(self)}")
+                t.start()
+                self.threads.append(t)
+
+    # --- GUI ------------------------------------------------------------------------
+    def _build_gui(self) -> None:
+        gui = self.client.gui
+        self.status = gui.add_html("")
+        with gui.add_folder("Animation", expand_by_default=True):
+            self.play_btn = gui.add_button("▶ Play", color="green")
+            self.speed_slider = gui.add_slider("Speed [°/s]", 5, 360, 5, self.speed)
+            self.angle_slider = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.5, 0.0)
+            self.stations_btn = gui.add_button_group("Go to station", ["0", "1", "2", "3",
+                                                                       "4", "5"])
+            self.where_md = gui.add_markdown("")
+        self.play_btn.on_click(lambda _: self.toggle_play())
+        self.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
+        self.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
+        self.stations_btn.on_click(lambda e: self.goto_station(int(e.target.value)))
+
+        tabs = gui.add_tab_group()
+        self.controls: dict[str, object] = {}
+        with tabs.add_tab("Design"):
+            for title, expand, specs in state.FOLDERS:
+                with gui.add_folder(title, expand_by_default=expand):
+                    for spec in specs:
+                        self.controls[spec.path] = self._add_control(gui, spec)
+                    if title == "Motion program":
+                        self.low_dwell_md = gui.add_markdown("")
+            with gui.add_folder("Key numbers", expand_by_default=True):
+                self.summary_md = gui.add_markdown("")
+        with tabs.add_tab("Curves"):
+            self.curves = plots.build_curves(gui, analyze(self.base, verify=False))
+        with tabs.add_tab("Compare"):
+            self.compare_view = compare.CompareView(gui)
+        with tabs.add_tab("View"):
+            self.overlay_boxes = {}
+            for name in OVERLAYS:
+                cb = gui.add_checkbox(OVERLAY_LABELS[name], True)
+                cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
+                self.overlay_boxes[name] = cb
+            self.camera_btn = gui.add_button("Reset camera")
+            self.camera_btn.on_click(lambda _: self.reset_camera())
+        with tabs.add_tab("Files"):
+            names = preset_names()
+            self.preset_dd = gui.add_dropdown(
+                "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names
+                else names[0])
+            self.preset_btn = gui.add_button("Load preset")
+            self.preset_btn.on_click(lambda _: self.load_preset(self.preset_dd.value))
+            self.upload_btn = gui.add_upload_button("Open design JSON…",
+                                                    mime_type="application/json")
+            self.upload_btn.on_upload(lambda e: self.upload(e.target.value.name,
+                                                            e.target.value.content))
+            gui.add_markdown("**Download**")
+            self.download_btns = {}
+            for kind, label in (("json", "Design JSON"), ("stl", "Cam STL (mm)"),
+                                ("dxf", "Profile DXF (mm)"), ("csv", "Profile CSV"),
+                                ("angles", "Per-angle CSV")):
+                b = gui.add_button(label)
+                b.on_click(lambda _, k=kind: self.download(k))
+                self.download_btns[kind] = b
+            self.files_md = gui.add_markdown("")
+
+    def _add_control(self, gui, spec: state.Spec):
+        v = state.get_path(self.base, spec.path)
+        if spec.widget == "slider":
+            lo, hi = min(spec.lo, v), max(spec.hi, v)
+            h = gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)
+        elif spec.widget == "number":
+            h = gui.add_number(spec.label, float(v), step=spec.step, hint=spec.hint)
+        elif spec.widget == "dropdown":
+            h = gui.add_dropdown(spec.label, spec.options, initial_value=v, hint=spec.hint)
+        else:
+            h = gui.add_checkbox(spec.label, bool(v), hint=spec.hint)
+        h.on_update(lambda _e: self.on_control())
+        return h
+
+    def values(self) -> dict[str, object]:
+        return {p: h.value for p, h in self.controls.items()}
+
+    def _sync_controls(self, design: Design) -> None:
+        self._syncing = True
+        try:
+            for spec in state.SPECS:
+                h = self.controls[spec.path]
+                v = state.get_path(design, spec.path)
+                if spec.widget == "slider":
+                    h.min, h.max = min(h.min, v), max(h.max, v)
+                h.value = v
+        finally:
+            self._syncing = False
+
+    def _enable_for_kind(self, design: Design) -> None:
+        k = design.follower.kind
+        self.controls["follower.face_radius_mm"].disabled = k.is_roller
+        self.controls["follower.roller_radius_mm"].disabled = not k.is_roller
+        self.controls["follower.offset_mm"].disabled = not k.is_double
+
+    # --- design changes -------------------------------------------------------------
+    def on_control(self) -> None:
+        """Any design control changed: rebuild the design from all controls."""
+        with self.lock:
+            if self._syncing or self.closed.is_set():
+                return
+            vals = self.values()
+            self.low_dwell_md.content = state.low_dwell_text(vals)
+            design, err = state.try_design(self.base, vals)
+            if err is not None:
+                self.error = err
+                self._show_status()
+                return
+            self.error = None
+            self._apply(design)
+
+    def _apply(self, design: Design, reset_camera: bool = False) -> None:
+        """Analyse (fast path, no verification) and redraw everything. Lock held."""
+        t0 = time.perf_counter()
+        a = analyze(design, verify=False)
+        self.design, self.analysis = design, a
+        self.gen += 1
+        self.verified = False
+        k = self._index(self.theta_deg)
+        with self.client.atomic():
+            self.view.build(a)
+            self.view.pose(k)
+            for c in self.curves:
+                c.update(a, k)
+            plots.relabel_limits(self.curves, a)
+            self._enable_for_kind(design)
+            self.low_dwell_md.content = state.low_dwell_text(self.values())
+            self.summary_md.content = state.summary_markdown(summary(a))
+            self._show_where(k)
+            self._show_status()
+        if reset_camera:
+            self.reset_camera()
+        self.timings.append(time.perf_counter() - t0)
+        del self.timings[:-200]
+        self._wake_settle.set()
+
+    def _show_status(self) -> None:
+        a = self.analysis
+        viol = list(a.violations) if a is not None else []
+        mesh = self.view.mesh_error if hasattr(self, "view") else None
+        html = state.status_html(self.error, viol, a.lift_error if a else None, self.verified)
+        if mesh:
+            html += state._BOX.format(bg="#fde2e2", fg="#d62728",
+                                      body=f"<b>No solid:</b> {mesh}")
+        self.status.content = html
+
+    def set_design(self, design: Design, reset_camera: bool = True) -> None:
+        """Replace the whole design (preset, upload): controls follow."""
+        with self.lock:
+            self.base = design
+            self.error = None
+            self._sync_controls(design)
+            self._apply(design, reset_camera=reset_camera)
+
+    def load_preset(self, name: str) -> None:
+        try:
+            d = load_preset(name)
+        except DesignError as exc:
+            with self.lock:
+                self.error = f"preset {name}: {exc}"
+                self._show_status()
+            return
+        self.set_design(d)
+        with self.lock:
+            self.files_md.content = f"Loaded preset **{name}**."
+
+    def upload(self, name: str, content: bytes) -> None:
+        try:
+            d = design_from_json(content)
+        except DesignError as exc:
+            with self.lock:
+                self.error = f"file {name or 'upload'}: {exc} (the current design is kept)"
+                self._show_status()
+                self.files_md.content = f"⛔ Could not open **{name}**: {exc}"
+            return
+        self.set_design(d)
+        with self.lock:
+            self.files_md.content = f"Opened **{name}** ({d.name})."
+
+    def download(self, kind: str) -> None:
+        with self.lock:
+            a, d = self.analysis, self.design
+            base = slug(d.name)
+            try:
+                if kind == "json":
+                    name, data = f"{base}.json", export.json_text(d).encode()
+                elif kind == "stl":
+                    name, data = f"{base}.stl", export.stl_bytes(a)
+                elif kind == "dxf":
+                    name, data = f"{base}.dxf", export.dxf_bytes(a)
+                elif kind == "csv":
+                    name, data = f"{base}_profile.csv", export.csv_text(a).encode()
+                else:
+                    name, data = f"{base}_angles.csv", export.cam_angle_csv_text(a).encode()
+            except export.ExportError as exc:
+                self.files_md.content = f"⛔ Cannot export {kind.upper()}: {exc}"
+                return
+            self.last_download = (name, data)
+            self.files_md.content = f"Sent **{name}** ({len(data):,} bytes)."
+        self.client.send_file_download(name, data, save_immediately=True)
+
+    # --- angle, stations, animation ------------------------------------------------
+    def _index(self, theta_deg: float) -> int:
+        th = self.analysis.theta
+        x = math.radians(theta_deg % 360.0)
+        j = int(np.clip(np.searchsorted(th, x), 1, th.size - 1))
+        return j - 1 if x - th[j - 1] < th[j] - x else j
+
+    def _show_where(self, k: int) -> None:
+        a = self.analysis
+        th = math.degrees(a.theta[k])
+        st = np.degrees(a.stations)
+        step = a.design.limits.resolution_deg
+        at = [i for i, s in enumerate(st) if abs(th - s) <= step / 2 + 1e-9]
+        if at:
+            where = "at station " + " and ".join(str(i) for i in at)
+        else:
+            i = int(np.searchsorted(st, th))
+            where = f"between stations {i - 1} and {i}" if 0 < i < 6 else "between stations 5 and 0"
+        faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
+        touch = ", ".join(faces) if faces else "none"
+        seg = SEGMENT[int(a.prog.segment[k])]
+        self.where_md.content = (
+            f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
+            f"In contact: **{touch}** · S = {a.prog.S[k] * 1e3:.3f} mm · "
+            f"F_N = {a.guide.FN[k]:.1f} N")
+
+    def _goto(self, theta_deg: float, markers: bool = True, slider: bool = True) -> None:
+        """Lock held."""
+        self.theta_deg = theta_deg % 360.0
+        k = self._index(self.theta_deg)
+        with self.client.atomic():
+            self.view.pose(k)
+            if slider:
+                self._syncing = True
+                try:
+                    self.angle_slider.value = round(self.theta_deg * 2) / 2
+                finally:
+                    self._syncing = False
+            if markers:
+                self._show_where(k)
+                for c in self.curves:
+                    c.marker(math.degrees(self.analysis.theta[k]))
+
+    def _on_angle(self, value: float) -> None:
+        with self.lock:
+            if self._syncing:
+                return
+            self._goto(float(value), slider=False)
+
+    def goto_station(self, i: int) -> None:
+        with self.lock:
+            self._set_playing(False)
+            self._goto(math.degrees(float(self.analysis.stations[i])))
+
+    def _set_speed(self, v: float) -> None:
+        self.speed = float(v)
+
+    def _set_overlay(self, name: str, on: bool) -> None:
+        with self.lock:
+            self.view.set_overlay(name, bool(on))
+
+    def _set_playing(self, on: bool) -> None:
+        self.playing = on
+        self.play_btn.label = "⏸ Pause" if on else "▶ Play"
+        self.play_btn.color = "orange" if on else "green"
+        if on:
+            self._wake_anim.set()
+
+    def toggle_play(self) -> None:
+        with self.lock:
+            self._set_playing(not self.playing)
+            if not self.playing:
+                self._goto(self.theta_deg)
+
+    def frame(self, dt: float, n: int = 0) -> None:
+        """One animation step of dt seconds (called by the loop; public for the bench)."""
+        with self.lock:
+            if self.closed.is_set():
+                return
+            slow = n % 3 == 0  # angle slider and label at 10 Hz
+            self._goto(self.theta_deg + self.speed * dt, markers=False, slider=slow)
+            if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
+                k = self._index(self.theta_deg)
+                self._show_where(k)
+                for c in self.curves:
+                    c.marker(math.degrees(self.analysis.theta[k]))
+
+    def _animate(self) -> None:
+        period, n, last = 1.0 / FPS, 0, time.perf_counter()
+        while not self.closed.is_set():
+            if not self.playing:
+                self._wake_anim.wait(0.5)  # asleep while paused
+                self._wake_anim.clear()
+                last = time.perf_counter()
+                continue
+            now = time.perf_counter()
+            try:
+                self.frame(min(now - last, 0.2), n)
+                self.frames_played += 1
+            except Exception:  # client gone mid-frame
+                if self.closed.is_set():
+                    return
+                raise
+            last, n = now, n + 1
+            time.sleep(max(0.0, period - (time.perf_counter() - now)))
+
+    def _settle(self) -> None:
+        """Background: verified analysis and the four-follower comparison."""
+        while not self.closed.is_set():
+            if not self._wake_settle.wait(0.5):
+                continue
+            self._wake_settle.clear()
+            time.sleep(0.2)  # let a slider drag finish
+            if self._wake_settle.is_set():
+                continue
+            self.settle_once()
+
+    def settle_once(self) -> None:
+        with self.lock:
+            design, gen = self.design, self.gen
+        av = analyze(design, verify=True)
+        results = compare.compute(design)
+        with self.lock:
+            if gen != self.gen or self.closed.is_set():
+                return
+            old = [(v.code, v.ranges_deg) for v in self.analysis.violations]
+            self.analysis, self.verified = av, True
+            if [(v.code, v.ranges_deg) for v in av.violations] != old:
+                self.view.build(av)
+                for c in self.curves:
+                    c.update(av, self._index(self.theta_deg))
+            self.summary_md.content = state.summary_markdown(summary(av))
+            self._show_status()
+            self.compare_view.update(results)
+
+    def reset_camera(self) -> None:
+        a = self.analysis
+        d = a.design
+        top = a.geo.r_b + a.geo.h + (d.dynamics.overhang_mm + d.dynamics.guide_length_mm) * 1e-3
+        bottom = -a.geo.r_b
+        H = top - bottom
+        cy = (top + bottom) / 2
+        dist = 0.95 * H
+        look = np.array([0.18 * H, cy, 0.0])
+        cam = self.client.camera
+        cam.up_direction = (0.0, 1.0, 0.0)
+        cam.position = tuple(look + np.array([0.18 * H, 0.12 * H, dist]))
+        cam.look_at = tuple(look)
+
+    def close(self) -> None:
+        self.closed.set()
+        self._wake_anim.set()
+        self._wake_settle.set()
+        for t in self.threads:
+            if t is not threading.current_thread():
+                t.join(timeout=2.0)

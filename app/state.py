@@ -1,0 +1,184 @@
+"""The controls as data: which design field each control edits, and the text of the
+status panel. Pure functions, no viser: the GUI layer reads these tables.
+
+A design is rebuilt from *all* control values on every change (``merged``), so a
+value that is invalid alone or in combination stays invalid until it is fixed, and
+the last valid design stays on screen meanwhile.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from dataclasses import dataclass, field
+
+from pydantic import ValidationError
+
+from camcore.model import Design, FollowerKind, MotionLaw, format_validation_error
+
+
+@dataclass(frozen=True)
+class Spec:
+    """One control: design path ("motion.lift_mm"), label, widget and its options."""
+
+    path: str
+    label: str
+    widget: str  # slider | number | dropdown | checkbox
+    lo: float | None = None
+    hi: float | None = None
+    step: float | None = None
+    options: tuple[str, ...] = ()
+    hint: str | None = None
+    extra: dict = field(default_factory=dict)
+
+
+LAWS = tuple(m.value for m in MotionLaw)
+KINDS = tuple(k.value for k in FollowerKind)
+
+# folder title, expanded?, specs
+FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
+    ("Motion program", True, (
+        Spec("motion.lift_mm", "Lift h [mm]", "slider", 1, 60, 0.5),
+        Spec("motion.rise_deg", "Rise β_r [°]", "slider", 5, 300, 1),
+        Spec("motion.high_dwell_deg", "High dwell β_h [°]", "slider", 0, 300, 1),
+        Spec("motion.fall_deg", "Fall β_f [°]", "slider", 5, 300, 1),
+        Spec("motion.rise_law", "Rise law", "dropdown", options=LAWS),
+        Spec("motion.fall_law", "Fall law", "dropdown", options=LAWS),
+    )),
+    ("Follower", True, (
+        Spec("follower.kind", "Kind", "dropdown", options=KINDS),
+        Spec("follower.offset_mm", "Offset e [mm]", "slider", 0, 60, 0.5,
+             hint="offset of each face/roller of a double follower"),
+        Spec("follower.face_radius_mm", "Face radius r_f [mm]", "slider", -1000, -20, 1,
+             hint="concave faces: negative, |r_f| must exceed r_b"),
+        Spec("follower.roller_radius_mm", "Roller radius r_c [mm]", "slider", 1, 50, 0.5),
+    )),
+    ("Cam", True, (
+        Spec("cam.base_radius_mm", "Base radius r_b [mm]", "slider", 10, 300, 1),
+        Spec("cam.width_mm", "Width w [mm]", "slider", 1, 100, 0.5),
+        Spec("cam.speed_rpm", "Speed [rpm]", "number", step=10),
+    )),
+    ("Dynamics", False, (
+        Spec("dynamics.mass_g", "Mass M [g]", "number", step=1),
+        Spec("dynamics.spring_rate_N_per_m", "Spring rate k [N/m]", "number", step=10),
+        Spec("dynamics.preload_mm", "Preload s_p [mm]", "number", step=0.5),
+        Spec("dynamics.guide_friction", "Guide friction μ", "number", step=0.01),
+        Spec("dynamics.guide_width_mm", "Guide width d [mm]", "number", step=0.5),
+        Spec("dynamics.guide_length_mm", "Guide length l2 [mm]", "number", step=1),
+        Spec("dynamics.overhang_mm", "Overhang l1 [mm]", "number", step=1),
+        Spec("dynamics.gravity_m_s2", "Gravity g [m/s²]", "number", step=0.01),
+        Spec("dynamics.overhang_shrinks", "Overhang shrinks with lift", "checkbox"),
+    )),
+    ("Material & limits", False, (
+        Spec("material.cam_E_GPa", "Cam E1 [GPa]", "number", step=1),
+        Spec("material.cam_nu", "Cam ν1", "number", step=0.01),
+        Spec("material.follower_E_GPa", "Follower E2 [GPa]", "number", step=1),
+        Spec("material.follower_nu", "Follower ν2", "number", step=0.01),
+        Spec("limits.max_pressure_angle_deg", "Max pressure angle [°]", "number", step=1),
+        Spec("limits.resolution_deg", "Resolution [°]", "number", step=0.05),
+    )),
+)
+
+SPECS: tuple[Spec, ...] = tuple(s for _, _, specs in FOLDERS for s in specs)
+
+
+def get_path(design: Design, path: str):
+    obj = design
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj.value if hasattr(obj, "value") else obj
+
+
+def merged(base: Design, values: dict[str, object]) -> dict:
+    """The design dict of ``base`` with control values (by path) written in."""
+    data = base.model_dump(mode="json")
+    for path, v in values.items():
+        group, key = path.split(".")
+        data[group][key] = v
+    return data
+
+
+def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, str | None]:
+    """(design, None) if the control values make a valid design, else (None, message)."""
+    try:
+        return Design.model_validate(merged(base, values)), None
+    except ValidationError as exc:
+        return None, format_validation_error(exc)
+
+
+def low_dwell_text(values: dict[str, object]) -> str:
+    try:
+        bl = 360.0 - float(values["motion.rise_deg"]) - float(values["motion.high_dwell_deg"]) \
+            - float(values["motion.fall_deg"])
+    except (KeyError, TypeError, ValueError):
+        return "Low dwell β_l: -"
+    flag = "  ⚠ negative" if bl < 0 else ""
+    return f"Low dwell β_l = 360 − β_r − β_h − β_f = **{bl:g}°**{flag}"
+
+
+# --- status panel --------------------------------------------------------------------
+
+_BOX = ("<div style='border-radius:6px;padding:6px 10px;margin:2px 0;font-size:0.85em;"
+        "line-height:1.35;background:{bg};border:2px solid {fg};color:#222'>{body}</div>")
+
+
+def status_html(error: str | None, violations, lift_error: float | None,
+                verified: bool) -> str:
+    """The always-visible panel: input errors (red), limit violations (amber), or OK."""
+    parts = []
+    if error:
+        items = "".join(f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
+                        f"{html.escape(p.split(': ', 1)[-1])}</li>" for p in error.split("; "))
+        parts.append(_BOX.format(
+            bg="#fde2e2", fg="#d62728",
+            body="<b>⛔ Invalid input — the last valid design stays on screen</b>"
+                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+    if violations:
+        items = "".join(
+            f"<li><b>{html.escape(v.equation)}</b> <code>{html.escape(v.code)}</code>: "
+            f"{html.escape(v.message)}</li>" for v in violations)
+        parts.append(_BOX.format(
+            bg="#fff3d6", fg="#e08a00",
+            body=f"<b>⚠ {len(violations)} design-limit violation"
+                 f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
+                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+    if not violations:
+        check = ""
+        if verified and lift_error is not None:
+            check = f"; geometric check max |lift − S| = {lift_error * 1e3:.2g} mm"
+        elif not verified:
+            check = "; geometric check running…"
+        parts.append(_BOX.format(bg="#e3f5e1", fg="#2ca02c",
+                                 body=f"<b>✔ All design limits met</b>{check}"))
+    return "".join(parts)
+
+
+def summary_markdown(s: dict) -> str:
+    """Key numbers of camcore.report.summary as a compact table."""
+
+    def f(x, nd=2):
+        if x is None:
+            return "–"
+        if isinstance(x, list):
+            return " … ".join(f(v, nd) for v in x)
+        return f"{x:.{nd}f}"
+
+    pa, rho = s["pressure_angle_max_deg"], s["curvature_radius_mm"]
+    fn, st = s["contact_force_max_N"], s["contact_stress_max_MPa"]
+    rows = [
+        ("High-dwell radius R", f"{f(s['dwell_radius_mm'], 3)} mm"),
+        ("ψ_h / ψ_l", f"{f(s['psi_h_deg'], 3)} / {f(s['psi_l_deg'], 3)} °"),
+        ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
+        ("ρ rise", f"{f(rho['rise'], 1)} mm"),
+        ("ρ fall", f"{f(rho['fall'], 1)} mm"),
+        ("Max F_N cycle / high dwell", f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N"),
+        ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
+                        f"{f(s['guide_force_max_N']['F2'])} N"),
+        ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
+        ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
+    ]
+    return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
+
+
+def fmt_deg(x: float) -> str:
+    return f"{math.degrees(x):.1f}°"

@@ -1,0 +1,233 @@
+"""Server-side tests of the design studio: drive the GUI handles of a real viser server
+(through websocket clients that viser counts as browser tabs, app.fake_tab) and check the scene,
+curves and panels change as they should."""
+
+from __future__ import annotations
+
+import io
+import time
+
+import numpy as np
+import pytest
+import trimesh
+from viser._gui_handles import GuiEvent, UploadedFile
+
+from app.fake_tab import FakeTab
+from app.main import App
+from camcore.model import design_to_json, load_preset
+
+
+def wait_for(pred, timeout=10.0):
+    t0 = time.time()
+    while time.time() - t0 < timeout:
+        if pred():
+            return True
+        time.sleep(0.02)
+    return False
+
+
+@pytest.fixture(scope="module")
+def app():
+    a = App(host="127.0.0.1", port=0)
+    yield a
+    a.stop()
+
+
+@pytest.fixture()
+def tab(app):
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    assert wait_for(lambda: set(app.sessions) - before), "no session for the new tab"
+    (cid,) = set(app.sessions) - before
+    s = app.sessions[cid]
+    yield s
+    t.close()
+    wait_for(lambda: cid not in app.sessions)
+
+
+def fire_upload(handle, name: str, content: bytes) -> None:
+    """What viser does when a browser uploads a file to ``handle``."""
+    handle._impl.value = UploadedFile(name, content)
+    for cb in handle._impl.update_cb:
+        cb(GuiEvent(client=None, client_id=None, target=handle))
+
+
+def test_session_starts_on_paper_example(tab):
+    s = tab
+    assert s.design == load_preset("paper_example")
+    assert s.error is None
+    assert "All design limits met" in s.status.content
+    assert s.view.nodes["cam"].vertices.shape[0] > 1000
+    assert s.view.builds == 1
+    assert "station 0" in s.where_md.content
+    assert "S1 (left face), S2 (right face)" in s.where_md.content  # low dwell: both touch
+
+
+def test_control_change_reanalyses_and_redraws(tab):
+    s = tab
+    old_verts = s.view.nodes["cam"].vertices.copy()
+    builds = s.view.builds
+    s.controls["motion.lift_mm"].value = 25.0
+    assert s.design.motion.lift_mm == 25.0
+    assert s.view.builds == builds + 1
+    new_verts = s.view.nodes["cam"].vertices
+    r_old = np.hypot(old_verts[:, 0], old_verts[:, 1]).max()
+    r_new = np.hypot(new_verts[:, 0], new_verts[:, 1]).max()
+    assert r_new > r_old + 0.009  # the high-dwell arc moved out by ~10 mm
+    s_curve = s.curves[0].handle.data[1]  # S [mm]
+    assert abs(np.nanmax(s_curve) - 25.0) < 1e-6
+    assert "Low dwell" in s.low_dwell_md.content
+    assert max(s.timings[-1:]) < 0.25  # generous: the bench measures the real figure
+
+
+def test_invalid_value_keeps_last_design_and_explains(tab):
+    s = tab
+    good, a = s.design, s.analysis
+    s.controls["motion.rise_deg"].value = 250.0  # 250 + 70 + 130 > 360
+    assert s.design == good and s.analysis is a or s.analysis.design == good
+    assert "Invalid input" in s.status.content
+    assert "exceeds 360 deg by 90 deg" in s.status.content
+    assert "−90" in s.low_dwell_md.content or "-90" in s.low_dwell_md.content
+    s.controls["follower.face_radius_mm"].value = -50.0  # still invalid, now two problems
+    assert s.design == good
+    s.controls["motion.rise_deg"].value = 100.0
+    assert "face_radius_mm" in s.status.content and "base radius" in s.status.content
+    s.controls["follower.face_radius_mm"].value = -250.0
+    assert s.error is None and "Invalid input" not in s.status.content
+    assert s.design == good
+
+
+def test_limit_violations_are_highlighted(tab):
+    s = tab
+    assert "bad" not in s.view.nodes
+    s.controls["motion.lift_mm"].value = 40.0
+    s.controls["motion.rise_deg"].value = 30.0
+    codes = {v.code for v in s.analysis.violations}
+    assert "pressure_angle" in codes
+    assert "design-limit violation" in s.status.content
+    assert "Eqs. 5, 13" in s.status.content
+    assert s.view.nodes["bad"].points.shape[0] > 0  # red segments on the cam profile
+    phi_plot = s.curves[2]
+    assert np.max(phi_plot.shade) > 0  # shaded angles on the pressure-angle curve
+    on = phi_plot.x[phi_plot.shade > 0]
+    assert on.min() >= 0 and on.max() <= 31  # only over the (short) rise
+
+
+def test_follower_kind_changes_the_body(tab):
+    s = tab
+    s.controls["follower.kind"].value = "double_roller"
+    assert s.design.follower.kind.value == "double_roller"
+    assert {"pin0", "pin1"} <= set(s.view.nodes)
+    assert s.controls["follower.face_radius_mm"].disabled
+    assert not s.controls["follower.roller_radius_mm"].disabled
+    s.controls["follower.kind"].value = "single_concave"
+    assert "pin0" not in s.view.nodes and "face1" not in s.view.nodes
+    assert s.controls["follower.offset_mm"].disabled
+    assert "In contact: **face**" in s.where_md.content
+
+
+def test_bad_upload_keeps_design_then_good_upload_loads(tab):
+    s = tab
+    good = s.design
+    fire_upload(s.upload_btn, "broken.json", b"{not json")
+    assert s.design == good
+    assert "not a JSON document" in s.status.content
+    assert "broken.json" in s.files_md.content
+    fire_upload(s.upload_btn, "bad.json", b'{"cam": {"base_radius_mm": -5}}')
+    assert s.design == good and "base_radius_mm" in s.status.content
+    other = load_preset("valve_lift_roller")
+    fire_upload(s.upload_btn, "valve.json", design_to_json(other).encode())
+    assert s.design == other and s.error is None
+    assert s.controls["cam.base_radius_mm"].value == other.cam.base_radius_mm
+    assert s.controls["follower.kind"].value == other.follower.kind.value
+
+
+def test_preset_and_downloads(tab):
+    s = tab
+    s.preset_dd.value = "classroom_harmonic"
+    s.preset_btn.value = True  # click
+    assert s.design == load_preset("classroom_harmonic")
+    s.download_btns["stl"].value = True
+    name, data = s.last_download
+    assert name.endswith(".stl")
+    mesh = trimesh.load(io.BytesIO(data), file_type="stl")
+    assert mesh.is_watertight
+    expect = s.analysis.profile.area * 1e6 * s.design.cam.width_mm
+    assert abs(mesh.volume - expect) / expect < 1e-6
+    s.download_btns["json"].value = True
+    assert s.last_download[1].decode().startswith("{")
+    for kind, ext in (("dxf", ".dxf"), ("csv", "_profile.csv"), ("angles", "_angles.csv")):
+        s.download_btns[kind].value = True
+        assert s.last_download[0].endswith(ext) and len(s.last_download[1]) > 1000
+
+
+def test_stations_angle_and_animation(tab):
+    s = tab
+    s.stations_btn.value = "2"
+    assert abs(np.radians(s.theta_deg) - s.analysis.stations[2]) < 1e-9
+    assert "at station 2" in s.where_md.content
+    assert "S1 (left face), S2 (right face)" in s.where_md.content  # both on the dwell arc
+    wxyz = np.array(s.view.cam_frame.wxyz)
+    assert abs(2 * np.arctan2(-wxyz[3], wxyz[0]) - s.analysis.stations[2]) < 1e-2
+    s.angle_slider.value = 50.0
+    assert s.theta_deg == 50.0 and "rise" in s.where_md.content
+    y = s.view.follower_frame.position[1]
+    assert abs(y - float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))) < 1e-4
+    builds = s.view.builds
+    s.play_btn.value = True
+    assert s.playing and "Pause" in s.play_btn.label
+    assert wait_for(lambda: s.theta_deg > 52.0, 5.0)
+    s.play_btn.value = True
+    assert not s.playing
+    t = s.theta_deg
+    time.sleep(0.3)
+    assert s.theta_deg == t  # paused
+    assert s.view.builds == builds  # animation never rebuilt meshes
+
+
+def test_overlays_switch(tab):
+    s = tab
+    s.angle_slider.value = 120.0
+    assert s.view.nodes["forces"].visible
+    s.overlay_boxes["forces"].value = False
+    assert not s.view.nodes["forces"].visible
+    s.overlay_boxes["arcs"].value = False
+    assert not s.view.nodes["arcs"].visible
+    s.overlay_boxes["instant_centre"].value = False
+    assert not s.view.nodes["q"].visible
+
+
+def test_compare_tab(tab):
+    s = tab
+    s.settle_once()
+    md = s.compare_view.md.content
+    for label in ("single roller", "double roller", "single concave", "double concave"):
+        assert label in md
+    assert "67.297" in md  # Table 1 reference column
+    data = s.compare_view.fn.data
+    assert len(data) == 5 and data[0].size > 100
+    assert np.all(np.isfinite(data[1])) and s.verified
+    assert "geometric check max" in s.status.content
+
+
+def test_tabs_are_isolated_and_freed(app):
+    def open_tab():
+        before = set(app.sessions)
+        t = FakeTab(app.port)
+        assert wait_for(lambda: set(app.sessions) - before)
+        (cid,) = set(app.sessions) - before
+        return t, app.sessions[cid]
+
+    (t1, s1), (t2, s2) = open_tab(), open_tab()
+    s1.controls["motion.lift_mm"].value = 30.0
+    assert s1.design.motion.lift_mm == 30.0 and s2.design.motion.lift_mm == 15.0
+    s1.play_btn.value = True
+    assert wait_for(lambda: s1.theta_deg > 1.0, 5.0)
+    assert s2.theta_deg == 0.0
+    n = len(app.sessions)
+    t1.close()
+    assert wait_for(lambda: len(app.sessions) == n - 1)
+    assert s1.closed.is_set()
+    assert wait_for(lambda: not any(t.is_alive() for t in s1.threads), 5.0)
+    t2.close()
+    assert wait_for(lambda: len(app.sessions) == n - 2)

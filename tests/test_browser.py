@@ -1,0 +1,89 @@
+"""End-to-end: the app in a real headless Chromium (Debian's /usr/bin/chromium, software
+WebGL), driven by Playwright for Python. One page, small viewport: SwiftShader is slow."""
+
+from __future__ import annotations
+
+import io
+import os
+
+import numpy as np
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+T = 90_000  # ms: software rendering on 2 cores
+
+
+def drawn_fraction(png: bytes) -> float:
+    """Fraction of pixels that differ clearly from the (uniform) background."""
+    from PIL import Image
+
+    img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    bg = np.median(img.reshape(-1, 3), axis=0)
+    return float((np.abs(img - bg).sum(axis=-1) > 40).mean())
+
+
+@pytest.mark.browser
+def test_app_in_headless_chromium(tmp_path):
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("no /usr/bin/chromium")
+    import trimesh
+    from playwright.sync_api import sync_playwright
+
+    from app.main import App
+
+    app = App(host="127.0.0.1", port=0)
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+            page = browser.new_page(viewport={"width": 1000, "height": 700},
+                                    accept_downloads=True)
+            page.set_default_timeout(T)
+            page.goto(f"http://127.0.0.1:{app.port}/")
+            # the session is built and its panels reached the page
+            page.get_by_text("All design limits met").first.wait_for()
+            page.get_by_text("In contact: S1 (left face), S2 (right face)").first.wait_for()
+            assert len(app.sessions) == 1
+            (session,) = app.sessions.values()
+
+            # the 3D canvas drew the mechanism (not just the background)
+            canvas = page.locator("canvas").first
+            canvas.wait_for()
+            page.wait_for_timeout(3000)
+            box = canvas.bounding_box()
+            assert box and box["width"] > 200
+            shot = page.screenshot(clip={"x": box["x"], "y": box["y"],
+                                         "width": min(box["width"], 560),
+                                         "height": box["height"]})
+            assert drawn_fraction(shot) > 0.02
+
+            # change a control: follower kind -> single roller, and see the change
+            kind_input = page.evaluate_handle(
+                "() => [...document.querySelectorAll('input')]"
+                ".find(e => e.value === 'double_concave')").as_element()
+            assert kind_input is not None
+            kind_input.click()
+            page.get_by_role("option", name="single_roller").click()
+            page.get_by_text("In contact: roller").first.wait_for()
+            assert session.design.follower.kind.value == "single_roller"
+            # a station button moves the mechanism and says where it is
+            page.get_by_role("button", name="5", exact=True).click()
+            page.get_by_text("at station 5").first.wait_for()
+
+            # download the STL through the browser
+            page.get_by_role("tab", name="Files").click()
+            with page.expect_download(timeout=T) as dl:
+                page.get_by_role("button", name="Cam STL (mm)").click()
+            path = tmp_path / "cam.stl"
+            dl.value.save_as(path)
+            assert dl.value.suggested_filename.endswith(".stl")
+            mesh = trimesh.load(path, file_type="stl")
+            assert mesh.is_watertight
+            a = session.analysis
+            expect = a.profile.area * 1e6 * a.design.cam.width_mm
+            assert abs(mesh.volume - expect) / expect < 1e-6
+            browser.close()
+    finally:
+        app.stop()
