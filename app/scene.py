@@ -29,6 +29,7 @@ PHI_RGB = (0, 0, 0)
 PAD_T = 0.006  # concave pad thickness [m]
 YOKE_T = 0.006
 
+DISPLAY_POINTS = 1200  # profile vertices drawn on screen (exports use all of them)
 OVERLAYS = ("contacts", "forces", "instant_centre", "pressure_angle", "arcs")
 
 
@@ -153,7 +154,7 @@ class SceneView:
         w = d.cam.width_mm * 1e-3
         zt = w / 2 + 2e-4
         try:
-            m = cam_mesh(a)
+            m = cam_mesh(a, max_points=DISPLAY_POINTS)
             verts = np.asarray(m.vertices) * 1e-3 - np.array([0.0, 0.0, w / 2])
             self.nodes["cam"] = s.add_mesh_simple(
                 "/cam/solid", verts.astype(np.float32), np.asarray(m.faces, dtype=np.uint32),
@@ -163,7 +164,7 @@ class SceneView:
             self.mesh_error = str(exc)
             if "cam" in self.nodes:
                 self.nodes.pop("cam").remove()
-        pts = a.profile.points
+        pts = a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
         thick = max(2e-4, 0.004 * a.geo.r_b)
         self.nodes["outline"] = s.add_line_segments(
             "/cam/outline", _polyline_segments(_flat(pts, zt), closed=True), EDGE_RGB,

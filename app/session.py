@@ -66,6 +66,8 @@ class Session:
         self.last_download: tuple[str, bytes] | None = None
         self.timings: list[float] = []  # seconds per re-analysis + redraw
         self.frames_played = 0  # animation frames drawn by the loop
+        self._ticket_lock = threading.Lock()
+        self._ticket = 0  # newest design-control change (see on_control)
         self._wake_anim = threading.Event()
         self._wake_settle = threading.Event()
         with self.lock:
@@ -95,7 +97,7 @@ class Session:
         self.play_btn.on_click(lambda _: self.toggle_play())
         self.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
         self.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
-        self.stations_btn.on_click(lambda e: self.goto_station(int(e.target.value)))
+        self.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
 
         tabs = gui.add_tab_group()
         self.controls: dict[str, object] = {}
@@ -178,9 +180,17 @@ class Session:
 
     # --- design changes -------------------------------------------------------------
     def on_control(self) -> None:
-        """Any design control changed: rebuild the design from all controls."""
+        """Any design control changed: rebuild the design from all controls.
+
+        Changes coalesce: each callback takes a ticket, and only the newest ticket
+        redraws (it reads every control's latest value), so a burst of slider events
+        queued on the lock costs one analysis, not one per event.
+        """
+        with self._ticket_lock:
+            self._ticket += 1
+            mine = self._ticket
         with self.lock:
-            if self._syncing or self.closed.is_set():
+            if self._syncing or self.closed.is_set() or mine != self._ticket:
                 return
             vals = self.values()
             self.low_dwell_md.content = state.low_dwell_text(vals)
@@ -331,7 +341,11 @@ class Session:
                 return
             self._goto(float(value), slider=False)
 
-    def goto_station(self, i: int) -> None:
+    def goto_station(self, i: int | str) -> None:
+        """Jump to station i (0-5); anything else (a hostile client's value) is ignored."""
+        if str(i) not in {"0", "1", "2", "3", "4", "5"}:
+            return
+        i = int(i)
         with self.lock:
             self._set_playing(False)
             self._goto(math.degrees(float(self.analysis.stations[i])))

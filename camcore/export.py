@@ -31,13 +31,24 @@ def _profile_mm(a) -> np.ndarray:
     return a.profile.points * 1e3
 
 
-def cam_mesh(a):
-    """trimesh.Trimesh of the cam: profile extruded by the width, in mm."""
+def cam_mesh(a, max_points: int | None = None):
+    """trimesh.Trimesh of the cam: profile extruded by the width, in mm.
+
+    ``max_points`` thins the profile evenly for on-screen display (the exports use
+    every vertex).
+    """
+    p = _profile_mm(a)
+    if max_points is not None and p.shape[0] > max_points:
+        p = p[:: -(-p.shape[0] // max_points)]
+    return extrude(p, a.design.cam.width_mm)
+
+
+def extrude(p: np.ndarray, width: float):
+    """Watertight prism over a polygon p (n, 2) that is star-shaped about the origin,
+    from z = 0 to z = width; the caps are triangle fans around the origin."""
     import trimesh
 
-    p = _profile_mm(a)
-    w = a.design.cam.width_mm
-    n = p.shape[0]
+    n, w = p.shape[0], width
     verts = np.vstack([
         np.column_stack([p, np.zeros(n)]),  # bottom ring 0..n-1
         np.column_stack([p, np.full(n, w)]),  # top ring n..2n-1
