@@ -131,7 +131,7 @@ def status_html(error: str | None, violations, lift_error: float | None,
                         f"{html.escape(p.split(': ', 1)[-1])}</li>" for p in error.split("; "))
         parts.append(_BOX.format(
             bg="#fde2e2", fg="#d62728",
-            body="<b>⛔ Invalid input — the last valid design stays on screen</b>"
+            body="<b>✖ Invalid input — the last valid design stays on screen</b>"
                  f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
     if violations:
         items = "".join(

@@ -28,6 +28,7 @@ MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd f
 # arithmetic underflows (a radius of 1e-320 mm is 0 m) and results turn into inf/NaN.
 MIN_LENGTH_MM = 1e-3
 MIN_MODULUS_GPa = 1e-3
+MIN_MOTION_DEG = 0.01  # a rise or fall over less than this: V, A, J overflow (Eq. 21)
 
 
 class FollowerKind(StrEnum):
@@ -70,9 +71,13 @@ class Motion(_Part):
     """Motion program: rise, high dwell, fall; the low dwell is the rest of 360 deg."""
 
     lift_mm: float = Field(15.0, ge=MIN_LENGTH_MM, le=1000, description="total lift h [mm]")
-    rise_deg: float = Field(100.0, gt=0, lt=360, description="rise angle beta_r [deg]")
+    rise_deg: float = Field(
+        100.0, ge=MIN_MOTION_DEG, lt=360, description="rise angle beta_r [deg]"
+    )
     high_dwell_deg: float = Field(70.0, ge=0, lt=360, description="high dwell beta_h [deg]")
-    fall_deg: float = Field(130.0, gt=0, lt=360, description="fall angle beta_f [deg]")
+    fall_deg: float = Field(
+        130.0, ge=MIN_MOTION_DEG, lt=360, description="fall angle beta_f [deg]"
+    )
     rise_law: MotionLaw = MotionLaw.cycloidal
     fall_law: MotionLaw = MotionLaw.cycloidal
 
@@ -96,7 +101,9 @@ class Follower(_Part):
     """Translating follower. Radii are signed as in the paper: r_f < 0 is concave."""
 
     kind: FollowerKind = FollowerKind.double_concave
-    roller_radius_mm: float = Field(8.0, ge=MIN_LENGTH_MM, le=1000, description="roller radius r_c [mm]")
+    roller_radius_mm: float = Field(
+        8.0, ge=MIN_LENGTH_MM, le=1000, description="roller radius r_c [mm]"
+    )
     face_radius_mm: float = Field(
         -250.0, lt=0, ge=-100000, description="face radius r_f [mm], negative = concave"
     )
@@ -121,8 +128,12 @@ class Follower(_Part):
 class Cam(_Part):
     """The disk cam. It turns clockwise, as in the paper."""
 
-    base_radius_mm: float = Field(80.0, ge=MIN_LENGTH_MM, le=10000, description="base radius r_b [mm]")
-    width_mm: float = Field(15.0, ge=MIN_LENGTH_MM, le=10000, description="cam and contact width w [mm]")
+    base_radius_mm: float = Field(
+        80.0, ge=MIN_LENGTH_MM, le=10000, description="base radius r_b [mm]"
+    )
+    width_mm: float = Field(
+        15.0, ge=MIN_LENGTH_MM, le=10000, description="cam and contact width w [mm]"
+    )
     speed_rpm: float = Field(1200.0, gt=0, le=100000, description="cam speed [rpm]")
 
 
@@ -133,8 +144,12 @@ class Dynamics(_Part):
     spring_rate_N_per_m: float = Field(6772.5, ge=0, le=1e9, description="spring rate k [N/m]")
     preload_mm: float = Field(5.0, ge=0, le=1e4, description="initial compression s_p [mm]")
     guide_friction: float = Field(0.1, ge=0, le=1.0, description="guide friction mu [-]")
-    guide_width_mm: float = Field(8.0, ge=MIN_LENGTH_MM, le=1e4, description="stem/guide width d [mm]")
-    guide_length_mm: float = Field(80.0, ge=MIN_LENGTH_MM, le=1e5, description="guide length l2 [mm]")
+    guide_width_mm: float = Field(
+        8.0, ge=MIN_LENGTH_MM, le=1e4, description="stem/guide width d [mm]"
+    )
+    guide_length_mm: float = Field(
+        80.0, ge=MIN_LENGTH_MM, le=1e5, description="guide length l2 [mm]"
+    )
     overhang_mm: float = Field(30.0, ge=0, le=1e5, description="initial overhang l1 [mm]")
     gravity_m_s2: float = Field(
         9.81, ge=0, le=1000, description="g along the follower axis; 0 drops weight from Eq. 29"
@@ -147,9 +162,13 @@ class Dynamics(_Part):
 class Material(_Part):
     """Elastic constants for the Hertz stress (Eq. 42)."""
 
-    cam_E_GPa: float = Field(210.0, ge=MIN_MODULUS_GPa, le=2000, description="Young's modulus E1 of the cam")
+    cam_E_GPa: float = Field(
+        210.0, ge=MIN_MODULUS_GPa, le=2000, description="Young's modulus E1 of the cam"
+    )
     cam_nu: float = Field(0.29, ge=0, lt=0.5, description="Poisson's ratio nu1 of the cam")
-    follower_E_GPa: float = Field(210.0, ge=MIN_MODULUS_GPa, le=2000, description="E2 of the follower")
+    follower_E_GPa: float = Field(
+        210.0, ge=MIN_MODULUS_GPa, le=2000, description="E2 of the follower"
+    )
     follower_nu: float = Field(0.29, ge=0, lt=0.5, description="nu2 of the follower")
 
 
@@ -185,14 +204,14 @@ class Design(_Part):
                 f"r_b = {rb:g} mm (a concave face must wrap the cam, Eq. 3)"
             )
         reach = abs(r + rb)
-        if e >= reach:
+        if e >= reach * (1.0 - 1e-9):  # margin: e == |r + r_b| to round-off puts C on O's level
             raise ValueError(
                 f"follower.offset_mm: e = {e:g} mm must be below |r + r_b| = {reach:g} mm "
                 f"(the square root in Eq. 3 needs (r + r_b)^2 - e^2 > 0)"
             )
         if not f.kind.is_roller:
             l0 = math.sqrt(reach**2 - e**2)
-            if h >= l0:
+            if h >= l0 * (1.0 - 1e-9):  # margin: h == L(0) to round-off in SI is L = 0
                 raise ValueError(
                     f"motion.lift_mm: h = {h:g} mm must stay below L(0) = {l0:.3f} mm, the "
                     f"distance of the face centre below the cam axis (Eq. 3 needs L > 0)"
