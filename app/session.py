@@ -264,7 +264,7 @@ class Session:
             with self.lock:
                 self.error = f"file {name or 'upload'}: {exc} (the current design is kept)"
                 self._show_status()
-                self.files_md.content = f"⛔ Could not open **{name}**: {exc}"
+                self.files_md.content = f"✖ Could not open **{name}**: {exc}"
             return
         self.set_design(d)
         with self.lock:
@@ -286,7 +286,7 @@ class Session:
                 else:
                     name, data = f"{base}_angles.csv", export.cam_angle_csv_text(a).encode()
             except export.ExportError as exc:
-                self.files_md.content = f"⛔ Cannot export {kind.upper()}: {exc}"
+                self.files_md.content = f"✖ Cannot export {kind.upper()}: {exc}"
                 return
             self.last_download = (name, data)
             self.files_md.content = f"Sent **{name}** ({len(data):,} bytes)."
