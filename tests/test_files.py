@@ -1,0 +1,271 @@
+"""Hostile design files (issue 4): malformed, huge, absurdly deep, wrong or older schema
+version, not JSON at all; given to design_from_json / load_design and to the CLI they
+give one clear line and a non-zero exit, never a traceback. Exports of extreme but
+valid designs stay watertight (STL) and readable (DXF)."""
+
+from __future__ import annotations
+
+import io
+import itertools
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import ezdxf
+import numpy as np
+import pytest
+import trimesh
+
+from camcore import cli
+from camcore.analysis import analyze
+from camcore.export import ExportError, dxf_bytes, stl_bytes
+from camcore.model import (
+    MAX_DESIGN_BYTES,
+    Design,
+    DesignError,
+    FollowerKind,
+    MotionLaw,
+    design_from_json,
+    design_to_json,
+    load_design,
+)
+
+GOOD = json.loads(design_to_json(Design()))
+
+
+def _doc(**parts) -> str:
+    d = json.loads(json.dumps(GOOD))
+    for k, v in parts.items():
+        d[k] = v
+    return json.dumps(d)
+
+
+# name -> (file bytes, words the one-line message must contain)
+BAD_FILES: dict[str, tuple[bytes, tuple[str, ...]]] = {
+    "empty": (b"", ("JSON",)),
+    "whitespace": (b" \n\t ", ("JSON",)),
+    "truncated": (design_to_json(Design())[:-40].encode(), ("JSON",)),
+    "trailing_garbage": (design_to_json(Design()).encode() + b" }{", ("JSON",)),
+    "single_quotes": (b"{'motion': {}}", ("JSON",)),
+    "comment": (b'{"motion": {} // lift\n}', ("JSON",)),
+    "list": (b"[1, 2, 3]", ("JSON object",)),
+    "string": (b'"a design"', ("JSON object",)),
+    "number": (b"42", ("JSON object",)),
+    "null": (b"null", ("JSON object",)),
+    "binary_random": (bytes(np.random.default_rng(4).integers(0, 256, 4096, dtype=np.uint8)),
+                      ("JSON",)),
+    "binary_png": (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + b"\x00" * 64, ("JSON",)),
+    "utf16_bom": (design_to_json(Design()).encode("utf-16"), ()),  # decodes or says why
+    "latin1": ('{"name": "caf\xe9"}'.encode("latin-1"), ("JSON",)),
+    "deep_array": (b"[" * 200_000 + b"]" * 200_000, ("JSON",)),
+    "deep_object": (b'{"a":' * 100_000 + b"1" + b"}" * 100_000, ("JSON",)),
+    "deep_in_field": (('{"name": ' + "[" * 500 + "]" * 500 + "}").encode(), ("name",)),
+    "nan": (_doc(motion={"lift_mm": "NaN"}).replace('"NaN"', "NaN").encode(), ("lift_mm",)),
+    "infinity": (_doc(cam={"base_radius_mm": 1}).replace(": 1}", ": Infinity}").encode(),
+                 ("base_radius_mm",)),
+    "overflow": (_doc(cam={"base_radius_mm": 1}).replace(": 1}", ": 1e999}").encode(),
+                 ("base_radius_mm",)),
+    "huge_int": (_doc(cam={"base_radius_mm": 1}).replace(": 1}", ": 1" + "0" * 5000 + "}")
+                 .encode(), ("JSON",)),
+    "string_number": (_doc(motion={"lift_mm": "fifteen"}).encode(), ("motion.lift_mm",)),
+    "negative": (_doc(cam={"base_radius_mm": -80}).encode(), ("cam.base_radius_mm",)),
+    "zero_radius": (_doc(cam={"base_radius_mm": 0}).encode(), ("cam.base_radius_mm",)),
+    "subnormal_radius": (_doc(cam={"base_radius_mm": 5e-324}).encode(),
+                         ("cam.base_radius_mm",)),
+    "extra_field": (_doc(cam={"base_radius_mm": 80, "colour": "red"}).encode(),
+                    ("cam.colour", "Extra")),
+    "extra_part": (_doc(gearbox={}).encode(), ("gearbox",)),
+    "wrong_part_type": (_doc(motion=[1, 2]).encode(), ("motion",)),
+    "bad_kind": (_doc(follower={"kind": "flat_faced"}).encode(), ("follower.kind",)),
+    "dwell_overflow": (_doc(motion={"rise_deg": 200, "fall_deg": 200}).encode(),
+                       ("360",)),
+    "offset_at_limit": (_doc(follower={"kind": "double_roller", "roller_radius_mm": 10,
+                                       "offset_mm": 90}).encode(), ("follower.offset_mm",)),
+    "schema_2": (_doc(schema_version=2).encode(), ("schema_version", "2")),
+    "schema_0_older": (_doc(schema_version=0).encode(), ("schema_version", "0")),
+    "schema_string": (_doc(schema_version="1.0").encode(), ("schema_version",)),
+    "schema_null": (_doc(schema_version=None).encode(), ("schema_version",)),
+    "long_name": (_doc(name="x" * 10_000).encode(), ("name",)),
+    "newline_in_value": (_doc(schema_version="1\n2\n3").encode(), ("schema_version",)),
+}
+
+
+def _huge(tmp_path: Path, size: int) -> Path:
+    """A syntactically valid design padded to ``size`` bytes with whitespace."""
+    text = design_to_json(Design())
+    p = tmp_path / "huge.json"
+    with p.open("w") as f:
+        f.write(text[:-1])
+        f.write(" " * (size - len(text)))
+        f.write("}")
+    return p
+
+
+@pytest.mark.parametrize("name", sorted(BAD_FILES))
+def test_design_from_json_one_line(name):
+    data, words = BAD_FILES[name]
+    try:
+        design_from_json(data)
+    except DesignError as exc:
+        msg = str(exc)
+    else:
+        assert name == "utf16_bom", f"{name} was accepted"
+        return
+    assert msg and "\n" not in msg, repr(msg)
+    assert len(msg) < 2000, f"message of {len(msg)} chars"
+    assert "Traceback" not in msg
+    for w in words:
+        assert w in msg, (w, msg)
+
+
+@pytest.mark.parametrize("name", sorted(BAD_FILES))
+def test_cli_bad_file_one_line_exit_2(name, tmp_path, capsys):
+    data, words = BAD_FILES[name]
+    p = tmp_path / f"{name}.json"
+    p.write_bytes(data)
+    code = cli.main(["report", str(p)])
+    out, err = capsys.readouterr()
+    if name == "utf16_bom" and code == 0:
+        return
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("camcore: error: "), err[:500]
+    assert "Traceback" not in err
+    for w in words:
+        assert w in lines[0], (w, lines[0])
+
+
+@pytest.mark.parametrize("size", [MAX_DESIGN_BYTES + 1, 30_000_000])
+def test_huge_files_are_refused_without_reading(size, tmp_path, capsys):
+    p = _huge(tmp_path, size)
+    with pytest.raises(DesignError, match="bytes"):
+        load_design(p)
+    assert cli.main(["report", str(p)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "bytes" in err
+    # the same text handed over in memory (an upload) is refused before parsing
+    with pytest.raises(DesignError, match="limit"):
+        design_from_json(p.read_bytes())
+
+
+def test_huge_but_under_the_limit_loads(tmp_path):
+    p = _huge(tmp_path, MAX_DESIGN_BYTES - 10)
+    assert load_design(p) == Design()
+
+
+def test_missing_file_directory_and_device(tmp_path, capsys):
+    for target in (tmp_path / "nope.json", tmp_path):
+        assert cli.main(["report", str(target)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("camcore: error: ") and err.count("\n") == 1, err
+
+
+def test_subprocess_binary_file_no_traceback(tmp_path):
+    """The real entry point, as a user runs it."""
+    p = tmp_path / "cam.stl"
+    p.write_bytes(BAD_FILES["binary_random"][0])
+    for args in (["report", str(p)], ["compare", str(p)],
+                 ["export", str(p), "--stl", str(tmp_path / "o.stl")]):
+        r = subprocess.run([sys.executable, "-m", "camcore.cli", *args],
+                           capture_output=True, text=True, timeout=60)
+        assert r.returncode == 2, r
+        assert "Traceback" not in r.stderr
+        assert r.stderr.startswith("camcore: error: ") and r.stderr.count("\n") == 1
+        assert r.stdout == ""
+
+
+def test_older_schema_version_says_why(tmp_path):
+    """schema_version 0 (before versioning) is refused with the versions named;
+    a file without a version is read as the current one."""
+    with pytest.raises(DesignError, match=r"reads version 1, the file says 0"):
+        design_from_json(_doc(schema_version=0))
+    d = json.loads(_doc())
+    del d["schema_version"]
+    assert design_from_json(json.dumps(d)) == Design()
+
+
+# --- exports of extreme but valid designs ------------------------------------------------
+
+def _extreme_designs():
+    """Tiny and huge cams, each follower kind and each law (pairs rotated so every law
+    meets every kind on some size)."""
+    laws = list(MotionLaw)
+    for (i, kind), (scale, res) in itertools.product(
+            enumerate(FollowerKind), [(0.001, 1.0), (1.0, 0.5), (100.0, 1.0)]):
+        rb = 80.0 * scale
+        law = laws[(i + int(np.log10(scale))) % len(laws)]
+        fall = laws[(i + 3) % len(laws)]
+        yield f"{kind.value}-{law.value}-{fall.value}-rb{rb:g}", {
+            "follower": {"kind": kind.value, "roller_radius_mm": min(8.0 * scale, 1000),
+                         "face_radius_mm": max(-250.0 * scale, -1e5),
+                         "offset_mm": min(10.0 * scale, 1000)},
+            "motion": {"lift_mm": min(15.0 * scale, 1000), "rise_law": law.value,
+                       "fall_law": fall.value},
+            "cam": {"base_radius_mm": rb, "width_mm": 15.0 * scale},
+            "limits": {"resolution_deg": res},
+        }
+    yield "lowest_dwell_edges", {
+        "motion": {"rise_deg": 179.99, "high_dwell_deg": 0.0, "fall_deg": 180.0,
+                   "lift_mm": 5.0},
+        "follower": {"kind": "single_roller"}, "limits": {"resolution_deg": 0.5}}
+    yield "min_lengths", {
+        "cam": {"base_radius_mm": 0.001, "width_mm": 0.001},
+        "motion": {"lift_mm": 0.001},
+        "follower": {"kind": "single_roller", "roller_radius_mm": 0.001},
+        "limits": {"resolution_deg": 1.0}}
+
+
+EXTREME = dict(_extreme_designs())
+
+
+@pytest.mark.parametrize("name", sorted(EXTREME))
+def test_extreme_exports_watertight_stl_and_readable_dxf(name):
+    d = Design.model_validate(EXTREME[name])
+    a = analyze(d, verify=False)
+    try:
+        stl = stl_bytes(a)
+    except ExportError as exc:  # a self-crossing profile is refused, with the reason
+        assert a.violations and "star-shaped" in str(exc)
+        pytest.skip(f"refused: {[v.code for v in a.violations]}")
+    mesh = trimesh.load(io.BytesIO(stl), file_type="stl")
+    assert mesh.is_watertight
+    assert mesh.is_winding_consistent
+    area_mm2 = a.profile.area * 1e6
+    expect = area_mm2 * d.cam.width_mm
+    assert mesh.volume > 0
+    assert mesh.volume == pytest.approx(expect, rel=1e-6)
+    # the mesh has the cam's size
+    extent = mesh.bounds[1] - mesh.bounds[0]
+    assert extent[2] == pytest.approx(d.cam.width_mm, rel=1e-6)  # STL is float32
+    assert extent[0] == pytest.approx(np.ptp(a.profile.points[:, 0]) * 1e3, rel=1e-6)
+
+    dxf = dxf_bytes(a)
+    doc = ezdxf.read(io.StringIO(dxf.decode("utf-8")))
+    polys = list(doc.modelspace().query("LWPOLYLINE"))
+    assert len(polys) == 1 and polys[0].closed
+    pts = np.array([p[:2] for p in polys[0].get_points()])
+    assert pts.shape == a.profile.points.shape
+    np.testing.assert_allclose(pts, a.profile.points * 1e3, rtol=1e-9,
+                               atol=1e-9 * max(1.0, np.abs(pts).max()))
+    auditor = doc.audit()
+    assert not auditor.has_errors, [str(e) for e in auditor.errors]
+
+
+def test_extreme_exports_mostly_succeed():
+    """Not every extreme design may be refused: most must export."""
+    ok = 0
+    for data in EXTREME.values():
+        a = analyze(Design.model_validate(data), verify=False)
+        if a.profile.is_star_shaped():
+            ok += 1
+    assert ok >= len(EXTREME) * 0.75, ok
+
+
+def test_cli_export_extreme_design(tmp_path):
+    p = tmp_path / "tiny.json"
+    p.write_text(json.dumps(EXTREME["min_lengths"]))
+    stl, dxf = tmp_path / "t.stl", tmp_path / "t.dxf"
+    assert cli.main(["export", str(p), "--stl", str(stl), "--dxf", str(dxf)]) == 0
+    assert trimesh.load(stl).is_watertight
+    ezdxf.readfile(dxf)
