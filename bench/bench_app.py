@@ -1,6 +1,6 @@
 """Bench of the design studio, on the server: re-analysis + redraw per slider change,
 and the cost and rate of animation frames. ``python bench/bench_app.py`` prints a table;
-``run()`` returns rows {name, median_ms, p90_ms, n, note}."""
+``run(quick)`` returns rows {name, median_ms, p10_ms, p90_ms, n, note} for bench/run.py."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ from camcore.analysis import analyze
 def _row(name, samples_s, note=""):
     ms = np.asarray(samples_s) * 1e3
     return {"name": name, "median_ms": float(np.median(ms)),
-            "p90_ms": float(np.percentile(ms, 90)), "n": int(ms.size), "note": note}
+            "p10_ms": float(np.percentile(ms, 10)), "p90_ms": float(np.percentile(ms, 90)),
+            "n": int(ms.size), "note": note}
 
 
 def _session(app):
@@ -31,7 +32,8 @@ def _session(app):
     return tab, app.sessions[cid]
 
 
-def run(n: int = 30) -> list[dict]:
+def run(quick: bool = False) -> list[dict]:
+    n = 10 if quick else 30
     rows = []
     app = App(host="127.0.0.1", port=0)
     try:

@@ -15,6 +15,9 @@ Limits checked (on the contact points actually in use at each cam angle):
   keep the follower on the cam.
 * ``guide_jam``         Eqs. 33-41: no guide-contact mode of Fig. 6 balances the
   follower with friction (self-locking).
+* ``profile_crossing``  Eq. 22: the finished profile is not star-shaped about the
+  axis (it crosses itself), which a convex cam never does; caught even when the
+  sampled curvature misses it between grid angles.
 * ``geometric_check``   the independent check (camcore.verify) finds the profile
   does not produce S(theta).
 """
@@ -158,6 +161,13 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
             f"no guide-contact mode of Fig. 6 balances the follower with friction "
             f"mu = {design.dynamics.guide_friction:g} (self-locking) at {_where(a, bad)}",
             runs_deg(a.theta, bad), float(bad.sum()),
+        ))
+    if not a.profile.is_star_shaped():
+        out.append(Violation(
+            "profile_crossing", "Eq. 22",
+            "the synthesized profile crosses itself (it is not star-shaped about the cam "
+            "axis); no cam can be made from it",
+            (), 1.0,
         ))
     if lift_error is not None and not lift_error <= LIFT_TOLERANCE_M:
         out.append(Violation(

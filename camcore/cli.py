@@ -11,6 +11,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .model import Design, DesignError, FollowerKind, load_design, load_preset, preset_names
 
 
@@ -110,7 +112,9 @@ def main(argv: list[str] | None = None) -> int:
 
     args = _parser().parse_args(argv)
     try:
-        args.run(args)
+        # extreme designs overflow intermediate terms; results are checked finite
+        with np.errstate(all="ignore"):
+            args.run(args)
     except (DesignError, ExportError) as exc:
         print(f"camcore: error: {exc}", file=sys.stderr)
         return 2

@@ -23,6 +23,9 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 SCHEMA_VERSION = 1
+# Upgrades of older design files: MIGRATIONS[v] turns a format-v dict into format v + 1.
+# Format 1 is the first published one, so there are none yet.
+MIGRATIONS: dict = {}
 MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd files
 # Smallest length and modulus a design may have: 1 um and 1 MPa. Below these the SI
 # arithmetic underflows (a radius of 1e-320 mm is 0 m) and results turn into inf/NaN.
@@ -221,13 +224,27 @@ class Design(_Part):
     @model_validator(mode="before")
     @classmethod
     def _known_schema(cls, data):
-        if isinstance(data, dict) and "schema_version" in data:
-            v = data["schema_version"]
-            if v != SCHEMA_VERSION:
-                raise ValueError(
-                    f"schema_version: this program reads version {SCHEMA_VERSION}, "
-                    f"the file says {v!r}"
-                )
+        """Upgrade an older file through MIGRATIONS, or say exactly why it cannot load."""
+        if not isinstance(data, dict) or "schema_version" not in data:
+            return data
+        v = data["schema_version"]
+        if type(v) is not int:
+            raise ValueError(f"schema_version: must be an integer, the file says {v!r}")
+        while v < SCHEMA_VERSION and v in MIGRATIONS:
+            data = MIGRATIONS[v](dict(data))
+            v = data["schema_version"] = v + 1
+        if v < SCHEMA_VERSION:
+            raise ValueError(
+                f"schema_version: the file is format {v}, older than any this program "
+                f"can upgrade (it reads format {SCHEMA_VERSION}"
+                + (f" and upgrades {sorted(MIGRATIONS)})" if MIGRATIONS else "; format 1 is "
+                   "the first published one)")
+            )
+        if v > SCHEMA_VERSION:
+            raise ValueError(
+                f"schema_version: the file is format {v}, written by a newer program; "
+                f"this one reads format {SCHEMA_VERSION}"
+            )
         return data
 
     def with_kind(self, kind: FollowerKind | str) -> Design:

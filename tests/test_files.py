@@ -178,7 +178,7 @@ def test_subprocess_binary_file_no_traceback(tmp_path):
 def test_older_schema_version_says_why(tmp_path):
     """schema_version 0 (before versioning) is refused with the versions named;
     a file without a version is read as the current one."""
-    with pytest.raises(DesignError, match=r"reads version 1, the file says 0"):
+    with pytest.raises(DesignError, match=r"format 0, older than any this program can upgrade"):
         design_from_json(_doc(schema_version=0))
     d = json.loads(_doc())
     del d["schema_version"]
