@@ -98,11 +98,16 @@ class App:
 
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(prog="camdesigner", description=__doc__.splitlines()[0])
-    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to bind (default 127.0.0.1, this machine only); "
+                   "0.0.0.0 serves every network interface: see the README")
     p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free "
                    "one is used if it is busy)")
     args = p.parse_args(argv)
     app = App(args.host, args.port)
+    if not args.host.startswith("127.") and args.host not in ("localhost", "::1"):
+        print(f"warning: serving on {args.host}: anyone who can reach this address can use "
+              "the app (no login, no TLS); every visitor gets their own session", flush=True)
     host = "localhost" if args.host in ("127.0.0.1", "0.0.0.0") else args.host
     print(f"Disk-cam designer running at http://{host}:{app.port}  (Ctrl-C to stop)",
           flush=True)
