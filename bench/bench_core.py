@@ -15,7 +15,7 @@ import numpy as np
 from camcore.analysis import analyze, compare
 from camcore.export import dxf_bytes, stl_bytes
 from camcore.model import Design, FollowerKind, load_preset
-from camcore.verify import follower_lift_full, max_lift_error
+from camcore.verify import follower_lift, max_lift_error
 
 
 def _time(fn, n: int, warmup: int = 1) -> np.ndarray:
@@ -77,8 +77,8 @@ def run(quick: bool = False) -> list[dict]:
                      f"pruned, N={N} x M={M} vertices"))
     faces = [(f.r, f.x_c) for f in a.geo.faces]
     rows.append(_row("geometric check brute force", _time(
-        lambda: follower_lift_full(a.profile.points, a.theta, faces, a.geo.r_b), 2 * k),
-        "verify.follower_lift_full, the O(N M) reference"))
+        lambda: follower_lift(a.profile.points, a.theta, faces, a.geo.r_b, prune=False), 2 * k),
+        "follower_lift(prune=False), the O(N M) reference"))
     rows.append(_row("analyze with verify", _time(lambda: analyze(design, True), 3 * k),
                      "analysis + geometric check"))
     rows.append(_row("STL export", _time(lambda: stl_bytes(a), 5 * k),

@@ -124,13 +124,16 @@ def _face_lift(px, py, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
 
 
 def follower_lift(
-    points: np.ndarray, theta: np.ndarray, faces: list[tuple[float, float]], r_b: float
+    points: np.ndarray, theta: np.ndarray, faces: list[tuple[float, float]], r_b: float,
+    prune: bool = True,
 ) -> np.ndarray:
     """Lift [m] at which a follower with ``faces`` [(r, x_c), ...] just touches the cam.
 
     points : (M, 2) closed profile in the cam frame [m].
     theta : (N,) cam angles [rad].
     r_b : base radius [m], which fixes the zero of the lift.
+    prune : skip vertices that provably cannot touch (exact); False gives the plain
+        O(N M) maximum, the reference the tests compare against.
 
     -inf where no vertex lies under any face (the follower would drop through).
     """
@@ -140,31 +143,18 @@ def follower_lift(
     px, py = points[:, 0], points[:, 1]
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-    phi = np.arctan2(py, px)
-    order = np.argsort(phi, kind="stable")
-    phi_s = phi[order]
-    phi3 = np.concatenate([phi_s - 2 * math.pi, phi_s, phi_s + 2 * math.pi])
-    idx3 = np.tile(order, 3)
-    rho_max = float(np.hypot(px, py).max())
+    if prune:
+        phi = np.arctan2(py, px)
+        order = np.argsort(phi, kind="stable")
+        phi_s = phi[order]
+        phi3 = np.concatenate([phi_s - 2 * math.pi, phi_s, phi_s + 2 * math.pi])
+        idx3 = np.tile(order, 3)
+        rho_max = float(np.hypot(px, py).max())
     best = np.full(theta.size, -np.inf)
     for r, x_c in faces:
-        best = np.maximum(best, _face_lift(px, py, theta, c, s, r, x_c, phi3, idx3, rho_max))
-    return best - rest
-
-
-def follower_lift_full(
-    points: np.ndarray, theta: np.ndarray, faces: list[tuple[float, float]], r_b: float
-) -> np.ndarray:
-    """The same as :func:`follower_lift` without pruning (the reference, O(N M))."""
-    r0, x0 = faces[0]
-    sigma = 1.0 if r0 + r_b > 0 else -1.0
-    rest = sigma * math.sqrt((r0 + r_b) ** 2 - x0**2)
-    px, py = points[:, 0], points[:, 1]
-    theta = np.asarray(theta, dtype=float)
-    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-    best = np.full(theta.size, -np.inf)
-    for r, x_c in faces:
-        best = np.maximum(best, _face_full(px, py, c, s, r, x_c))
+        face = (_face_lift(px, py, theta, c, s, r, x_c, phi3, idx3, rho_max) if prune
+                else _face_full(px, py, c, s, r, x_c))
+        best = np.maximum(best, face)
     return best - rest
 
 

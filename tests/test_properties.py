@@ -44,7 +44,7 @@ from camcore.model import (
     format_validation_error,
 )
 from camcore.report import summary
-from camcore.verify import follower_lift, follower_lift_full
+from camcore.verify import follower_lift
 
 # --- profiles --------------------------------------------------------------------------
 
@@ -297,7 +297,7 @@ def prop_valid_range(data: dict, verify: bool) -> None:
     check_analysis(a)
     if verify:  # the pruned geometric check equals the brute-force one exactly
         args = (a.profile.points, a.theta, [(f.r, f.x_c) for f in a.geo.faces], a.geo.r_b)
-        np.testing.assert_array_equal(follower_lift(*args), follower_lift_full(*args))
+        np.testing.assert_array_equal(follower_lift(*args), follower_lift(*args, prune=False))
     m, res = design.motion, design.limits.resolution_deg
     sampled = min(m.rise_deg, m.fall_deg) >= 20 * res  # local checks see the whole curve
     codes = {v.code for v in a.violations}
