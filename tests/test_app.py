@@ -142,6 +142,23 @@ def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     assert s.controls["follower.kind"].value == other.follower.kind.value
 
 
+@pytest.mark.parametrize("name, content, message", [
+    ("huge.json", b'{"name": "' + b"x" * 30_000_000 + b'"}', "the limit is"),
+    ("deep.json", b"[" * 100_000 + b"]" * 100_000, "not a JSON document"),
+    ("photo.png", bytes(range(256)) * 64, "not a JSON document"),
+    ("future.json", b'{"schema_version": 7}', "written by a newer program"),
+    ("list.json", b"[1, 2]", "a design is a JSON object"),
+])
+def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content, message):
+    s = tab
+    good = s.design
+    fire_upload(s.upload_btn, name, content)
+    assert s.design == good and message in s.status.content and name in s.files_md.content
+    # the server keeps serving: the same tab still redraws on a control change
+    s.controls["motion.lift_mm"].value = 12.0
+    assert s.design.motion.lift_mm == 12.0 and s.error is None
+
+
 def test_preset_and_downloads(tab):
     s = tab
     s.preset_dd.value = "classroom_harmonic"
