@@ -10,6 +10,7 @@ import argparse
 import ctypes
 import ctypes.util
 import gc
+import signal
 import threading
 import time
 
@@ -96,6 +97,10 @@ class App:
         self.server.stop()
 
 
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(prog="camdesigner", description=__doc__.splitlines()[0])
     p.add_argument("--host", default="127.0.0.1",
@@ -104,6 +109,10 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free "
                    "one is used if it is busy)")
     args = p.parse_args(argv)
+    # Ctrl-C and SIGTERM stop cleanly, even when started with SIGINT ignored (a
+    # background job of a non-interactive shell inherits that).
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, _interrupt)
     app = App(args.host, args.port)
     if not args.host.startswith("127.") and args.host not in ("localhost", "::1"):
         print(f"warning: serving on {args.host}: anyone who can reach this address can use "
