@@ -13,10 +13,15 @@ import gc
 import signal
 import threading
 import time
+import warnings
 
 import viser
 
 from .session import Session
+
+# A tab that closes while its redraw is in flight makes viser warn once per queued
+# message; that is expected (the session is being torn down), not worth a log line.
+warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
 
 
 def _load_malloc_trim():
