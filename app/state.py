@@ -57,6 +57,8 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         Spec("cam.base_radius_mm", "Base radius r_b [mm]", "slider", 10, 300, 1),
         Spec("cam.width_mm", "Width w [mm]", "slider", 1, 100, 0.5),
         Spec("cam.speed_rpm", "Speed [rpm]", "number", step=10),
+        Spec("cam.bore_diameter_mm", "Bore diameter [mm]", "number", step=1,
+             hint="shaft bore of the exported solid; 0 = solid blank"),
     )),
     ("Dynamics", False, (
         Spec("dynamics.mass_g", "Mass M [g]", "number", step=1),

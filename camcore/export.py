@@ -11,6 +11,7 @@ refused with a clear error rather than exported as a broken part.
 from __future__ import annotations
 
 import io
+import math
 
 import numpy as np
 
@@ -32,7 +33,8 @@ def _profile_mm(a) -> np.ndarray:
 
 
 def cam_mesh(a, max_points: int | None = None):
-    """trimesh.Trimesh of the cam: profile extruded by the width, in mm.
+    """trimesh.Trimesh of the cam: profile extruded by the width, in mm, with the
+    design's shaft bore (if any) through it.
 
     ``max_points`` thins the profile evenly for on-screen display (the exports use
     every vertex).
@@ -40,30 +42,69 @@ def cam_mesh(a, max_points: int | None = None):
     p = _profile_mm(a)
     if max_points is not None and p.shape[0] > max_points:
         p = p[:: -(-p.shape[0] // max_points)]
-    return extrude(p, a.design.cam.width_mm)
+    bore = a.design.cam.bore_diameter_mm / 2
+    if bore > 0 and bore >= np.hypot(p[:, 0], p[:, 1]).min():
+        raise ExportError(f"the bore (radius {bore:g} mm) cuts through the profile")
+    return extrude(p, a.design.cam.width_mm, bore)
 
 
-def extrude(p: np.ndarray, width: float):
-    """Watertight prism over a polygon p (n, 2) that is star-shaped about the origin,
-    from z = 0 to z = width; the caps are triangle fans around the origin."""
+BORE_SEGMENTS = 256  # polygon of the bore in the exported mesh
+
+
+def extrude(p: np.ndarray, width: float, bore: float = 0.0):
+    """Watertight prism over a polygon p (n, 2), counter-clockwise and star-shaped
+    about the origin, from z = 0 to z = width, with a round hole of radius ``bore``
+    (a 256-gon) about the origin when bore > 0.
+
+    Caps: a triangle fan around the origin, or with a bore a "zipper" strip between
+    the two rings, advancing along whichever ring comes next in polar angle (valid
+    because both rings are star-shaped about the origin).
+    """
     import trimesh
 
-    n, w = p.shape[0], width
-    verts = np.vstack([
-        np.column_stack([p, np.zeros(n)]),  # bottom ring 0..n-1
-        np.column_stack([p, np.full(n, w)]),  # top ring n..2n-1
-        [[0.0, 0.0, 0.0], [0.0, 0.0, w]],  # axis centres 2n, 2n+1
-    ])
-    i = np.arange(n)
-    j = (i + 1) % n
-    cb, ct = 2 * n, 2 * n + 1
-    faces = np.vstack([
-        np.column_stack([np.full(n, cb), j, i]),  # bottom cap, facing -z
-        np.column_stack([np.full(n, ct), n + i, n + j]),  # top cap, facing +z
-        np.column_stack([i, j, n + j]),  # side quads as two triangles, facing out
-        np.column_stack([i, n + j, n + i]),
-    ])
-    return trimesh.Trimesh(vertices=verts, faces=faces, process=False)
+    n = p.shape[0]
+    if bore > 0:
+        a0 = math.atan2(p[0, 1], p[0, 0])
+        t = a0 + 2 * math.pi * np.arange(BORE_SEGMENTS) / BORE_SEGMENTS
+        inner = bore * np.column_stack([np.cos(t), np.sin(t)])
+        cap = _zipper(p, a0)  # indices: outer 0..n-1, inner n..n+m-1
+    else:
+        inner = np.zeros((1, 2))  # the axis point as the fan's centre
+        i = np.arange(n)
+        cap = np.column_stack([i, (i + 1) % n, np.full(n, n)])
+    ring = np.vstack([p, inner])
+    k = ring.shape[0]
+    verts = np.vstack([np.column_stack([ring, np.zeros(k)]),
+                       np.column_stack([ring, np.full(k, width)])])
+    faces = [cap + k, cap[:, ::-1]]  # top faces +z, bottom faces -z
+    faces += _wall(np.arange(n), k)  # outer wall, facing out
+    if bore > 0:
+        faces += _wall(n + np.arange(inner.shape[0])[::-1], k)  # bore wall, facing the axis
+    return trimesh.Trimesh(vertices=verts, faces=np.vstack(faces), process=False)
+
+
+def _wall(loop: np.ndarray, k: int) -> list[np.ndarray]:
+    """Quads (as triangle pairs) between the bottom and top copies of a closed loop."""
+    i, j = loop, np.roll(loop, -1)
+    return [np.column_stack([i, j, j + k]), np.column_stack([i, j + k, i + k])]
+
+
+def _zipper(p: np.ndarray, a0: float) -> np.ndarray:
+    """Counter-clockwise triangles between the outer ring p (n points, polar angles
+    increasing from a0) and a BORE_SEGMENTS-gon starting on the same ray."""
+    n, m = p.shape[0], BORE_SEGMENTS
+    ang_o = a0 + np.mod(np.arctan2(p[:, 1], p[:, 0]) - a0, 2 * math.pi)
+    next_o = np.append(ang_o[1:], a0 + 2 * math.pi)
+    next_i = a0 + 2 * math.pi * np.arange(1, m + 1) / m
+    is_outer = np.concatenate([np.ones(n, bool), np.zeros(m, bool)])
+    order = np.lexsort((~is_outer, np.concatenate([next_o, next_i])))
+    step_outer = is_outer[order]
+    i = np.cumsum(step_outer) - step_outer  # outer vertex before each step
+    j = np.cumsum(~step_outer) - ~step_outer  # inner vertex before each step
+    o0, o1 = i % n, (i + 1) % n
+    i0, i1 = n + j % m, n + (j + 1) % m
+    return np.where(step_outer[:, None],
+                    np.column_stack([o0, o1, i0]), np.column_stack([o0, i1, i0]))
 
 
 def stl_bytes(a) -> bytes:
@@ -72,8 +113,9 @@ def stl_bytes(a) -> bytes:
 
 
 def dxf_bytes(a) -> bytes:
-    """DXF (R2010, mm) with the closed profile as an LWPOLYLINE on layer PROFILE and
-    the axis as a small circle on layer AXIS, for CAM/CNC software."""
+    """DXF (R2010, mm) with the closed profile as an LWPOLYLINE on layer PROFILE, the
+    axis as a small circle on layer AXIS and the bore (if any) as a true circle on
+    layer BORE, for CAM/CNC software."""
     import ezdxf
 
     p = _profile_mm(a)
@@ -84,6 +126,10 @@ def dxf_bytes(a) -> bytes:
     msp = doc.modelspace()
     msp.add_lwpolyline(p.tolist(), close=True, dxfattribs={"layer": "PROFILE"})
     msp.add_circle((0.0, 0.0), radius=1.0, dxfattribs={"layer": "AXIS"})
+    if a.design.cam.bore_diameter_mm > 0:
+        doc.layers.add("BORE", color=3)
+        msp.add_circle((0.0, 0.0), radius=a.design.cam.bore_diameter_mm / 2,
+                       dxfattribs={"layer": "BORE"})
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue().encode("utf-8")

@@ -138,6 +138,19 @@ class Cam(_Part):
         15.0, ge=MIN_LENGTH_MM, le=10000, description="cam and contact width w [mm]"
     )
     speed_rpm: float = Field(1200.0, gt=0, le=100000, description="cam speed [rpm]")
+    bore_diameter_mm: float = Field(
+        0.0, ge=0, le=20000,
+        description="shaft bore of the exported solid [mm]; 0 = a solid blank",
+    )
+
+    @model_validator(mode="after")
+    def _bore_inside_base_circle(self) -> Cam:
+        if self.bore_diameter_mm >= 2 * self.base_radius_mm:
+            raise ValueError(
+                f"bore_diameter_mm = {self.bore_diameter_mm:g} mm must be below the base "
+                f"circle's diameter 2 r_b = {2 * self.base_radius_mm:g} mm"
+            )
+        return self
 
 
 class Dynamics(_Part):
