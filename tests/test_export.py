@@ -6,6 +6,8 @@ import math
 import ezdxf
 import pytest
 import trimesh
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from pydantic import ValidationError
 
 from camcore import export
@@ -43,3 +45,20 @@ def test_bore_in_dxf():
 def test_bore_larger_than_base_circle_is_rejected():
     with pytest.raises(ValidationError, match="bore_diameter_mm"):
         with_bore(160.0)
+
+
+@settings(max_examples=25, deadline=None, derandomize=True)
+@given(
+    preset=st.sampled_from(["paper_example", "indexer_345", "valve_lift_roller",
+                            "classroom_harmonic"]),
+    fraction=st.floats(min_value=0.0, max_value=0.999),
+)
+def test_any_bore_inside_the_base_circle_exports_a_solid(preset, fraction):
+    d = load_preset(preset)
+    data = d.model_dump()
+    data["cam"]["bore_diameter_mm"] = fraction * 2 * d.cam.base_radius_mm
+    data["limits"]["resolution_deg"] = 0.5
+    a = analyze(Design.model_validate(data), verify=False)
+    mesh = export.cam_mesh(a)
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
+    assert mesh.euler_number == (0 if fraction > 0 else 2)
