@@ -66,9 +66,9 @@ def slow(n: int) -> settings:
     return settings(_CI, max_examples=n * SLOW_FACTOR, derandomize=False)
 
 
-# A single analysis at the coarsest resolution takes ~1 ms and at 0.1 deg ~10 ms; even
-# at the finest allowed resolution (0.005 deg) it stays well below this.
-ANALYSIS_SECONDS = 5.0
+# A hang guard, not a speed test (speed is measured in bench/): one analysis takes
+# milliseconds, so only a hang or a runaway loop comes near this.
+ANALYSIS_SECONDS = 30.0
 
 # --- the model's fields, read from pydantic ---------------------------------------------
 
@@ -278,7 +278,7 @@ def run_analysis(design: Design, verify: bool) -> Analysis:
         a = analyze(design, verify=verify)
     dt = time.perf_counter() - t0
     note(f"analysis {dt * 1e3:.1f} ms, warnings: {[str(w.message) for w in caught]}")
-    assert dt < ANALYSIS_SECONDS, f"analysis took {dt:.1f} s"
+    assert dt < ANALYSIS_SECONDS, f"analysis hung for {dt:.1f} s"
     return a
 
 
