@@ -174,3 +174,32 @@ def test_offset_too_large_is_rejected():
     data["follower"]["offset_mm"] = 171.0  # |r_f + r_b| = 170
     with pytest.raises(ValidationError, match="offset_mm"):
         Design.model_validate(data)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_normal_and_curvature_from_the_finished_polyline(kind):
+    """From the finished profile alone: the normal at each rise/fall contact vertex
+    (perpendicular to the chord through its neighbours, turned to the world frame) is
+    the instant-centre normal of Eqs. 5/13, and the circle through three consecutive
+    vertices has the radius of Eq. 21."""
+    a = analyze(PAPER.with_kind(kind), verify=False)
+    P, part, th = a.profile.points, a.profile.part, a.profile.theta
+    k = np.flatnonzero((part == RISE) | (part == FALL))
+    k = k[(k > 0) & (k < len(P) - 1)]
+    k = k[(part[k - 1] == part[k]) & (part[k + 1] == part[k])][::7]
+    prev, here, nxt = P[k - 1], P[k], P[k + 1]
+    chord = nxt - prev
+    outward = np.stack([chord[:, 1], -chord[:, 0]], -1)  # CCW profile: right of travel
+    outward /= np.hypot(*outward.T)[:, None]
+    c, s = np.cos(th[k]), np.sin(th[k])
+    world = np.stack([c * outward[:, 0] + s * outward[:, 1],
+                      -s * outward[:, 0] + c * outward[:, 1]], -1)
+    # which face touched at that angle, and its normal there
+    grid = np.searchsorted(a.theta, th[k])
+    face = np.where(part[k] == RISE, 0, len(a.geo.faces) - 1)
+    np.testing.assert_allclose(world, a.normal[face, grid], atol=2e-5)
+    # Menger curvature: 4 * area / (product of the three side lengths)
+    u, v = here - prev, nxt - here
+    cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
+    rho_fit = (np.hypot(*u.T) * np.hypot(*v.T) * np.hypot(*chord.T)) / (2 * cross)
+    np.testing.assert_allclose(rho_fit, a.rho[face, grid], rtol=2e-3)
