@@ -132,6 +132,15 @@ def _circle(r: float, n: int = 180) -> np.ndarray:
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
 
 
+def geometry_key(design) -> str:
+    """Everything the drawn geometry depends on (not speed, spring, mass, material)."""
+    return design.model_dump_json(include={
+        "motion": True, "follower": True, "limits": {"resolution_deg"},
+        "cam": {"base_radius_mm", "width_mm", "bore_diameter_mm"},
+        "dynamics": {"guide_width_mm", "guide_length_mm", "overhang_mm"},
+    })
+
+
 class SceneView:
     """Scene nodes of one client. All methods are called with the session lock held."""
 
@@ -144,15 +153,28 @@ class SceneView:
         self.cam_frame = scene.add_frame("/cam", show_axes=False)
         self.follower_frame = scene.add_frame("/follower", show_axes=False)
         self.nodes: dict[str, object] = {}
-        self.builds = 0
+        self.builds = 0  # geometry rebuilds
+        self._geometry: str | None = None
 
     # --- build once per analysis ---------------------------------------------------
     def build(self, a) -> None:
+        """Show a new analysis. The geometry (cam, follower, arcs, overlay markers) is
+        rebuilt only when it changed: a new speed, spring or material moves no node."""
         self.a = a
-        self.builds += 1
-        s, d = self.scene, a.design
-        w = d.cam.width_mm * 1e-3
+        w = a.design.cam.width_mm * 1e-3
         zt = w / 2 + 2e-4
+        thick = max(2e-4, 0.004 * a.geo.r_b)
+        key = geometry_key(a.design)
+        if key != self._geometry:
+            self._geometry = key
+            self.builds += 1
+            self._build_geometry(a, w, zt, thick)
+        self.fn_scale = 0.5 * a.geo.r_b / max(1e-9, float(np.max(np.abs(a.guide.FN))))
+        self._build_bad(a, zt + 1e-4, thick * 2.5)
+        self.pose(self.k if self.k < a.theta.size else 0)
+
+    def _build_geometry(self, a, w, zt, thick) -> None:
+        s = self.scene
         try:
             m = cam_mesh(a, max_points=DISPLAY_POINTS)
             verts = np.asarray(m.vertices) * 1e-3 - np.array([0.0, 0.0, w / 2])
@@ -165,14 +187,12 @@ class SceneView:
             if "cam" in self.nodes:
                 self.nodes.pop("cam").remove()
         pts = a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
-        thick = max(2e-4, 0.004 * a.geo.r_b)
         self.nodes["outline"] = s.add_line_segments(
             "/cam/outline", _polyline_segments(_flat(pts, zt), closed=True), EDGE_RGB,
             thickness=thick * 0.6)
         self.nodes["hub"] = s.add_line_segments(
             "/cam/hub", _polyline_segments(_flat(_circle(0.1 * a.geo.r_b, 48), zt), True),
             EDGE_RGB, thickness=thick * 0.6)
-        self._build_bad(a, zt + 1e-4, thick * 2.5)
         self._build_arcs(a, zt + 2e-4, thick * 1.5)
         parts = follower_parts(a)
         self._face_meshes = [parts[f"face{i}"][0] for i in range(len(a.geo.faces))]
@@ -187,7 +207,6 @@ class SceneView:
                 self.nodes.pop(name).remove()
         self._build_face_labels(a)
         self._build_overlays(a, zt)
-        self.pose(self.k if self.k < a.theta.size else 0)
 
     def _build_bad(self, a, z, thick) -> None:
         """Red profile segments over the cam angles where a limit is violated."""
@@ -239,7 +258,6 @@ class SceneView:
     def _build_overlays(self, a, zt) -> None:
         s = self.scene
         r = 0.03 * a.geo.r_b + 0.5e-3
-        self.fn_scale = 0.5 * a.geo.r_b / max(1e-9, float(np.max(np.abs(a.guide.FN))))
         for i in range(2):
             key = f"contact{i}"
             if i < len(a.geo.faces):

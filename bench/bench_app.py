@@ -59,6 +59,13 @@ def run(quick: bool = False) -> list[dict]:
         s.controls["follower.kind"].value = "double_concave"
         time.sleep(1.0)
         t = []
+        for i in range(n):
+            t0 = time.perf_counter()
+            s.controls["cam.speed_rpm"].value = 1200.0 + (i % 2) * 10  # geometry unchanged
+            t.append(time.perf_counter() - t0)
+        rows.append(_row("speed change -> re-analysis + redraw (geometry kept)", t,
+                         "analyze + plots + panels; cam and follower nodes not re-sent"))
+        t = []
         for i in range(1, 10 * n):
             t0 = time.perf_counter()
             s.frame(1 / 30, i if i % 3 and i % 15 else i + 1)  # transform-only frames
