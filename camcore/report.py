@@ -53,6 +53,10 @@ def summary(a: Analysis) -> dict:
         "psi_h_deg": a.geo.psi_h * R2D,
         "psi_l_deg": a.geo.psi_l * R2D,
         "stations_deg": [float(s) for s in a.stations * R2D],
+        "dwell_arc_deg": {  # angles the dwell arcs subtend on the cam (Eqs. 24, 26)
+            "high": a.design.motion.high_dwell_deg - 2 * a.geo.psi_h * R2D,
+            "low": a.design.motion.low_dwell_deg + 2 * a.geo.psi_l * R2D,
+        },
         "pressure_angle_max_deg": {
             "rise": _max(phi[on & (a.part == RISE)]),
             "fall": _max(phi[on & (a.part == FALL)]),
@@ -97,6 +101,8 @@ def report_text(s: dict) -> str:
         ("psi_h / psi_l (Eqs. 23, 25)",
          f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg"),
         ("stations 0-5", " ".join(f"{v:.3f}" for v in s["stations_deg"]) + " deg"),
+        ("dwell arcs high / low (Eqs. 24, 26)",
+         f"{_fmt(s['dwell_arc_deg']['high'], 3)} / {_fmt(s['dwell_arc_deg']['low'], 3)} deg"),
         ("max pressure angle rise / fall",
          f"{_fmt(s['pressure_angle_max_deg']['rise'], 2)} / "
          f"{_fmt(s['pressure_angle_max_deg']['fall'], 2)} deg"),

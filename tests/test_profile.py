@@ -203,3 +203,21 @@ def test_normal_and_curvature_from_the_finished_polyline(kind):
     cross = u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
     rho_fit = (np.hypot(*u.T) * np.hypot(*v.T) * np.hypot(*chord.T)) / (2 * cross)
     np.testing.assert_allclose(rho_fit, a.rho[face, grid], rtol=2e-3)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_dwell_arcs_subtend_eqs_24_and_26(kind):
+    """The arcs of the finished profile, measured as polar-angle spans of its vertices,
+    subtend beta_h - 2 psi_h (Eq. 24) and beta_l + 2 psi_l (Eq. 26)."""
+    from camcore.report import summary
+
+    a = analyze(PAPER.with_kind(kind), verify=False)
+    s = summary(a)
+    P, part = a.profile.points, a.profile.part
+    for seg, key in ((1, "high"), (3, "low")):
+        idx = np.flatnonzero(part == seg)
+        # include the neighbouring motion-curve vertices where the arc begins and ends
+        ends = P[[idx[0] - 1, (idx[-1] + 1) % len(P)]]
+        span = np.degrees(np.mod(np.arctan2(ends[1, 1], ends[1, 0])
+                                 - np.arctan2(ends[0, 1], ends[0, 0]), 2 * math.pi))
+        assert span == pytest.approx(s["dwell_arc_deg"][key], abs=1e-6)
