@@ -9,7 +9,6 @@ the last valid design stays on screen meanwhile.
 from __future__ import annotations
 
 import html
-import math
 from dataclasses import dataclass, field
 
 from pydantic import ValidationError
@@ -180,7 +179,3 @@ def summary_markdown(s: dict) -> str:
         ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
     ]
     return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
-
-
-def fmt_deg(x: float) -> str:
-    return f"{math.degrees(x):.1f}°"

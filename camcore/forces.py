@@ -35,7 +35,6 @@ import numpy as np
 from .model import MM, Design, omega_rad_s
 
 MODES = ((1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0))
-MODE_NAMES = ("a", "b", "c", "d")
 TWO_CONTACTS = 4  # mode code of a two-contact dwell (Eqs. 36-38); -1 = self-locking
 
 

@@ -128,12 +128,6 @@ def to_body(theta: np.ndarray, world: np.ndarray) -> np.ndarray:
     return np.stack([c * world[:, 0] - s * world[:, 1], s * world[:, 0] + c * world[:, 1]], -1)
 
 
-def to_world(theta: float, body: np.ndarray) -> np.ndarray:
-    """Cam-fixed points to the world frame at cam angle theta (inverse of Eq. 11)."""
-    c, s = math.cos(theta), math.sin(theta)
-    return np.stack([c * body[..., 0] + s * body[..., 1], -s * body[..., 0] + c * body[..., 1]], -1)
-
-
 def curvature_radius(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
     """Signed radius of curvature rho [m] of the profile traced by ``face`` (Eq. 21).
 
