@@ -193,10 +193,10 @@ class Session:
             if self._syncing or self.closed.is_set() or mine != self._ticket:
                 return
             vals = self.values()
-            self.low_dwell_md.content = state.low_dwell_text(vals)
             design, err = state.try_design(self.base, vals)
             if err is not None:
                 self.error = err
+                self.low_dwell_md.content = state.low_dwell_text(vals)  # e.g. "negative"
                 self._show_status()
                 return
             self.error = None
