@@ -22,6 +22,8 @@ from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from .units import DEG, MM, RPM  # noqa: F401  (MM, DEG re-exported for older imports)
+
 SCHEMA_VERSION = 1
 # Upgrades of older design files: MIGRATIONS[v] turns a format-v dict into format v + 1.
 # Format 1 is the first published one, so there are none yet.
@@ -338,10 +340,7 @@ def load_preset(name: str) -> Design:
 
 # --- SI conversion at the edge -------------------------------------------------------
 
-MM = 1e-3
-DEG = math.pi / 180.0
-
 
 def omega_rad_s(design: Design) -> float:
     """Cam angular speed omega_2 [rad/s] (the magnitude; the cam turns clockwise)."""
-    return design.cam.speed_rpm * 2.0 * math.pi / 60.0
+    return design.cam.speed_rpm * RPM
