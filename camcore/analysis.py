@@ -3,6 +3,11 @@
 design -> motion program -> face contacts and profile -> forces -> stress -> checks
 (-> optional independent geometric verification). Everything is vectorized over
 the cam-angle grid; the same code path serves all four followers.
+
+``evaluate`` computes everything that is defined at a single cam angle, at any set of
+angles; ``analyze`` runs it on the design's grid, assembles the profile, finds the
+worst values of the checked quantities between the grid samples (camcore.extremes)
+and lists the broken limits (camcore.checks).
 """
 
 from __future__ import annotations
@@ -11,40 +16,83 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import checks, forces, motion, profile
+from . import checks, extremes, forces, motion, profile
 from .contact import contact_stress
 from .model import Design, FollowerKind
 
 
 @dataclass(frozen=True)
-class Analysis:
-    """Results over the cam-angle grid theta (N points); per-face arrays are (n_faces, N).
+class Local:
+    """Everything defined at one cam angle, over angles theta (N); per face (F, N).
 
     SI units throughout: metres, radians, newtons, pascals.
     """
 
-    design: Design
-    geo: profile.Geometry
     prog: motion.Program
     in_contact: np.ndarray  # (F, N) bool
+    part: np.ndarray  # (F, N) index into the segments of the profile piece under the face
     point_world: np.ndarray  # (F, N, 2) contact point of each face in the world frame
-    point_body: np.ndarray  # (F, N, 2) the same point in the cam frame
+    point_body: np.ndarray  # (F, N, 2) the same point in the cam frame (Eq. 11)
     normal: np.ndarray  # (F, N, 2) unit common normal (cam -> follower), world frame
     pressure_angle: np.ndarray  # (F, N) [rad], signed (see camcore.profile)
+    kappa_pitch: np.ndarray  # (F, N) pitch-curve curvature [1/m]
     rho: np.ndarray  # (F, N) cam radius of curvature at the contact point [m] (Eq. 21)
-    part: np.ndarray  # (F, N) profile segment the contact point lies on
     Ft: np.ndarray  # (N,) total load on the follower [N] (Eq. 29)
-    guide: forces.GuideSolution  # F1, F2, mode per angle
+    guide: forces.GuideSolution  # F1, F2, F_N per contact, mode per angle
     FN: np.ndarray  # (F, N) contact force at each face [N], 0 where not touching
     stress: np.ndarray  # (F, N) Hertz stress [Pa] (Eq. 42)
+
+
+def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
+             theta: np.ndarray) -> Local:
+    """The per-angle results (Eqs. 1-19, 21, 29-42) at the cam angles ``theta`` [rad]."""
+    prog = motion.program(design, theta)
+    contacts = [profile.face_contact(geo, f, prog) for f in geo.faces]
+    normal = np.stack([c.normal for c in contacts])
+    point_world = np.stack([c.point for c in contacts])
+    point_body = np.stack([profile.to_body(prog.theta, p) for p in point_world])
+    kappa = np.stack([profile.pitch_curvature(geo, f, prog) for f in geo.faces])
+    rho = np.stack([profile.curvature_radius(geo, f, k) for f, k in zip(geo.faces, kappa,
+                                                                           strict=True)])
+    windows, part = profile.contact_windows(geo, prog, segs)
+    Ft = forces.total_load(design, prog.S, prog.A)
+    x_c = np.array([f.x_c for f in geo.faces])
+    guide = forces.follower_forces(design, Ft, windows, normal, x_c, geo.r, prog.S, prog.V)
+    FN = np.where(windows, guide.FN[None, :], 0.0)
+    return Local(
+        prog=prog, in_contact=windows, part=part, point_world=point_world,
+        point_body=point_body, normal=normal,
+        pressure_angle=np.stack([c.pressure_angle for c in contacts]), kappa_pitch=kappa,
+        rho=rho, Ft=Ft, guide=guide, FN=FN, stress=contact_stress(design, FN, rho),
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Analysis(Local):
+    """The per-angle results on the design's grid, the profile and the verdict."""
+
+    design: Design
+    geo: profile.Geometry
+    segments: tuple[motion.Segment, ...]
     profile: profile.Polyline
     stations: np.ndarray  # (6,) cam angles of stations 0-5 [rad]
+    worst: dict = field(default_factory=dict)  # camcore.extremes.worst_values
     violations: list[checks.Violation] = field(default_factory=list)
     lift_error: float | None = None  # max |lift - S| [m] of the geometric check
 
     @property
     def theta(self) -> np.ndarray:
         return self.prog.theta
+
+    @property
+    def segment_code(self) -> np.ndarray:
+        """(F, N) RISE / HIGH / FALL / LOW of the profile piece under each face."""
+        return np.array([g.code for g in self.segments], dtype=np.int8)[self.part]
+
+    @property
+    def on_curve(self) -> np.ndarray:
+        """(F, N) where a face touches a rise or fall curve (not a dwell arc)."""
+        return self.in_contact & np.isin(self.segment_code, motion.MOTIONS)
 
     @property
     def n_contacts(self) -> np.ndarray:
@@ -57,6 +105,10 @@ class Analysis:
     def primary(self, per_face: np.ndarray) -> np.ndarray:
         """A per-face quantity at the face that touches (the rise face when both do)."""
         return np.where(self.in_contact[0], per_face[0], per_face[-1])
+
+    def local(self, theta: np.ndarray) -> Local:
+        """The per-angle results at other cam angles (e.g. between the grid's)."""
+        return evaluate(self.design, self.geo, self.segments, theta)
 
 
 def stations(design: Design, geo: profile.Geometry) -> np.ndarray:
@@ -77,32 +129,18 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     design : the design (validated pydantic model).
     verify : also run the independent geometric check (camcore.verify).
     theta : cam angles [rad]; default: the design's grid (0 .. 2 pi at its resolution,
-        with every segment boundary on the grid).
+        with every segment boundary and station on the grid, and every rise and fall
+        resolved by motion.MIN_MOTION_STEPS samples at least).
     """
-    th = motion.theta_grid(design) if theta is None else np.asarray(theta, dtype=float)
     geo = profile.geometry(design)
-    prog = motion.program(design, th)
-    contacts = [profile.face_contact(geo, f, prog) for f in geo.faces]
-    normal = np.stack([c.normal for c in contacts])
-    point_world = np.stack([c.point for c in contacts])
-    point_body = np.stack([profile.to_body(prog.theta, p) for p in point_world])
-    rho = np.stack([profile.curvature_radius(geo, f, prog) for f in geo.faces])
-    windows = profile.contact_windows(geo, prog, design)
-    parts = profile.profile_part(geo, prog)
-
-    Ft = forces.total_load(design, prog.S, prog.A)
-    x_c = np.array([f.x_c for f in geo.faces])
-    guide = forces.follower_forces(design, Ft, windows, normal, x_c, geo.r, prog.S, prog.V)
-    FN = np.where(windows, guide.FN[None, :], 0.0)
-    stress = contact_stress(design, FN, rho)
-    poly = profile.assemble(prog, point_body, windows, parts)
-
-    result = Analysis(
-        design=design, geo=geo, prog=prog, in_contact=windows, point_world=point_world,
-        point_body=point_body, normal=normal,
-        pressure_angle=np.stack([c.pressure_angle for c in contacts]), rho=rho, part=parts,
-        Ft=Ft, guide=guide, FN=FN, stress=stress, profile=poly, stations=stations(design, geo),
-    )
+    segs = motion.segments(design)
+    st = stations(design, geo)
+    th = motion.theta_grid(design, tuple(st)) if theta is None else np.asarray(theta, float)
+    loc = evaluate(design, geo, segs, th)
+    poly = profile.assemble(loc.prog, segs, loc.point_body, loc.in_contact, loc.part)
+    result = Analysis(**vars(loc), design=design, geo=geo, segments=segs, profile=poly,
+                      stations=st)
+    result = replace(result, worst=extremes.worst_values(result))
     lift_error = None
     if verify:
         from .verify import max_lift_error

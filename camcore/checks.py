@@ -1,23 +1,28 @@
-"""Design limits: each broken limit becomes a Violation naming its equation, where it
-fails (cam-angle ranges in degrees) and by how much.
+"""Design limits: each broken limit becomes a Violation naming its source (the paper's
+equation, or the rule it comes from), where it fails (cam-angle ranges in degrees) and
+by how much.
 
-Limits checked (on the contact points actually in use at each cam angle):
+Limits are checked on the contact points actually in use at each cam angle, and on
+the rise and fall curves also between the grid samples (camcore.extremes), so a
+verdict holds for the real cam, not only at the analysed angles:
 
-* ``curvature_convex``  Eq. 22, rho > 0: the cam must be convex.
-* ``curvature_face``    Eq. 22, rho < |r_f| (concave faces): otherwise the face
-  touches at several points or not at the synthesized one.
-* ``roller_undercut``   rollers: rho > r_c, the conservative no-undercut rule
-  (equivalently a pitch-curve radius above 2 r_c).
-* ``pressure_angle``    Eqs. 5/13: |phi| <= the user's maximum (default 30 deg).
+* ``curvature_convex``  concave faces, Eq. 22, rho > 0: the cam must be convex; where
+  the pitch-curve radius 1/kappa_p reaches |r_f| the profile folds back (rho < 0).
+* ``curvature_face``    concave faces, Eq. 22, rho < |r_f|: a cam flatter than the
+  face touches it at two points or at the wrong one.
+* ``roller_undercut``   rollers: the pitch curve's radius must not lie in (0, r_c]
+  (the parallel curve at r_c folds back there; not in the paper, the classic undercut
+  rule, e.g. Norton, Cam Design and Manufacturing Handbook, ch. 7). A roller runs
+  happily on a concave flank (rho < -r_c).
+* ``pressure_angle``    Eqs. 5/13 against the user's maximum (default 30 deg).
 * ``high_dwell_arc``    Eq. 28, beta_h >= 4 psi_h (double followers).
 * ``low_dwell_arc``     Eq. 27, beta_l >= 0 (already enforced by the model).
 * ``jump``              Eqs. 29-41: contact force F_N <= 0 means the spring cannot
   keep the follower on the cam.
 * ``guide_jam``         Eqs. 33-41: no guide-contact mode of Fig. 6 balances the
   follower with friction (self-locking).
-* ``profile_crossing``  Eq. 22: the finished profile is not star-shaped about the
-  axis (it crosses itself), which a convex cam never does; caught even when the
-  sampled curvature misses it between grid angles.
+* ``profile_crossing``  the finished profile is not star-shaped about the axis (it
+  crosses itself), which a convex cam never does.
 * ``geometric_check``   the independent check (camcore.verify) finds the profile
   does not produce S(theta).
 """
@@ -29,10 +34,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .motion import FALL, RISE
+from .units import to_deg, to_mm
 
-MM_PER_M = 1e3
-RAD2DEG = 180.0 / math.pi
 LIFT_TOLERANCE_M = 1e-8  # 1e-5 mm: far above round-off, far below any real defect
 
 
@@ -54,126 +57,151 @@ class Violation:
         }
 
 
-def runs_deg(theta: np.ndarray, mask: np.ndarray) -> tuple[tuple[float, float], ...]:
-    """Contiguous runs of ``mask`` over the grid, as (start, end) cam angles in degrees."""
-    if not mask.any():
-        return ()
+def runs_deg(theta: np.ndarray, mask: np.ndarray,
+             extra: tuple[tuple[float, float], ...] = ()) -> tuple[tuple[float, float], ...]:
+    """Contiguous runs of ``mask`` over the grid, with the brackets ``extra`` [rad] of
+    breaks found between the samples, merged, as (start, end) cam angles in degrees."""
     m = mask.astype(np.int8)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], m, [0]])))
-    return tuple(
-        (round(float(theta[a] * RAD2DEG), 3), round(float(theta[b - 1] * RAD2DEG), 3))
-        for a, b in zip(edges[::2], edges[1::2], strict=True)
-    )
+    spans = [(float(theta[a]), float(theta[b - 1]))
+             for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    merged: list[list[float]] = []
+    for lo, hi in sorted(spans + list(extra)):
+        if merged and lo <= merged[-1][1] + 1e-12:
+            merged[-1][1] = max(merged[-1][1], hi)
+        else:
+            merged.append([lo, hi])
+    return tuple((round(float(to_deg(lo)), 3), round(float(to_deg(hi)), 3)) for lo, hi in merged)
 
 
-def _where(a, mask) -> str:
-    r = runs_deg(a.theta, mask)
-    shown = ", ".join(f"{s:g}-{e:g}" for s, e in r[:4])
-    more = f" (+{len(r) - 4} more)" if len(r) > 4 else ""
+def _where(ranges: tuple[tuple[float, float], ...]) -> str:
+    shown = ", ".join(f"{s:g}-{e:g}" for s, e in ranges[:4])
+    more = f" (+{len(ranges) - 4} more)" if len(ranges) > 4 else ""
     return f"theta = {shown} deg{more}"
 
 
-def run_all(a, lift_error: float | None) -> list[Violation]:
-    """Every violation of ``a`` (a camcore.analysis.Analysis)."""
-    out: list[Violation] = []
-    design = a.design
-    on_curve = a.in_contact & ((a.part == RISE) | (a.part == FALL))
-    rho_mm = a.rho * MM_PER_M
-
-    bad = on_curve & (a.rho <= 0)
-    if bad.any():
-        worst = float(np.min(rho_mm[bad]))
+def _curvature_rules(a) -> list[Violation]:
+    """Eq. 22 for concave faces, the undercut rule for rollers, in terms of the
+    pitch-curve curvature kappa_p (rho = sigma / kappa_p - r, camcore.profile)."""
+    on, k, out = a.on_curve, a.kappa_pitch, []
+    if a.geo.r > 0:  # rollers: the pitch radius 1/kappa_p must not lie in (0, r_c]
+        rc = a.geo.r
+        worst = a.worst.get("kappa_pitch_max")
+        bad = on & (k >= 1.0 / rc)
+        extra = worst.beyond(1.0 / rc, 1.0) if worst else ()
+        if bad.any() or extra:
+            kmax = max(float(k[bad].max()) if bad.any() else 0.0, worst.value if worst else 0.0)
+            ranges = runs_deg(a.theta, bad.any(0), extra)
+            short = to_mm(rc - 1.0 / kmax)
+            out.append(Violation(
+                "roller_undercut", "undercut: pitch radius > r_c",
+                f"the pitch curve's radius falls to {to_mm(1.0 / kmax):.4g} mm, inside "
+                f"(0, r_c = {to_mm(rc):g} mm] (by {short:.3g} mm): the profile undercuts "
+                f"(folds back) at {_where(ranges)}", ranges, short))
+        return out
+    rf = -a.geo.r  # concave faces: 0 < rho < |r_f| (Eq. 22) <=> kappa_p > 1/|r_f|
+    worst = a.worst.get("kappa_pitch_min")
+    cands = worst.others if worst else ()
+    fold = on & (k > 0) & (k <= 1.0 / rf)
+    extra = tuple((lo, hi) for v, lo, hi in cands if 0 < v <= 1.0 / rf)
+    if fold.any() or extra:
+        rho = [float(np.min(a.rho[fold]))] if fold.any() else []
+        rho += [rf - 1.0 / v for v, _, _ in cands if 0 < v <= 1.0 / rf]
+        ranges = runs_deg(a.theta, fold.any(0), extra)
         out.append(Violation(
             "curvature_convex", "Eq. 22",
-            f"cam not convex (rho <= 0; min rho = {worst:.3g} mm) at {_where(a, bad.any(0))}",
-            runs_deg(a.theta, bad.any(0)), -worst,
-        ))
-    if design.follower.kind.is_roller:
-        rc = design.follower.roller_radius_mm
-        bad = on_curve & (a.rho > 0) & (rho_mm < rc)
-        if bad.any():
-            worst = float(np.min(rho_mm[bad]))
-            out.append(Violation(
-                "roller_undercut", "Eq. 21",
-                f"rho = {worst:.3g} mm is below the roller radius r_c = {rc:g} mm "
-                f"(short by {rc - worst:.3g} mm) at {_where(a, bad.any(0))}",
-                runs_deg(a.theta, bad.any(0)), rc - worst,
-            ))
-    else:
-        rf = -design.follower.face_radius_mm
-        bad = on_curve & ((rho_mm >= rf) | ~np.isfinite(a.rho))
-        if bad.any():
-            worst = float(np.max(np.where(np.isfinite(rho_mm[bad]), rho_mm[bad], np.inf)))
-            out.append(Violation(
-                "curvature_face", "Eq. 22",
-                f"rho reaches {worst:.4g} mm, above |r_f| = {rf:g} mm "
-                f"(by {worst - rf:.3g} mm) at {_where(a, bad.any(0))}",
-                runs_deg(a.theta, bad.any(0)), worst - rf,
-            ))
-
-    limit = design.limits.max_pressure_angle_deg
-    phi = np.abs(a.pressure_angle) * RAD2DEG
-    bad = on_curve & (phi > limit)
-    if bad.any():
-        worst = float(np.max(phi[bad]))
+            f"cam not convex: the profile folds back (rho down to {to_mm(min(rho)):.4g} mm "
+            f"<= 0; the pitch radius passes |r_f| = {to_mm(rf):g} mm) at {_where(ranges)}",
+            ranges, -to_mm(min(rho))))
+    flat = on & (k <= 0)
+    extra = tuple((lo, hi) for v, lo, hi in cands if v <= 0)
+    if flat.any() or extra:
+        finite = a.rho[flat & np.isfinite(a.rho)]
+        worst_rho = float(finite.max()) if finite.size else math.inf
+        ranges = runs_deg(a.theta, flat.any(0), extra)
+        how = (f"rho reaches {to_mm(worst_rho):.4g} mm" if math.isfinite(worst_rho)
+               else "the cam is straight or concave")
         out.append(Violation(
-            "pressure_angle", "Eqs. 5, 13",
-            f"pressure angle {worst:.2f} deg exceeds the limit {limit:g} deg "
-            f"by {worst - limit:.2f} deg at {_where(a, bad.any(0))}",
-            runs_deg(a.theta, bad.any(0)), worst - limit,
-        ))
+            "curvature_face", "Eq. 22",
+            f"{how}, not below |r_f| = {to_mm(rf):g} mm, at {_where(ranges)}",
+            ranges, to_mm(worst_rho - rf) if math.isfinite(worst_rho) else to_mm(rf)))
+    return out
 
-    if design.follower.kind.is_double:
-        need = 4 * a.geo.psi_h * RAD2DEG
+
+def _pressure_angle(a) -> list[Violation]:
+    limit = a.design.limits.max_pressure_angle_deg
+    phi = to_deg(np.abs(a.pressure_angle))
+    bad = a.on_curve & (phi > limit)
+    worst = a.worst.get("pressure_angle_max")
+    extra = worst.beyond(math.radians(limit), 1.0) if worst else ()
+    if not (bad.any() or extra):
+        return []
+    top = max(float(phi[bad].max()) if bad.any() else 0.0, to_deg(worst.value) if worst else 0)
+    ranges = runs_deg(a.theta, bad.any(0), extra)
+    return [Violation(
+        "pressure_angle", "Eqs. 5, 13",
+        f"pressure angle {top:.2f} deg exceeds the limit {limit:g} deg "
+        f"by {top - limit:.2f} deg at {_where(ranges)}", ranges, top - limit)]
+
+
+def _dwell_arcs(a) -> list[Violation]:
+    out, design = [], a.design
+    if len(a.geo.faces) == 2:
+        need = to_deg(4 * a.geo.psi_h)
         have = design.motion.high_dwell_deg
         if have < need - 1e-9:
             out.append(Violation(
                 "high_dwell_arc", "Eq. 28",
                 f"high dwell beta_h = {have:g} deg is below 4 psi_h = {need:.3f} deg "
                 f"(short by {need - have:.3f} deg): both faces cannot rest on the dwell arc",
-                (), need - have,
-            ))
+                (), need - have))
     if design.motion.low_dwell_deg < 0:
         out.append(Violation("low_dwell_arc", "Eq. 27", "beta_l < 0", (),
                              -design.motion.low_dwell_deg))
+    return out
 
-    touching = a.in_contact.any(0)
+
+def _forces(a) -> list[Violation]:
+    out, touching = [], a.in_contact.any(0)
     bad = touching & (a.guide.FN <= 0)
-    if bad.any():
-        worst = float(np.min(a.guide.FN[bad]))
+    worst = a.worst.get("FN_min")
+    extra = worst.beyond(0.0, -1.0) if worst else ()
+    if bad.any() or extra:
+        low = min(float(a.guide.FN[bad].min()) if bad.any() else 0.0,
+                  worst.value if worst else 0.0)
+        ranges = runs_deg(a.theta, bad, extra)
         out.append(Violation(
             "jump", "Eqs. 29-41",
-            f"follower jump: contact force F_N = {worst:.3g} N <= 0 at {_where(a, bad)} "
-            f"(raise the spring rate or preload, or lower the speed)",
-            runs_deg(a.theta, bad), -worst,
-        ))
+            f"follower jump: contact force F_N = {low:.3g} N <= 0 at {_where(ranges)} "
+            f"(raise the spring rate or preload, or lower the speed)", ranges, -low))
     lost = ~touching
     if lost.any():
-        out.append(Violation(
-            "contact_lost", "Eq. 28",
-            f"no face rests on the dwell arc at {_where(a, lost)}",
-            runs_deg(a.theta, lost), float(lost.sum()),
-        ))
+        ranges = runs_deg(a.theta, lost)
+        out.append(Violation("contact_lost", "Eq. 28",
+                             f"no face rests on the dwell arc at {_where(ranges)}",
+                             ranges, float(lost.sum())))
     bad = touching & (a.guide.mode < 0)
     if bad.any():
+        ranges = runs_deg(a.theta, bad)
         out.append(Violation(
             "guide_jam", "Eqs. 33-41",
             f"no guide-contact mode of Fig. 6 balances the follower with friction "
-            f"mu = {design.dynamics.guide_friction:g} (self-locking) at {_where(a, bad)}",
-            runs_deg(a.theta, bad), float(bad.sum()),
-        ))
+            f"mu = {a.design.dynamics.guide_friction:g} (self-locking) at {_where(ranges)}",
+            ranges, float(bad.sum())))
+    return out
+
+
+def run_all(a, lift_error: float | None) -> list[Violation]:
+    """Every violation of ``a`` (a camcore.analysis.Analysis)."""
+    out = _curvature_rules(a) + _pressure_angle(a) + _dwell_arcs(a) + _forces(a)
     if not a.profile.is_star_shaped():
         out.append(Violation(
-            "profile_crossing", "Eq. 22",
+            "profile_crossing", "star-shaped profile",
             "the synthesized profile crosses itself (it is not star-shaped about the cam "
-            "axis); no cam can be made from it",
-            (), 1.0,
-        ))
+            "axis); no cam can be made from it", (), 1.0))
     if lift_error is not None and not lift_error <= LIFT_TOLERANCE_M:
         out.append(Violation(
             "geometric_check", "Eqs. 1-20",
             f"rotating the finished cam gives a follower lift that differs from S(theta) "
-            f"by up to {lift_error * MM_PER_M:.4g} mm",
-            (), lift_error * MM_PER_M,
-        ))
+            f"by up to {to_mm(lift_error):.4g} mm", (), to_mm(lift_error)))
     return out

@@ -20,7 +20,7 @@ from enum import StrEnum
 from pathlib import Path
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from .units import DEG, MM, RPM  # noqa: F401  (MM, DEG re-exported for older imports)
 
@@ -119,6 +119,11 @@ class Follower(_Part):
         description="offset e of each face/roller of a double follower [mm]; "
         "single followers run on the stem centreline (e = 0), as in the paper",
     )
+
+    @field_validator("offset_mm")
+    @classmethod
+    def _no_negative_zero(cls, v: float) -> float:
+        return v + 0.0  # -0.0 mm is 0 mm (it printed psi_h = -0.0)
 
     @property
     def radius_mm(self) -> float:

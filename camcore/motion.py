@@ -139,6 +139,48 @@ def peak_factors(law: MotionLaw, n: int = 20001) -> tuple[float, float, float]:
 
 # --- the whole program -----------------------------------------------------------------
 
+RISE, HIGH, FALL, LOW = 0, 1, 2, 3  # segment codes: rise, high dwell, fall, low dwell
+MOTIONS = (RISE, FALL)
+# Every rise or fall gets at least this many analysis steps, whatever the resolution:
+# a segment shorter than the grid step is otherwise judged on one sample (issue 8).
+MIN_MOTION_STEPS = 120
+MIN_DWELL_STEPS = 4
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One piece of the motion program: [start, end] cam angles [rad], the displacement
+    S0 at its start and S1 at its end [m], and the law of a rise or fall."""
+
+    code: int  # RISE, HIGH, FALL or LOW
+    start: float
+    end: float
+    S0: float
+    S1: float
+    law: MotionLaw | None = None
+
+    @property
+    def is_motion(self) -> bool:
+        return self.code in MOTIONS
+
+    @property
+    def length(self) -> float:
+        return self.end - self.start
+
+
+def segments(design: Design) -> tuple[Segment, ...]:
+    """The program as segments covering [0, 2 pi), zero-length dwells left out."""
+    m = design.motion
+    h = m.lift_mm * MM
+    t1, t2, t3, t4 = boundaries_rad(design)
+    parts = (
+        Segment(RISE, 0.0, t1, 0.0, h, m.rise_law),
+        Segment(HIGH, t1, t2, h, h),
+        Segment(FALL, t2, t3, h, 0.0, m.fall_law),
+        Segment(LOW, t3, t4, 0.0, 0.0),
+    )
+    return tuple(p for p in parts if p.is_motion or p.length > 1e-12)
+
 
 @dataclass(frozen=True)
 class Program:
@@ -149,10 +191,8 @@ class Program:
     V: np.ndarray  # dS/dtheta [m/rad]
     A: np.ndarray  # d2S/dtheta2 [m/rad^2]
     J: np.ndarray  # d3S/dtheta3 [m/rad^3]
-    segment: np.ndarray  # 0 rise, 1 high dwell, 2 fall, 3 low dwell
-
-
-RISE, HIGH, FALL, LOW = 0, 1, 2, 3
+    segment: np.ndarray  # segment code: 0 rise, 1 high dwell, 2 fall, 3 low dwell
+    index: np.ndarray  # index into segments(design) of each angle
 
 
 def boundaries_rad(design: Design) -> tuple[float, float, float, float]:
@@ -164,51 +204,68 @@ def boundaries_rad(design: Design) -> tuple[float, float, float, float]:
     return t1, t2, t3, 2 * math.pi
 
 
-def segment_of(design: Design, theta: np.ndarray) -> np.ndarray:
-    """Segment index of each cam angle [rad]; boundaries belong to the motion segments.
+def segment_index(segs: tuple[Segment, ...], theta: np.ndarray) -> np.ndarray:
+    """Index of the segment holding each cam angle [rad, in 0 .. 2 pi).
 
-    RISE: 0 <= theta <= theta_1, HIGH: theta_1 < theta < theta_4,
-    FALL: theta_4 <= theta <= theta_5, LOW: theta_5 < theta < 2 pi.
+    A boundary between two segments belongs to the motion (rise or fall) segment, so
+    the ends of a rise or fall are evaluated with its law; between two motions it
+    belongs to the earlier one.
     """
-    t1, t2, t3, _ = boundaries_rad(design)
-    th = np.mod(theta, 2 * math.pi)
-    seg = np.full(th.shape, LOW, dtype=np.int8)
-    seg[th <= t3] = FALL
-    seg[th < t2] = HIGH
-    seg[th <= t1] = RISE
-    return seg
+    ends = np.array([g.end for g in segs])
+    idx = np.minimum(np.searchsorted(ends, theta, side="left"), len(segs) - 1)
+    nxt = np.minimum(idx + 1, len(segs) - 1)
+    motion = np.array([g.is_motion for g in segs])
+    at_end = theta >= ends[idx]
+    return np.where(at_end & ~motion[idx] & motion[nxt] & (nxt > idx), nxt, idx)
+
+
+def segment_of(design: Design, theta: np.ndarray) -> np.ndarray:
+    """Segment code (RISE, HIGH, FALL, LOW) of each cam angle [rad]."""
+    segs = segments(design)
+    codes = np.array([g.code for g in segs], dtype=np.int8)
+    return codes[segment_index(segs, np.mod(np.asarray(theta, dtype=float), 2 * math.pi))]
 
 
 def program(design: Design, theta: np.ndarray) -> Program:
-    """Evaluate S, V, A, J at the cam angles ``theta`` [rad] (vectorized)."""
-    m = design.motion
-    h = m.lift_mm * MM
-    br, bf = m.rise_deg * DEG, m.fall_deg * DEG
-    t1, t2, _, _ = boundaries_rad(design)
+    """Evaluate S, V, A, J at the cam angles ``theta`` [rad] (vectorized).
+
+    A rise or fall of lift H over beta is S = S0 + H s(x), x = (theta - start)/beta,
+    so V = H s'/beta, A = H s''/beta^2, J = H s'''/beta^3 (H < 0 for a fall).
+    """
+    segs = segments(design)
     th = np.mod(np.asarray(theta, dtype=float), 2 * math.pi)
-    seg = segment_of(design, th)
+    idx = segment_index(segs, th)
     S, V, A, J = (np.zeros_like(th) for _ in range(4))
-    S[seg == HIGH] = h
-    r = seg == RISE
-    n = rise(m.rise_law, th[r] / br)
-    S[r], V[r], A[r], J[r] = h * n.s, h * n.v / br, h * n.a / br**2, h * n.j / br**3
-    f = seg == FALL
-    n = rise(m.fall_law, (th[f] - t2) / bf)
-    S[f], V[f], A[f], J[f] = h * (1 - n.s), -h * n.v / bf, -h * n.a / bf**2, -h * n.j / bf**3
-    return Program(th, S, V, A, J, seg)
+    for i, g in enumerate(segs):
+        m = idx == i
+        if not g.is_motion:
+            S[m] = g.S0
+            continue
+        H, beta = g.S1 - g.S0, g.length
+        n = rise(g.law, (th[m] - g.start) / beta)
+        S[m] = g.S0 + H * n.s
+        V[m], A[m], J[m] = H * n.v / beta, H * n.a / beta**2, H * n.j / beta**3
+    codes = np.array([g.code for g in segs], dtype=np.int8)
+    return Program(th, S, V, A, J, codes[idx], idx)
 
 
-def theta_grid(design: Design) -> np.ndarray:
-    """Cam angles [rad] at the design's resolution, hitting every segment boundary exactly.
+def theta_grid(design: Design, extra: tuple[float, ...] = ()) -> np.ndarray:
+    """Cam angles [rad] from 0 to just below 2 pi (the cycle closes on itself).
 
-    Each segment gets ceil(length / resolution) steps; the grid runs from 0 to just
-    below 2 pi (the cycle closes on itself).
+    Every segment boundary and every angle in ``extra`` (e.g. the stations) is on the
+    grid exactly. Each piece between them gets ceil(length / resolution) steps, and a
+    rise or fall at least MIN_MOTION_STEPS (a dwell MIN_DWELL_STEPS) however coarse the
+    resolution, so that no segment is judged on a single sample.
     """
     res = design.limits.resolution_deg * DEG
-    edges = [0.0, *boundaries_rad(design)]
     parts = []
-    for a, b in zip(edges[:-1], edges[1:], strict=True):
-        if b - a > 1e-12:
-            n = max(1, math.ceil((b - a) / res - 1e-9))
+    for g in segments(design):
+        cuts = sorted({g.start, g.end, *(t for t in extra if g.start < t < g.end)})
+        need = MIN_MOTION_STEPS if g.is_motion else MIN_DWELL_STEPS
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+            if b - a <= 1e-12:
+                continue
+            share = max(1, math.ceil(need * (b - a) / g.length - 1e-9))
+            n = max(share, math.ceil((b - a) / res - 1e-9))
             parts.append(np.linspace(a, b, n, endpoint=False))
     return np.concatenate(parts)

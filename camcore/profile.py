@@ -34,8 +34,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import MM, Design
-from .motion import FALL, HIGH, LOW, RISE, Program, boundaries_rad
+from .model import Design
+from .motion import FALL, RISE, Program, Segment
+from .units import MM
 
 
 @dataclass(frozen=True)
@@ -64,15 +65,22 @@ class Geometry:
 
 
 def geometry(design: Design) -> Geometry:
+    """The closed-form geometry of ``design``.
+
+    A double follower with e = 0 is a valid, degenerate design: its two faces coincide,
+    so it is one face on the stem centreline (nothing to share the load with).
+    """
     f = design.follower
-    r, e = f.radius_mm * MM, f.effective_offset_mm * MM
+    r, e = f.radius_mm * MM, abs(f.effective_offset_mm) * MM  # abs: -0.0 mm is 0
     r_b, h = design.cam.base_radius_mm * MM, design.motion.lift_mm * MM
     sigma = 1.0 if r + r_b > 0 else -1.0
-    if f.kind.is_double:
-        tag = "roller" if f.kind.is_roller else "face"
+    tag = "roller" if f.kind.is_roller else "face"
+    if f.kind.is_double and e > 0:
         faces = (Face(f"S1 (left {tag})", r, -sigma * e), Face(f"S2 (right {tag})", r, sigma * e))
+    elif f.kind.is_double:
+        faces = (Face(f"S1 = S2 ({tag}s coincide, e = 0)", r, 0.0),)
     else:
-        faces = (Face("roller" if f.kind.is_roller else "face", r, 0.0),)
+        faces = (Face(tag, r, 0.0),)
     y0 = sigma * math.sqrt((r + r_b) ** 2 - e**2)
     R = dwell_radius(r, r_b, e, h)
     return Geometry(
@@ -128,76 +136,112 @@ def to_body(theta: np.ndarray, world: np.ndarray) -> np.ndarray:
     return np.stack([c * world[:, 0] - s * world[:, 1], s * world[:, 0] + c * world[:, 1]], -1)
 
 
-def curvature_radius(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
-    """Signed radius of curvature rho [m] of the profile traced by ``face`` (Eq. 21).
+def pitch_curvature(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
+    """Signed curvature kappa_p [1/m] of the pitch curve, the path of the face centre C
+    on the cam (cam frame), from S, V and A alone.
 
-    Uses exact derivatives of the body-frame profile p = R(theta) A(theta):
-    p' = R (J A + A'), p'' = R (-A + 2 J A' + A''), J = rotation by +90 deg, with
-    A' and A'' from S, V, A(theta) and the jerk. rho > 0 where the cam is convex.
+    C = (x_c, Y), Y = y0 + S, in the world frame is R(theta) C on the cam (Eq. 11), so
+    with u = x_c + V the derivatives give the classic pitch-curve formula
+
+        kappa_p = (Y^2 + u (u + V) - A Y) / (Y^2 + u^2)^(3/2)
+
+    (1/kappa_p = r_b + r_c + S on a roller's dwell). Y^2 + u^2 > 0 for every design the
+    model accepts (the face centre never reaches the cam axis), so kappa_p is finite.
     """
-    V, Ac, Jk = prog.V, prog.A, prog.J
-    yc = geo.y0 + prog.S
-    u = np.stack([face.x_c + V, yc], -1)
-    du = np.stack([Ac, V], -1)
-    ddu = np.stack([Jk, Ac], -1)
-    m = np.hypot(u[:, 0], u[:, 1])[:, None]
-    udu = np.sum(u * du, -1, keepdims=True)
-    dm = udu / m
-    ddm = (np.sum(du * du, -1, keepdims=True) + np.sum(u * ddu, -1, keepdims=True)) / m - (
-        udu**2 / m**3
-    )
-    s = geo.sigma
-    n = s * u / m
-    dn = s * (du / m - u * dm / m**2)
-    ddn = s * (ddu / m - 2 * du * dm / m**2 - u * ddm / m**2 + 2 * u * dm**2 / m**3)
-    zero = np.zeros_like(V)
-    A = np.stack([face.x_c + zero, yc], -1) - face.r * n
-    dA = np.stack([zero, V], -1) - face.r * dn
-    ddA = np.stack([zero, Ac], -1) - face.r * ddn
-    rot = np.array([[0.0, -1.0], [1.0, 0.0]])
-    p1 = A @ rot.T + dA
-    p2 = -A + 2 * dA @ rot.T + ddA
-    cross = p1[:, 0] * p2[:, 1] - p1[:, 1] * p2[:, 0]
-    speed = np.hypot(p1[:, 0], p1[:, 1])
+    Y = geo.y0 + prog.S
+    u = face.x_c + prog.V
+    return (Y * Y + u * (u + prog.V) - prog.A * Y) / (Y * Y + u * u) ** 1.5
+
+
+def curvature_radius(geo: Geometry, face: Face, kappa_p: np.ndarray) -> np.ndarray:
+    """Signed radius of curvature rho [m] of the cam profile at the contact (Eq. 21).
+
+    The profile is the parallel curve at distance r of the pitch curve, so
+    rho = sigma / kappa_p - r (sigma = +1 roller, -1 concave face): cheaper than
+    evaluating Eq. 21 on the traced profile, and right in sign where the profile folds
+    back on itself, where the traced curve turns round and Eq. 21 flips sign (a roller
+    with 0 < 1/kappa_p < r_c, a concave face with 1/kappa_p > |r_f|). rho > 0 where the
+    cam is convex; +inf where the pitch curve is straight (kappa_p = 0).
+    ``kappa_p`` is ``pitch_curvature(geo, face, prog)``.
+    """
     with np.errstate(divide="ignore"):
-        return np.where(cross == 0, np.inf, speed**3 / cross)
+        return np.where(kappa_p == 0.0, np.inf, geo.sigma / kappa_p - face.r)
 
 
-def contact_windows(geo: Geometry, prog: Program, design: Design) -> np.ndarray:
-    """(n_faces, N) bool: which face touches the cam at each cam angle.
+def face_sides(geo: Geometry) -> tuple[float, ...]:
+    """World direction of each face's dwell contact, +1 left of the stem, -1 right.
 
-    Rise: the rise face. Fall: the fall face. Dwells of a single follower: its face.
-    Dwells of a double follower (Sec. 4, Fig. 4): on the high arc the rise face
-    touches from theta_1 = beta_r to theta_3 = beta_r + beta_h - 2 psi_h and the fall
-    face from theta_2 = beta_r + 2 psi_h to theta_4 = beta_r + beta_h; both touch in
-    between. (The paper prints theta_3 = beta_r + beta_h + 2 psi_h, which would put
-    station 3 after station 4; its own geometry - A3 = B4 and Eq. 24 - gives the
-    minus sign.) On the low arc both faces touch for the whole low dwell, from
-    station 5 to station 0 (Eq. 26).
+    The rise face S1 touches left of the stem (its centre is on the right for a concave
+    face), the fall face S2 right; a single face sits on the centreline (0).
     """
-    seg, th = prog.segment, prog.theta
+    return (1.0, -1.0) if len(geo.faces) == 2 else (0.0,)
+
+
+def dwell_psi(geo: Geometry, S: float) -> float:
+    """psi [rad] of a dwell at displacement S: half the angle its two contacts subtend
+    (Eqs. 23, 25 at the dwell's own radius); 0 for single followers."""
     if len(geo.faces) == 1:
-        return np.ones((1, th.size), dtype=bool)
-    t1, t2, t3, _ = boundaries_rad(design)
-    high, low = seg == HIGH, seg == LOW
-    on_base = low | (th == 0) | (th == t3)  # stations 0 and 5 included
-    rise_face = (seg == RISE) | on_base | (high & (th <= t2 - 2 * geo.psi_h))
-    fall_face = ((seg == FALL) & (th != t3)) | on_base | (high & (th >= t1 + 2 * geo.psi_h))
-    return np.stack([rise_face, fall_face])
+        return 0.0
+    return math.asin(min(1.0, geo.e / math.hypot(geo.e, geo.y0 + S)))
 
 
-def profile_part(geo: Geometry, prog: Program) -> np.ndarray:
-    """(n_faces, N): the profile segment each face's contact point lies on.
+def arc_span(geo: Geometry, segs: tuple[Segment, ...], j: int) -> tuple[float, float]:
+    """Cam-frame polar interval [start, end] [rad, relative to the cam angle] that the
+    dwell arc of segment j occupies.
 
-    It is the motion segment, except where a double follower's idle face rests on
-    the base circle at the ends of the rise or fall (stations 0 and 5): that point
-    belongs to the low-dwell arc.
+    A face at world side s (+1 left) touches the cam at direction s psi from vertical,
+    i.e. at cam-frame angle theta + s psi. The arc starts where the face driving the
+    segment before it left off and ends where the face driving the one after it takes
+    over (rise: S1, fall: S2). Between a rise and a fall (the high dwell) this gives
+    beta - 2 psi (Eq. 24), between a fall and a rise (the low dwell) beta + 2 psi
+    (Eq. 26), and beta between two rises or two falls.
     """
-    parts = np.repeat(prog.segment[None, :], len(geo.faces), axis=0)
-    if len(geo.faces) == 2:
-        parts[0][prog.segment == FALL] = LOW
-        parts[1][prog.segment == RISE] = LOW
-    return parts
+    g, n = segs[j], len(segs)
+    before, after = segs[(j - 1) % n], segs[(j + 1) % n]
+    psi_j = dwell_psi(geo, g.S0)
+    s_before = 1.0 if before.code == RISE else -1.0
+    s_after = 1.0 if after.code == RISE else -1.0
+    return g.start + s_before * psi_j, g.end + s_after * psi_j
+
+
+def contact_windows(geo: Geometry, prog: Program, segs: tuple[Segment, ...]
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Which face touches the cam at each cam angle, and on which profile segment.
+
+    Returns (windows, part), both (n_faces, N): windows[i, k] is True where face i
+    touches at prog.theta[k]; part[i, k] is the index (into ``segs``) of the profile
+    segment face i's contact point lies on.
+
+    A single face always touches. A double follower (Sec. 4, Fig. 4): every rise is
+    driven by S1 and every fall by S2; on a dwell arc (see ``arc_span``) a face
+    touches while its contact direction theta + s psi lies on the arc. For the paper's
+    program this gives its stations: the rise face on the high arc from beta_r to
+    beta_r + beta_h - 2 psi_h, the fall face from beta_r + 2 psi_h to beta_r + beta_h,
+    and both faces for the whole low dwell. (The paper prints station 3 at
+    beta_r + beta_h + 2 psi_h, after station 4; its own geometry - A3 = B4 and Eq. 24 -
+    gives the minus sign.)
+    """
+    N, F = prog.theta.size, len(geo.faces)
+    part = np.repeat(prog.index[None, :], F, axis=0)
+    if F == 1:
+        return np.ones((1, N), dtype=bool), part
+    driver = np.where(prog.segment == RISE, 0, np.where(prog.segment == FALL, 1, -1))
+    windows = np.stack([driver == 0, driver == 1])
+    tol = 1e-12
+    for j, g in enumerate(segs):
+        if g.is_motion:
+            continue
+        start, end = arc_span(geo, segs, j)
+        psi_j = dwell_psi(geo, g.S0)
+        # the closed interval [g.start, g.end], also reached through theta = 0 (2 pi)
+        th = np.where(prog.theta < g.start - tol, prog.theta + 2 * math.pi, prog.theta)
+        inside = (th >= g.start - tol) & (th <= g.end + tol)
+        for i, side in enumerate(face_sides(geo)):
+            c = th + side * psi_j
+            on = inside & (c >= start - tol) & (c <= end + tol)
+            windows[i] |= on
+            part[i] = np.where(on & (driver != i), j, part[i])
+    return windows, part
 
 
 @dataclass(frozen=True)
@@ -225,23 +269,28 @@ class Polyline:
         return bool(np.all(np.diff(ang) > 0) and ang[-1] - ang[0] < 2 * math.pi)
 
 
-def assemble(prog: Program, body_points: np.ndarray, windows: np.ndarray,
-             parts: np.ndarray) -> Polyline:
+def assemble(prog: Program, segs: tuple[Segment, ...], body_points: np.ndarray,
+             windows: np.ndarray, parts: np.ndarray) -> Polyline:
     """The profile as the union of every contact point over the cycle, in traversal order.
 
-    Order: rise curve (by cam angle), high arc (by polar angle), fall curve (by cam
-    angle), low arc (by polar angle, measured from the start of the rise). Every
-    analysed cam angle thus has its contact point(s) as exact vertices, which lets
-    the geometric check (camcore.verify) measure the synthesis to round-off.
+    ``parts`` holds segment indices (see ``contact_windows``). Order: segment by
+    segment as the program runs; within a rise or fall by cam angle, within a dwell arc
+    by polar angle (measured from A0, the contact at theta = 0, so the last arc runs up
+    to it). Every analysed cam angle thus has its contact point(s) as exact vertices.
     """
     P = body_points[windows]
-    part = parts[windows]
+    index = parts[windows]
     theta = np.broadcast_to(prog.theta, windows.shape)[windows]
     a0 = math.atan2(body_points[0, 0, 1], body_points[0, 0, 0])  # A0, theta = 0
     polar = np.mod(np.arctan2(P[:, 1], P[:, 0]) - a0, 2 * math.pi)
-    on_arc = (part == HIGH) | (part == LOW)
-    order = np.lexsort((np.where(on_arc, polar, theta), part))
-    P, part, theta = P[order], part[order], theta[order]
+    motion = np.array([g.is_motion for g in segs])[index]
+    order = np.lexsort((np.where(motion, theta, polar), index))
+    P, index, theta, motion = P[order], index[order], theta[order], motion[order]
+    # a point reached twice (where an arc meets a curve, B2 = A1, A3 = B4, ...) is kept
+    # once, as the end of the rise or fall curve
     step = np.hypot(*np.diff(P, axis=0, append=P[:1]).T)
-    keep = step > 1e-12 * max(1.0, float(np.abs(P).max()))
-    return Polyline(P[keep], part[keep], theta[keep])
+    pair = step <= 1e-12 * max(1.0, float(np.abs(P).max()))  # P[i] == P[i + 1]
+    drop = (pair & ~motion) | np.roll(pair & motion, 1)
+    keep = ~drop if not drop.all() else np.arange(P.shape[0]) == 0
+    codes = np.array([g.code for g in segs], dtype=np.int8)
+    return Polyline(P[keep], codes[index[keep]], theta[keep])

@@ -30,7 +30,7 @@ def _max(x: np.ndarray, mask: np.ndarray | None = None) -> float | None:
 
 
 def _range_mm(a: Analysis, part: int) -> list[float] | None:
-    m = a.in_contact & (a.part == part)
+    m = a.in_contact & (a.segment_code == part)
     if not m.any():
         return None
     rho = a.rho[m] * 1e3
@@ -58,8 +58,8 @@ def summary(a: Analysis) -> dict:
             "low": a.design.motion.low_dwell_deg + 2 * a.geo.psi_l * R2D,
         },
         "pressure_angle_max_deg": {
-            "rise": _max(phi[on & (a.part == RISE)]),
-            "fall": _max(phi[on & (a.part == FALL)]),
+            "rise": _max(phi[on & (a.segment_code == RISE)]),
+            "fall": _max(phi[on & (a.segment_code == FALL)]),
         },
         "curvature_radius_mm": {"rise": _range_mm(a, RISE), "fall": _range_mm(a, FALL)},
         "contact_force_max_N": {

@@ -6,7 +6,18 @@ import numpy as np
 import pytest
 
 from camcore.model import Design, Motion, MotionLaw
-from camcore.motion import HIGH, LOW, peak_factors, program, rise, theta_grid
+from camcore.motion import (
+    FALL,
+    HIGH,
+    LOW,
+    MIN_MOTION_STEPS,
+    RISE,
+    peak_factors,
+    program,
+    rise,
+    segment_of,
+    theta_grid,
+)
 
 # (C_v, C_a, C_j) from Norton, Cam Design and Manufacturing Handbook (2nd ed.), Table 3-2,
 # and Chen, Mechanics and Design of Cam Mechanisms; None where the jerk is unbounded/not listed.
@@ -82,4 +93,29 @@ def test_grid_resolution():
     d = Design()
     assert theta_grid(d).size == 3600
     coarse = d.model_copy(update={"limits": d.limits.model_copy(update={"resolution_deg": 1.0})})
-    assert theta_grid(coarse).size == 360
+    th = np.degrees(theta_grid(coarse))
+    # no step is longer than the resolution; each rise/fall has MIN_MOTION_STEPS at least
+    assert np.diff(np.append(th, 360.0)).max() <= 1.0 + 1e-9
+    assert np.sum(th < 100) == MIN_MOTION_STEPS == 120  # 100 deg rise: 120 > 100 steps
+    assert np.sum((th >= 170) & (th < 300)) == 130  # 130 deg fall at 1 deg
+    assert th.size == 120 + 70 + 130 + 60
+
+
+def test_segment_shorter_than_the_grid_is_resolved():
+    """Issue 8: a 0.9 deg rise at 1 deg resolution was one sample; now it has 120."""
+    d = Design.model_validate({"motion": {"lift_mm": 8, "rise_deg": 0.9},
+                               "limits": {"resolution_deg": 1.0}})
+    th = np.degrees(theta_grid(d))
+    rise = th[th < 0.9]
+    assert rise.size == MIN_MOTION_STEPS
+    assert np.diff(rise).max() == pytest.approx(0.9 / MIN_MOTION_STEPS)
+    p = program(d, np.radians(rise))
+    assert np.all(p.segment == RISE) and p.V.max() > 0
+
+
+def test_boundaries_belong_to_the_motion_segments():
+    d = Design(motion=Motion(rise_deg=100, high_dwell_deg=70, fall_deg=130))
+    seg = segment_of(d, np.radians([0.0, 100.0, 100.5, 170.0, 300.0, 300.5]))
+    assert seg.tolist() == [RISE, RISE, HIGH, FALL, FALL, LOW]
+    no_dwell = Design(motion=Motion(rise_deg=180, high_dwell_deg=0, fall_deg=180))
+    assert segment_of(no_dwell, np.radians([180.0, 180.1])).tolist() == [RISE, FALL]

@@ -109,15 +109,49 @@ def test_stations_from_geometry(kind):
     assert math.degrees(both.max()) == pytest.approx(deg[3], abs=0.1)
 
 
+def eq21_exact(g, face, p):
+    """Eq. 21 evaluated on the traced profile p(theta) = R(theta) A(theta), with exact
+    derivatives (the jerk enters through A''): the reference the parallel-curve formula
+    of camcore.profile is checked against where the profile does not fold back."""
+    V, Ac, Jk = p.V, p.A, p.J
+    yc = g.y0 + p.S
+    u = np.stack([face.x_c + V, yc], -1)
+    du = np.stack([Ac, V], -1)
+    ddu = np.stack([Jk, Ac], -1)
+    m = np.hypot(u[:, 0], u[:, 1])[:, None]
+    udu = np.sum(u * du, -1, keepdims=True)
+    dm = udu / m
+    ddm = (np.sum(du * du, -1, keepdims=True) + np.sum(u * ddu, -1, keepdims=True)) / m - (
+        udu**2 / m**3)
+    s = g.sigma
+    n = s * u / m
+    dn = s * (du / m - u * dm / m**2)
+    ddn = s * (ddu / m - 2 * du * dm / m**2 - u * ddm / m**2 + 2 * u * dm**2 / m**3)
+    zero = np.zeros_like(V)
+    A = np.stack([face.x_c + zero, yc], -1) - face.r * n
+    dA = np.stack([zero, V], -1) - face.r * dn
+    ddA = np.stack([zero, Ac], -1) - face.r * ddn
+    rot = np.array([[0.0, -1.0], [1.0, 0.0]])
+    p1 = A @ rot.T + dA
+    p2 = -A + 2 * dA @ rot.T + ddA
+    cross = p1[:, 0] * p2[:, 1] - p1[:, 1] * p2[:, 0]
+    return np.hypot(p1[:, 0], p1[:, 1]) ** 3 / cross
+
+
+def rho_of(g, face, p):
+    return profile.curvature_radius(g, face, profile.pitch_curvature(g, face, p))
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_curvature_matches_finite_differences(kind):
-    """Eq. 21 with exact derivatives agrees with a fine finite-difference estimate."""
+    """rho (parallel-curve formula) agrees with Eq. 21 by finite differences of the
+    traced contact points."""
     d = PAPER.with_kind(kind)
     g = profile.geometry(d)
     th = np.radians(np.linspace(5, 95, 901))
     p = program(d, th)
     for face in g.faces[:1]:
-        rho = profile.curvature_radius(g, face, p)
+        rho = rho_of(g, face, p)
         hstep = 1e-5
         pts = []
         for k in (-1, 0, 1):
@@ -130,31 +164,67 @@ def test_curvature_matches_finite_differences(kind):
 
 
 @pytest.mark.parametrize("kind", KINDS)
-def test_curvature_parallel_curve_identity(kind):
-    """The profile is the offset of the pitch curve (locus of the face centre) by r:
-    rho = sigma * rho_pitch - r. The pitch curve needs only S, V, A (no jerk), so this
-    checks the jerk terms of Eq. 21 independently."""
+def test_curvature_parallel_curve_equals_eq21_exact(kind):
+    """rho = sigma / kappa_pitch - r (S, V, A only) equals Eq. 21 evaluated with exact
+    derivatives of the traced profile (which needs the jerk) wherever the profile does
+    not fold back: an independent check of both."""
     d = PAPER.with_kind(kind)
     g = profile.geometry(d)
-    th = theta_grid(d)
-    p = program(d, th)
+    p = program(d, theta_grid(d))
     for face in g.faces:
-        yc = g.y0 + p.S
-        C = np.stack([face.x_c + 0 * yc, yc], -1)
-        dC = np.stack([0 * yc, p.V], -1)
-        ddC = np.stack([0 * yc, p.A], -1)
-        J = np.array([[0.0, -1.0], [1.0, 0.0]])
-        c1 = C @ J.T + dC
-        c2 = -C + 2 * dC @ J.T + ddC
-        rho_pitch = np.hypot(*c1.T) ** 3 / (c1[:, 0] * c2[:, 1] - c1[:, 1] * c2[:, 0])
-        rho = profile.curvature_radius(g, face, p)
-        np.testing.assert_allclose(rho, g.sigma * rho_pitch - g.r, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(rho_of(g, face, p), eq21_exact(g, face, p),
+                                   rtol=1e-9, atol=1e-12)
+
+
+FOLDED = Design.model_validate({**PAPER.model_dump(), "follower": {
+    **PAPER.follower.model_dump(), "kind": "single_concave"},
+    "motion": {**PAPER.motion.model_dump(), "lift_mm": 12.0, "rise_deg": 40.0}})
+
+
+def test_folded_concave_profile_is_not_convex():
+    """Issue 8: where the pitch radius passes |r_f| the profile folds back. Eq. 21 on the
+    traced curve comes out positive there (the curve turns round), so Eq. 22 never fired;
+    the parallel-curve rho is negative and the check reports curvature_convex."""
+    a = analyze(FOLDED, verify=False)
+    g, face = a.geo, a.geo.faces[0]
+    folded = a.on_curve[0] & (a.kappa_pitch[0] > 0) & (a.kappa_pitch[0] < -1 / g.r)
+    assert folded.sum() > 10
+    traced = eq21_exact(g, face, a.prog)[folded]
+    assert np.all(traced > 0)  # the old, wrong sign
+    assert np.all(a.rho[0, folded] < 0)
+    codes = {v.code: v for v in a.violations}
+    assert "curvature_convex" in codes and "curvature_face" not in codes
+    lo, hi = codes["curvature_convex"].ranges_deg[0]
+    assert 0 < lo < hi < 40
+    # and the Hertz stress is not computed from a spurious small positive rho there
+    assert np.all(a.stress[0, folded] == 0)
+
+
+def test_roller_may_run_on_a_concave_flank():
+    """A roller on a concave flank (rho < -r_c) is fine: only a pitch radius in
+    (0, r_c] undercuts."""
+    d = Design.model_validate({"motion": {"lift_mm": 40, "rise_deg": 60, "high_dwell_deg": 60,
+                                          "fall_deg": 60},
+                               "follower": {"kind": "single_roller", "roller_radius_mm": 8},
+                               "cam": {"base_radius_mm": 30}})
+    a = analyze(d)
+    assert (a.on_curve[0] & (a.rho[0] < -a.geo.r)).sum() > 10  # concave flanks exist
+    assert a.lift_error < 1e-9
+    assert "roller_undercut" not in {v.code for v in a.violations}
+    assert "curvature_convex" not in {v.code for v in a.violations}
+    # a roller larger than the tightest convex pitch radius undercuts: the rule fires,
+    # and the independent geometric check confirms the cam no longer gives S(theta)
+    big = d.model_copy(update={"follower": d.follower.model_copy(
+        update={"roller_radius_mm": 40.0})})
+    b = analyze(big)
+    assert 1.0 / b.kappa_pitch[b.on_curve].max() < b.geo.r  # pitch radius below r_c
+    assert {"roller_undercut", "geometric_check"} <= {v.code for v in b.violations}
 
 
 def test_dwell_curvature_is_arc_radius():
     a = analyze(PAPER, verify=False)
-    high = a.in_contact & (a.part == 1)
-    low = a.in_contact & (a.part == 3)
+    high = a.in_contact & (a.segment_code == 1)
+    low = a.in_contact & (a.segment_code == 3)
     np.testing.assert_allclose(a.rho[high], a.geo.dwell_radius, rtol=1e-9)
     np.testing.assert_allclose(a.rho[low], 0.080, rtol=1e-9)
 
@@ -221,3 +291,21 @@ def test_dwell_arcs_subtend_eqs_24_and_26(kind):
         span = np.degrees(np.mod(np.arctan2(ends[1, 1], ends[1, 0])
                                  - np.arctan2(ends[0, 1], ends[0, 0]), 2 * math.pi))
         assert span == pytest.approx(s["dwell_arc_deg"][key], abs=1e-6)
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.double_roller])
+@pytest.mark.parametrize("e", [0.0, -0.0])
+def test_double_follower_with_zero_offset_is_one_face(kind, e):
+    """Issue 8: e = 0 was rejected as "crosses itself". Its two faces coincide: a valid,
+    degenerate design, analysed as one face on the centreline, like the single kind."""
+    d = PAPER.with_kind(kind).model_copy(deep=True)
+    d = Design.model_validate({**d.model_dump(), "follower": {**d.follower.model_dump(),
+                                                               "offset_mm": e}})
+    assert math.copysign(1.0, d.follower.offset_mm) == 1.0  # -0.0 is stored as 0.0
+    a = analyze(d)
+    single = analyze(PAPER.with_kind("single_concave" if kind == FollowerKind.double_concave
+                                     else "single_roller"))
+    assert a.valid, [v.message for v in a.violations]
+    assert len(a.geo.faces) == 1 and a.geo.psi_h == 0.0
+    np.testing.assert_array_equal(a.profile.points, single.profile.points)
+    np.testing.assert_array_equal(a.guide.FN, single.guide.FN)
