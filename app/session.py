@@ -275,17 +275,9 @@ class Session:
             a, d = self.analysis, self.design
             base = slug(d.name)
             try:
-                if kind == "json":
-                    name, data = f"{base}.json", export.json_text(d).encode()
-                elif kind == "stl":
-                    name, data = f"{base}.stl", export.stl_bytes(a)
-                elif kind == "dxf":
-                    name, data = f"{base}.dxf", export.dxf_bytes(a)
-                elif kind == "csv":
-                    name, data = f"{base}_profile.csv", export.csv_text(a).encode()
-                else:
-                    name, data = f"{base}_angles.csv", export.cam_angle_csv_text(a).encode()
-            except export.ExportError as exc:
+                spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
+                name, data = f"{base}{spec.suffix}", spec.write(a)
+            except (KeyError, export.ExportError) as exc:
                 self.files_md.content = f"✖ Cannot export {kind.upper()}: {exc}"
                 return
             self.last_download = (name, data)

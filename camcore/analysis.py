@@ -16,9 +16,10 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import checks, extremes, forces, motion, profile
+from . import checks, extremes, forces, motion, profile, sampling
 from .contact import contact_stress
 from .model import Design, FollowerKind
+from .units import MM
 
 
 @dataclass(frozen=True)
@@ -74,7 +75,8 @@ class Analysis(Local):
     design: Design
     geo: profile.Geometry
     segments: tuple[motion.Segment, ...]
-    profile: profile.Polyline
+    profile: profile.Polyline  # the cam as made: sampled to the export tolerance
+    chord_error: float  # largest deviation of a profile chord from the exact cam [m]
     stations: np.ndarray  # (6,) cam angles of stations 0-5 [rad]
     worst: dict = field(default_factory=dict)  # camcore.extremes.worst_values
     violations: list[checks.Violation] = field(default_factory=list)
@@ -137,9 +139,13 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     st = stations(design, geo)
     th = motion.theta_grid(design, tuple(st)) if theta is None else np.asarray(theta, float)
     loc = evaluate(design, geo, segs, th)
-    poly = profile.assemble(loc.prog, segs, loc.point_body, loc.in_contact, loc.part)
-    result = Analysis(**vars(loc), design=design, geo=geo, segments=segs, profile=poly,
-                      stations=st)
+    breaks = np.mod([*(g.start for g in segs), *st], 2 * np.pi)
+    cuts = np.unique(np.clip(np.searchsorted(th, breaks), 0, th.size - 1))
+    made = sampling.sample_profile(
+        loc, geo, segs, lambda x: evaluate(design, geo, segs, x), np.union1d(cuts, [0]),
+        design.limits.export_tolerance_mm * MM)
+    result = Analysis(**vars(loc), design=design, geo=geo, segments=segs,
+                      profile=made.polyline, chord_error=made.chord_error, stations=st)
     result = replace(result, worst=extremes.worst_values(result))
     lift_error = None
     if verify:

@@ -1,7 +1,12 @@
 """Command line: ``camcore report | compare | export``.
 
-Every failure (bad file, bad value, impossible export) prints one line starting
-with ``camcore: error:`` and exits with status 2; never a traceback.
+Exit status (the same for every command, so scripts can rely on it):
+
+- 0: the design was analysed and meets every limit (files written, if asked);
+- 1: the design was analysed and breaks a limit: the report (text or JSON) is
+  still printed, exports are still written, and the limits are listed;
+- 2: bad input (unreadable or invalid design file, bad value, impossible export):
+  one line starting with ``camcore: error:`` on stderr, never a traceback.
 """
 
 from __future__ import annotations
@@ -9,11 +14,41 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from pathlib import Path
+from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
 from .model import Design, DesignError, FollowerKind, load_design, load_preset, preset_names
+
+EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _version() -> str:
+    try:
+        return version("camdesigner")
+    except PackageNotFoundError:  # running from a source tree that was never installed
+        return "unknown"
+
+
+def _apply_set(data: dict, assignment: str) -> None:
+    """Apply one ``--set a.b.c=VALUE`` to the design dict (VALUE parsed as JSON if it can be)."""
+    path, sep, raw = assignment.partition("=")
+    keys = path.strip().split(".")
+    if not sep or not all(keys):
+        raise DesignError(f"--set {assignment!r}: expected FIELD.PATH=VALUE, "
+                          "e.g. cam.base_radius_mm=90")
+    try:
+        value = json.loads(raw)
+    except ValueError:
+        value = raw  # a bare word, e.g. follower.kind=double_roller
+    node = data
+    for i, key in enumerate(keys[:-1]):
+        node = node.get(key) if isinstance(node, dict) else None
+        if not isinstance(node, dict):
+            raise DesignError(f"--set {path}: {'.'.join(keys[: i + 1])} is not a group of fields")
+    if keys[-1] not in node:
+        raise DesignError(f"--set {path}: no such field; fields here: {', '.join(node)}")
+    node[keys[-1]] = value
 
 
 def _design(args) -> Design:
@@ -27,54 +62,89 @@ def _design(args) -> Design:
         raise DesignError(f"give a design file or --preset NAME ({', '.join(preset_names())})")
     if getattr(args, "follower", None):
         design = design.with_kind(args.follower)
+    sets = list(getattr(args, "set", None) or [])
+    if getattr(args, "tolerance_mm", None) is not None:
+        sets.append(f"limits.export_tolerance_mm={args.tolerance_mm!r}")
+    if sets:
+        from .model import design_from_json
+
+        data = json.loads(design.model_dump_json())
+        for assignment in sets:
+            _apply_set(data, assignment)
+        design = design_from_json(json.dumps(data))  # strict: "--set x=true" is refused
     return design
 
 
-def _report(args) -> None:
+def _report(args) -> int:
     from .report import analyze_summary, report_text
 
     s = analyze_summary(_design(args))
     print(json.dumps(s, indent=2) if args.json else report_text(s))
+    return EXIT_VALID if s["valid"] else EXIT_BREAKS_LIMITS
 
 
-def _compare(args) -> None:
+def _compare(args) -> int:
     from .report import compare_rows, compare_text
 
     rows = compare_rows(_design(args))
     print(json.dumps(rows, indent=2) if args.json else compare_text(rows))
+    return EXIT_VALID if all(r["valid"] for r in rows) else EXIT_BREAKS_LIMITS
 
 
-def _export(args) -> None:
-    from . import export
+def _outputs(args) -> dict[str, str]:
+    """The requested output files by export kind, refusing a path used twice or the input."""
+    from .files import same_file
+
+    outputs = {k: p for k in EXPORT_FLAGS if (p := getattr(args, f"out_{k}", None))}
+    if not outputs:
+        flags = ", ".join(f"--{k}" for k in EXPORT_FLAGS)
+        raise DesignError(f"nothing to export: give one or more of {flags} FILE")
+    paths = list(outputs.items())
+    for i, (k1, p1) in enumerate(paths):
+        if args.design and same_file(p1, args.design):
+            raise DesignError(f"--{k1} {p1}: that is the input design file; "
+                              "refusing to overwrite it")
+        for k2, p2 in paths[i + 1:]:
+            if same_file(p1, p2):
+                raise DesignError(f"--{k1} and --{k2} name the same file {p1}; give two paths")
+    return outputs
+
+
+def _export(args) -> int:
     from .analysis import analyze
+    from .export import EXPORTS
+    from .files import FileError, write_atomic
 
     design = _design(args)
-    outputs = {"stl": args.stl, "dxf": args.dxf, "csv": args.csv, "json": args.json_out}
-    if not any(outputs.values()):
-        raise DesignError("nothing to export: give --stl, --dxf, --csv and/or --json FILE")
+    outputs = _outputs(args)
     a = analyze(design)
-    writers = {
-        "stl": lambda: export.stl_bytes(a),
-        "dxf": lambda: export.dxf_bytes(a),
-        "csv": lambda: export.csv_text(a).encode(),
-        "json": lambda: export.json_text(design).encode(),
-    }
+    blobs = {kind: EXPORTS[kind].write(a) for kind in outputs}  # all or none: build first
     for kind, path in outputs.items():
-        if path:
-            data = writers[kind]()
-            try:
-                Path(path).write_bytes(data)
-            except OSError as exc:
-                raise DesignError(f"cannot write {path}: {exc.strerror}") from None
-            print(f"wrote {path} ({len(data)} bytes)")
+        try:
+            write_atomic(path, blobs[kind])
+        except FileError as exc:
+            raise DesignError(str(exc)) from None
+        print(f"wrote {path} ({len(blobs[kind])} bytes)")
     if a.violations:
-        print(f"note: the design breaks {len(a.violations)} limit(s); run `camcore report`")
+        names = ", ".join(sorted({v.code for v in a.violations}))
+        print(f"note: the design breaks {len(a.violations)} limit(s) ({names}); "
+              "run `camcore report` for details", file=sys.stderr)
+        return EXIT_BREAKS_LIMITS
+    return EXIT_VALID
+
+
+EXPORT_FLAGS = ("stl", "dxf", "csv", "angles", "json")
 
 
 def _parser() -> argparse.ArgumentParser:
+    from .export import EXPORTS
+
     p = argparse.ArgumentParser(
-        prog="camcore", description="Disk cam design after Chuang, Hsu & Chang (four followers)."
+        prog="camcore",
+        description="Disk cam design after Chuang, Hsu & Chang (translating followers).",
+        epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input.",
     )
+    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
 
     def source(sp, follower=True):
@@ -83,6 +153,9 @@ def _parser() -> argparse.ArgumentParser:
         if follower:
             sp.add_argument("--follower", choices=[k.value for k in FollowerKind],
                             help="override the follower kind")
+        sp.add_argument("--set", action="append", metavar="FIELD=VALUE",
+                        help="override one design field, e.g. --set cam.base_radius_mm=90 "
+                             "(repeatable; VALUE is JSON, or a bare word for names)")
 
     r = sub.add_parser("report", help="analyse one design")
     source(r)
@@ -96,10 +169,11 @@ def _parser() -> argparse.ArgumentParser:
 
     e = sub.add_parser("export", help="write STL / DXF / CSV / design JSON")
     source(e)
-    e.add_argument("--stl", help="STL file of the cam solid (mm)")
-    e.add_argument("--dxf", help="DXF file of the profile (mm)")
-    e.add_argument("--csv", help="CSV of the profile points")
-    e.add_argument("--json", dest="json_out", help="design JSON file")
+    for kind in EXPORT_FLAGS:
+        e.add_argument(f"--{kind}", dest=f"out_{kind}", metavar="FILE", help=EXPORTS[kind].help)
+    e.add_argument("--tolerance-mm", type=float, metavar="MM",
+                   help="largest distance of the exported polyline from the exact cam "
+                        "(default: the design's limits.export_tolerance_mm, 0.001 mm)")
     e.set_defaults(run=_export)
     return p
 
@@ -114,18 +188,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # extreme designs overflow intermediate terms; results are checked finite
         with np.errstate(all="ignore"):
-            args.run(args)
+            return args.run(args)
     except (DesignError, ExportError) as exc:
         print(f"camcore: error: {exc}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except ValidationError as exc:
         print(f"camcore: error: {format_validation_error(exc)}", file=sys.stderr)
-        return 2
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return 130
     except BrokenPipeError:
         return 0
-    return 0
 
 
 if __name__ == "__main__":

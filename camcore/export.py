@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import io
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -107,9 +109,41 @@ def _zipper(p: np.ndarray, a0: float) -> np.ndarray:
                     np.column_stack([o0, o1, i0]), np.column_stack([o0, i1, i0]))
 
 
+WELD_MM = 1e-3  # a vertex merged away by the weld lies this close to a kept one at most
+MIN_EDGE_MM = 1e-5  # shorter edges are merged: float32 resolves ~8e-6 mm at 100 mm, and
+# readers weld vertices closer than their own tolerance (trimesh: 1e-8)
+
+
+def weld_float32(p: np.ndarray) -> np.ndarray:
+    """The polygon p (n, 2) [mm] as STL will store it: rounded to 32-bit floats, with
+    every vertex dropped that does not advance strictly counter-clockwise about the axis
+    from the one before (a duplicate, or one on the same ray) or lies within MIN_EDGE_MM
+    of it.
+
+    A reader welds equal vertices and drops zero-area triangles; a mesh built from the
+    float64 polygon (e.g. the two contact points of a double follower with e = 1e-6 mm)
+    would then have holes. The dropped vertices lie within WELD_MM of a kept one."""
+    q = p.astype(np.float32).astype(np.float64)
+    while True:
+        prev = np.roll(q, 1, axis=0)
+        advance = prev[:, 0] * q[:, 1] - prev[:, 1] * q[:, 0]  # cross(prev, this)
+        drop = (advance <= 0) | (np.hypot(*(q - prev).T) < MIN_EDGE_MM)
+        if not drop.any():
+            return q
+        if q.shape[0] - drop.sum() < 3:
+            raise ExportError("the profile collapses at 32-bit precision")
+        gap = np.hypot(*(q - prev)[drop].T).max()
+        if gap > WELD_MM:
+            raise ExportError(f"the profile turns back by {gap:.3g} mm about the axis; "
+                              "it is not star-shaped")
+        q = q[~drop]
+
+
 def stl_bytes(a) -> bytes:
-    """Binary STL of the cam solid [mm]."""
-    return cam_mesh(a).export(file_type="stl")
+    """Binary STL of the cam solid [mm], built from the float32-welded profile."""
+    p = weld_float32(_profile_mm(a))
+    bore = a.design.cam.bore_diameter_mm / 2
+    return extrude(p, a.design.cam.width_mm, bore).export(file_type="stl")
 
 
 def dxf_bytes(a) -> bytes:
@@ -174,3 +208,24 @@ def cam_angle_csv_text(a) -> str:
 
 def json_text(design: Design) -> str:
     return design_to_json(design) + "\n"
+
+
+@dataclass(frozen=True)
+class ExportKind:
+    """One export format: the file-name suffix added to the design's slug, and its writer."""
+
+    suffix: str
+    help: str
+    write: Callable[[object], bytes]  # Analysis -> file bytes
+
+
+# The one dispatch table of exports, used by the CLI and the app alike.
+EXPORTS: dict[str, ExportKind] = {
+    "stl": ExportKind(".stl", "STL of the cam solid (mm)", stl_bytes),
+    "dxf": ExportKind(".dxf", "DXF of the profile (mm)", dxf_bytes),
+    "csv": ExportKind("_profile.csv", "CSV of the profile vertices",
+                      lambda a: csv_text(a).encode()),
+    "angles": ExportKind("_angles.csv", "CSV of S, V, A, forces and stress per cam angle",
+                         lambda a: cam_angle_csv_text(a).encode()),
+    "json": ExportKind(".json", "the design as JSON", lambda a: json_text(a.design).encode()),
+}

@@ -200,7 +200,12 @@ class Limits(_Part):
 
     max_pressure_angle_deg: float = Field(30.0, gt=0, lt=90, description="max |phi| [deg]")
     resolution_deg: float = Field(
-        0.1, ge=0.005, le=5.0, description="cam-angle step of the analysis [deg]"
+        0.1, ge=0.01, le=5.0, description="cam-angle step of the analysis [deg]"
+    )
+    export_tolerance_mm: float = Field(
+        0.001, ge=1e-5, le=1.0,
+        description="largest deviation of the exported profile's chords from the exact "
+        "cam [mm] (default 1 um)",
     )
 
 
@@ -281,20 +286,70 @@ class DesignError(ValueError):
     """A design file or value that cannot be used; the message says why, in one line."""
 
 
+MAX_JSON_DEPTH = 8  # a design nests three deep; deeper documents are not designs
+
+
+class _JsonObject(dict):
+    """A JSON object that remembers the keys it saw twice (json.loads keeps the last)."""
+
+    duplicates: list[str]
+
+
+def _object_pairs(pairs: list[tuple[str, object]]) -> _JsonObject:
+    obj = _JsonObject(pairs)
+    seen: set[str] = set()
+    obj.duplicates = [k for k, _ in pairs if k in seen or seen.add(k)]
+    return obj
+
+
+class _NonFinite(str):
+    """Marks a NaN/Infinity literal so that _check_tree can name its field."""
+
+
+def _non_finite(name: str) -> _NonFinite:
+    return _NonFinite(name)
+
+
+def _check_tree(node, path: str = "", depth: int = 1) -> None:
+    """Refuse duplicate keys (naming the field) and nesting deeper than MAX_JSON_DEPTH."""
+    if depth > MAX_JSON_DEPTH:
+        raise DesignError(f"{path or 'the document'}: nested deeper than {MAX_JSON_DEPTH} levels")
+    if isinstance(node, _NonFinite):
+        raise DesignError(f"{path or 'the document'}: {node} is not a number a design may hold "
+                          "(it must be finite)")
+    if isinstance(node, dict):
+        if getattr(node, "duplicates", None):
+            key = node.duplicates[0]
+            raise DesignError(f"{path + '.' if path else ''}{key}: the key appears twice")
+        for key, value in node.items():
+            _check_tree(value, f"{path}.{key}" if path else str(key), depth + 1)
+    elif isinstance(node, list):
+        for i, value in enumerate(node):
+            _check_tree(value, f"{path}.{i}", depth + 1)
+
+
 def design_from_json(text: str | bytes) -> Design:
-    """Parse a design JSON document, turning every failure into a one-line DesignError."""
+    """Parse a design JSON document strictly, turning every failure into a one-line DesignError.
+
+    Strict means: a key given twice, a number written as a string ("15") or a
+    boolean, NaN/Infinity, and nesting deeper than MAX_JSON_DEPTH are refused
+    with the field's dotted path, never silently coerced or overwritten.
+    """
     from pydantic import ValidationError
 
     if len(text) > MAX_DESIGN_BYTES:
         raise DesignError(f"design file is {len(text)} bytes; the limit is {MAX_DESIGN_BYTES}")
     try:
-        data = json.loads(text)
+        data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
     except (ValueError, RecursionError) as exc:
         raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None
     if not isinstance(data, dict):
         raise DesignError(f"a design is a JSON object, got {type(data).__name__}")
+    _check_tree(data)
     try:
-        return Design.model_validate(data)
+        # JSON-mode strict validation: no str->number or bool->number coercion,
+        # while enum fields still take their string values.
+        return Design.model_validate_json(json.dumps(data), strict=True)
     except ValidationError as exc:
         raise DesignError(format_validation_error(exc)) from None
 
@@ -310,14 +365,13 @@ def format_validation_error(exc) -> str:
 
 
 def load_design(path: str | Path) -> Design:
-    path = Path(path)
+    """Read a design file (a regular file of at most MAX_DESIGN_BYTES) strictly."""
+    from .files import FileError, read_capped
+
     try:
-        size = path.stat().st_size
-        if size > MAX_DESIGN_BYTES:
-            raise DesignError(f"{path}: {size} bytes; a design file is at most {MAX_DESIGN_BYTES}")
-        text = path.read_bytes()
-    except OSError as exc:
-        raise DesignError(f"cannot read {path}: {exc.strerror}") from None
+        text = read_capped(path, MAX_DESIGN_BYTES)
+    except FileError as exc:
+        raise DesignError(str(exc)) from None
     return design_from_json(text)
 
 
@@ -329,18 +383,30 @@ def save_design(design: Design, path: str | Path) -> None:
     Path(path).write_text(design_to_json(design) + "\n")
 
 
-PRESET_DIR = Path(__file__).resolve().parent.parent / "static" / "presets"
+PRESETS = "camcore.presets"  # package data: ships inside the wheel
 
 
 def preset_names() -> list[str]:
-    return sorted(p.stem for p in PRESET_DIR.glob("*.json"))
+    """The names of the presets shipped with the package, sorted."""
+    from importlib.resources import files
+
+    return sorted(p.name[:-5] for p in files(PRESETS).iterdir() if p.name.endswith(".json"))
 
 
 def load_preset(name: str) -> Design:
-    path = PRESET_DIR / f"{name}.json"
-    if not path.is_file():
-        raise DesignError(f"no preset {name!r}; presets: {', '.join(preset_names())}")
-    return load_design(path)
+    """The preset called *name*, looked up in the fixed set of shipped names.
+
+    The name is compared against ``preset_names()`` and never joined onto a
+    path, so a client-supplied value like ``../../x`` or ``/tmp/x`` cannot
+    reach any other file.
+    """
+    from importlib.resources import files
+
+    names = preset_names()
+    if not isinstance(name, str) or name not in names:
+        raise DesignError(f"no preset {str(name)[:40]!r}; presets: {', '.join(names)}")
+    shipped = names[names.index(name)]  # the package's own string, not the client's
+    return design_from_json(files(PRESETS).joinpath(shipped + ".json").read_bytes())
 
 
 # --- SI conversion at the edge -------------------------------------------------------

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from . import checks
 from .analysis import Analysis, analyze, compare
 from .model import Design, FollowerKind
 from .motion import FALL, HIGH, RISE
@@ -79,7 +80,10 @@ def summary(a: Analysis) -> dict:
             "vertices": int(a.profile.points.shape[0]),
         },
         "verification": {
-            "max_lift_error_mm": None if a.lift_error is None else a.lift_error * 1e3
+            "max_lift_error_mm": None if a.lift_error is None else a.lift_error * 1e3,
+            "allowed_lift_error_mm": checks.lift_tolerance(a) * 1e3,
+            "export_tolerance_mm": a.design.limits.export_tolerance_mm,
+            "chord_error_mm": a.chord_error * 1e3,
         },
     }
 
@@ -118,8 +122,11 @@ def report_text(s: dict) -> str:
          f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa"),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
          f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
+        ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "
+         f"exact cam (tolerance {s['verification']['export_tolerance_mm']:g} mm)"),
         ("geometric check max |lift - S|",
-         f"{s['verification']['max_lift_error_mm']:.3g} mm"
+         f"{s['verification']['max_lift_error_mm']:.3g} mm (allowed "
+         f"{s['verification']['allowed_lift_error_mm']:.3g} mm)"
          if s["verification"]["max_lift_error_mm"] is not None else "-"),
     ]
     w = max(len(k) for k, _ in rows)

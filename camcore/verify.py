@@ -14,9 +14,16 @@ The follower's lift is the highest of its faces' Y_C minus the height at which i
 rests on the base circle, sigma sqrt((r + r_b)^2 - e^2). Comparing with S(theta)
 catches a wrong face, a wrong sign, a wrong rotation sense or a wrong dwell radius.
 
-Because the profile's vertices include the synthesized contact point of every
-analysed angle, and the cam is convex, the check is exact to round-off on a
-correct design (a chord of a convex cam never reaches further than its vertices).
+The profile is the cam as made: a polyline whose chords stray from the exact cam by
+at most its measured chord error (camcore.sampling). The follower meets it as a real
+body would: a concave face rests on vertices only (a disk holding both ends of a chord
+holds the chord), but a roller can rest on a chord's middle, so for rollers the top of
+the chord's offset line counts too (the maximum of the concave function
+Y(t) + sqrt(r^2 - (X(t) - x_c)^2) along a chord is at an end or where the chord's
+upward normal points at the roller's centre). The check runs at the analysis angles
+and half-way between them, against S(theta) evaluated there, so it measures the
+profile between the vertices and the grid: on a correct design the lift differs from
+S by at most the chord error over cos(pressure angle).
 
 Speed: the maximum above is over all M vertices at each of N angles, O(N M). Most
 vertices cannot matter: any vertex's value is a lower bound L of Y_C, and only
@@ -49,22 +56,41 @@ SAMPLE = 64  # vertices in the strided sample that gives the lower bound L
 _SLACK = 1e-9  # [rad] widening of every wedge against round-off in its bounds
 
 
-def _face_full(px, py, c, s, r, x_c) -> np.ndarray:
-    """max_j Y_C for one face over all vertices (c, s: (n, 1) cos/sin of the angles)."""
+def _rotate(c, s, x, y):
+    """Cam-frame points (x, y) seen in the world frame at the angles with cos/sin c, s
+    ((n, 1) each): R(-theta) p, Eq. 11 inverted."""
+    return c * x + s * y, -s * x + c * y
+
+
+def _face_full(pts, nxt, c, s, r, x_c) -> np.ndarray:
+    """max Y_C for one face over all vertices (and chords for rollers); pts, nxt:
+    (x, y) of the vertices and of the next vertex of each; c, s: (n, 1)."""
     out = np.empty(c.shape[0])
     for start in range(0, c.shape[0], CHUNK):
         cc, ss = c[start:start + CHUNK], s[start:start + CHUNK]
-        out[start:start + CHUNK] = _face_max(cc * px + ss * py, -ss * px + cc * py, r, x_c)
+        out[start:start + CHUNK] = _face_max(_rotate(cc, ss, *pts), _rotate(cc, ss, *nxt),
+                                             r, x_c)
     return out
 
 
-def _face_max(X, Y, r, x_c, valid=None) -> np.ndarray:
+def _face_max(P, Q, r, x_c) -> np.ndarray:
+    """Lowest centre height Y_C of a face (r, x_c) above the vertices P and, for a
+    roller (r >= 0), the chords P -> Q; P, Q: (X, Y) arrays of shape (angles, m)."""
+    X, Y = P
     dx2 = (X - x_c) ** 2
     reach = dx2 <= r * r
-    if valid is not None:
-        reach &= valid
     yc = Y + math.copysign(1.0, r) * np.sqrt(np.where(reach, r * r - dx2, 0.0))
-    return np.max(np.where(reach, yc, -np.inf), axis=1)
+    best = np.max(np.where(reach, yc, -np.inf), axis=1)
+    if r < 0:  # a concave face holding both ends of a chord holds all of it
+        return best
+    dx, dy = Q[0] - X, Q[1] - Y
+    length = np.hypot(dx, dy)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        side = np.sign(dx) / length  # the chord's upward unit normal: side * (-dy, dx)
+        t = (x_c - X + r * dy * side) / dx  # where that normal points at the centre
+        top = Y + t * dy + r * dx * side
+    ok = (dx != 0) & (t > 0) & (t < 1)
+    return np.maximum(best, np.max(np.where(ok, top, -np.inf), axis=1))
 
 
 def _wedge(L, r, x_c, rho_max):
@@ -89,12 +115,16 @@ def _wedge(L, r, x_c, rho_max):
     return ctr, np.where(hw < math.pi, hw + _SLACK, 4.0)
 
 
-def _face_lift(px, py, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
+def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
+    px, py = pts
     M = px.size
-    # lower bound from a strided sample (any vertex's value is one)
+    # lower bound from a strided sample (any vertex's value is one) ...
     stride = max(1, M // SAMPLE)
-    L = _face_max(c * px[::stride] + s * py[::stride], -s * px[::stride] + c * py[::stride],
-                  r, x_c)
+    sample = (px[::stride], py[::stride])
+    L = _vertex_max(_rotate(c, s, *sample), r, x_c)
+    # ... and from the vertices and chords right under the face: a roller narrower than
+    # the vertex spacing reaches no sampled vertex, only the chord beneath it
+    L = np.maximum(L, _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max))
     ctr, hw = _wedge(L, r, x_c, rho_max)
     # world direction psi = body angle phi - theta: the body window starts at lo
     lo = ctr - hw + theta
@@ -103,24 +133,52 @@ def _face_lift(px, py, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
     part = np.flatnonzero(~full)
     if part.size:
         # blocks of consecutive angles share one contiguous run of the polar-sorted
-        # vertices (a view, no gather); extra vertices in the run are harmless
-        px3, py3 = px[idx3], py[idx3]
+        # vertices (a view, no gather); extra vertices in the run are harmless. The run
+        # starts one vertex early: a chord starting just before it can reach into it.
+        p3 = (px[idx3], py[idx3])
+        n3 = (nxt[0][idx3], nxt[1][idx3])
         for i in range(0, part.size, BLOCK):
             rows = part[i:i + BLOCK]
             lo_r = lo[rows]
             lo_r = lo_r - 2 * math.pi * math.floor((lo_r.min() + math.pi) / (2 * math.pi))
-            s0 = int(np.searchsorted(phi3, lo_r.min(), "left"))
+            s0 = int(np.searchsorted(phi3, lo_r.min(), "left")) - 1
             e0 = int(np.searchsorted(phi3, (lo_r + 2 * hw[rows]).max(), "right"))
             if e0 - s0 >= M:
                 full[rows] = True
                 continue
-            qx, qy = px3[s0:e0], py3[s0:e0]
             cc, ss = c[rows], s[rows]
-            m = _face_max(cc * qx + ss * qy, -ss * qx + cc * qy, r, x_c)
+            m = _face_max(_rotate(cc, ss, p3[0][s0:e0], p3[1][s0:e0]),
+                          _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]), r, x_c)
             best[rows] = np.maximum(best[rows], m)
     if full.any():
-        best[full] = np.maximum(best[full], _face_full(px, py, c[full], s[full], r, x_c))
+        best[full] = np.maximum(best[full], _face_full(pts, nxt, c[full], s[full], r, x_c))
     return best
+
+
+LOCAL = 8  # vertices on each side of the face's direction in the local lower bound
+
+
+def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
+    """max Y_C over the 2 LOCAL vertices (and their chords) nearest in polar angle to
+    where the line X = x_c meets the circle of the largest radius: a lower bound of the
+    lift, exact or close for any face width."""
+    k = min(2 * LOCAL, idx3.size // 3)
+    psi0 = math.acos(max(-1.0, min(1.0, x_c / rho_max)))  # world direction under the face
+    body = np.mod(psi0 + theta + math.pi, 2 * math.pi) - math.pi  # phi = psi + theta
+    j0 = np.searchsorted(phi3, body) - k // 2  # body >= -pi: the middle period of phi3
+    j = idx3[np.clip(j0[:, None] + np.arange(k), 0, idx3.size - 1)]
+    P = _rotate(c, s, pts[0][j], pts[1][j])
+    Q = _rotate(c, s, nxt[0][j], nxt[1][j])
+    return _face_max(P, Q, r, x_c)
+
+
+def _vertex_max(P, r, x_c) -> np.ndarray:
+    """The vertex part of _face_max (a lower bound of the lift for any face)."""
+    X, Y = P
+    dx2 = (X - x_c) ** 2
+    reach = dx2 <= r * r
+    yc = Y + math.copysign(1.0, r) * np.sqrt(np.where(reach, r * r - dx2, 0.0))
+    return np.max(np.where(reach, yc, -np.inf), axis=1)
 
 
 def follower_lift(
@@ -129,47 +187,73 @@ def follower_lift(
 ) -> np.ndarray:
     """Lift [m] at which a follower with ``faces`` [(r, x_c), ...] just touches the cam.
 
-    points : (M, 2) closed profile in the cam frame [m].
+    points : (M, 2) closed profile in the cam frame [m], counter-clockwise.
     theta : (N,) cam angles [rad].
     r_b : base radius [m], which fixes the zero of the lift.
-    prune : skip vertices that provably cannot touch (exact); False gives the plain
-        O(N M) maximum, the reference the tests compare against.
+    prune : skip vertices that provably cannot touch (exact, for a profile that is
+        star-shaped about the axis); False gives the plain O(N M) maximum, the
+        reference the tests compare against.
 
-    -inf where no vertex lies under any face (the follower would drop through).
+    -inf where nothing lies under any face (the follower would drop through).
     """
     r0, x0 = faces[0]
     sigma = 1.0 if r0 + r_b > 0 else -1.0
     rest = sigma * math.sqrt((r0 + r_b) ** 2 - x0**2)
-    px, py = points[:, 0], points[:, 1]
+    pts = (points[:, 0], points[:, 1])
+    nxt = (np.roll(points[:, 0], -1), np.roll(points[:, 1], -1))
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    phi = np.arctan2(pts[1], pts[0])
+    if prune:  # polar order must be the polygon's order for the chord runs to hold
+        turns = np.diff(np.unwrap(phi))
+        prune = bool(np.all(turns > 0) and turns.sum() < 2 * math.pi)
     if prune:
-        phi = np.arctan2(py, px)
         order = np.argsort(phi, kind="stable")
         phi_s = phi[order]
         phi3 = np.concatenate([phi_s - 2 * math.pi, phi_s, phi_s + 2 * math.pi])
         idx3 = np.tile(order, 3)
-        rho_max = float(np.hypot(px, py).max())
+        rho_max = float(np.hypot(*pts).max())
     best = np.full(theta.size, -np.inf)
     for r, x_c in faces:
-        face = (_face_lift(px, py, theta, c, s, r, x_c, phi3, idx3, rho_max) if prune
-                else _face_full(px, py, c, s, r, x_c))
+        face = (_face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) if prune
+                else _face_full(pts, nxt, c, s, r, x_c))
         best = np.maximum(best, face)
     return best - rest
 
 
+UNPRUNED_BUDGET = 4_000_000  # angles x vertices per face where pruning does not apply
+
+
+def check_angles(theta: np.ndarray, vertices: int = 0, star_shaped: bool = True) -> np.ndarray:
+    """The analysis angles and the angles half-way between them (and to 2 pi).
+
+    A profile that is not star-shaped is already rejected (profile_crossing) and its
+    check costs O(N M) without pruning: it runs at UNPRUNED_BUDGET / M (at least 36)
+    evenly spread analysis angles, enough to say how far off the profile is."""
+    if not star_shaped:
+        n = max(36, UNPRUNED_BUDGET // max(vertices, 1))
+        return theta[:: max(1, math.ceil(theta.size / n))]
+    mid = 0.5 * (theta + np.append(theta[1:], 2 * math.pi))
+    return np.sort(np.concatenate([theta, mid]))
+
+
 def max_lift_error(a) -> float:
-    """Largest |lift - S(theta)| [m] over the analysis grid of ``a`` (an Analysis).
+    """Largest |lift - S(theta)| [m] of the finished profile of ``a`` (an Analysis), at
+    the analysis angles and half-way between them.
 
     Angles where no face touches the cam (a broken dwell, reported as contact_lost)
-    are skipped; if the follower finds no vertex to rest on where a face should touch,
+    are skipped; if the follower finds nothing to rest on where a face should touch,
     the error there counts as the profile's diameter, a finite value far above any
     tolerance.
     """
+    from . import motion, profile
+
+    th = check_angles(a.theta, a.profile.points.shape[0], a.profile.is_star_shaped())
+    prog = motion.program(a.design, th)
+    touching = profile.contact_windows(a.geo, prog, a.segments)[0].any(axis=0)
     faces = [(f.r, f.x_c) for f in a.geo.faces]
-    lift = follower_lift(a.profile.points, a.theta, faces, a.geo.r_b)
-    err = np.abs(lift - a.prog.S)
-    touching = a.in_contact.any(axis=0)
+    lift = follower_lift(a.profile.points, th, faces, a.geo.r_b)
+    err = np.abs(lift - prog.S)
     err = np.where(np.isfinite(err), err, 2.0 * float(np.abs(a.profile.points).max()))
     err = err[touching]
     return float(err.max()) if err.size else 0.0

@@ -4,6 +4,7 @@ import io
 import math
 
 import ezdxf
+import numpy as np
 import pytest
 import trimesh
 from hypothesis import given, settings
@@ -62,3 +63,22 @@ def test_any_bore_inside_the_base_circle_exports_a_solid(preset, fraction):
     mesh = export.cam_mesh(a)
     assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
     assert mesh.euler_number == (0 if fraction > 0 else 2)
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.double_roller, FollowerKind.double_concave])
+@pytest.mark.parametrize("offset_mm", [0.0, 1e-9, 1e-6, 1e-4])
+def test_tiny_offsets_give_watertight_stl_once_read_back(kind, offset_mm):
+    """STL stores float32: contact points 1e-6 mm apart merge when read back. The export
+    welds in float32 first, so the file as read is still a closed solid."""
+    data = load_preset("paper_example").with_kind(kind).model_dump()
+    data["follower"]["offset_mm"] = offset_mm
+    a = analyze(Design.model_validate(data), verify=False)
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume == pytest.approx(a.profile.area * 1e6 * 15.0, rel=1e-7)
+
+
+def test_weld_refuses_a_profile_that_turns_back():
+    square = np.array([[1.0, 0], [0, 1], [-1, 0], [0.5, 0.9], [0, -1]])
+    with pytest.raises(export.ExportError, match="not star-shaped"):
+        export.weld_float32(square)

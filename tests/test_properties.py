@@ -263,7 +263,7 @@ def check_analysis(a: Analysis) -> dict:
     if max(x for x in (pa["rise"], pa["fall"], 0.0) if x is not None) > limit + 1e-9:
         assert "pressure_angle" in codes
     if a.lift_error is not None:
-        assert ("geometric_check" in codes) == (a.lift_error > checks.LIFT_TOLERANCE_M)
+        assert ("geometric_check" in codes) == (a.lift_error > checks.lift_tolerance(a))
     if (a.guide.FN[a.in_contact.any(0)] <= 0).any():
         assert "jump" in codes
     return s
@@ -296,15 +296,38 @@ def prop_valid_range(data: dict, verify: bool) -> None:
     a = run_analysis(design, verify)
     check_analysis(a)
     if verify:  # the pruned geometric check equals the brute-force one exactly
-        args = (a.profile.points, a.theta, [(f.r, f.x_c) for f in a.geo.faces], a.geo.r_b)
+        # (at 97 spread angles: brute force costs angles x vertices, up to 50,000 vertices)
+        th = a.theta[:: max(1, a.theta.size // 97)]
+        args = (a.profile.points, th, [(f.r, f.x_c) for f in a.geo.faces], a.geo.r_b)
         np.testing.assert_array_equal(follower_lift(*args), follower_lift(*args, prune=False))
-    m, res = design.motion, design.limits.resolution_deg
-    sampled = min(m.rise_deg, m.fall_deg) >= 20 * res  # local checks see the whole curve
     codes = {v.code for v in a.violations}
-    if verify and sampled and a.profile.is_star_shaped() and not codes & GEOMETRY_DEFECTS:
+    if verify and a.profile.is_star_shaped() and not codes & GEOMETRY_DEFECTS:
         # a convex, not undercut cam with a dwell arc both faces fit on: the independent
-        # check must reproduce S(theta) (it does so to round-off for the presets)
-        assert a.lift_error <= checks.LIFT_TOLERANCE_M, a.lift_error
+        # check must reproduce S(theta) within the export tolerance, however short the
+        # segments and coarse the grid
+        assert a.lift_error <= checks.lift_tolerance(a), a.lift_error
+
+
+def prop_verdict_independent_of_resolution(data: dict) -> None:
+    """The verdict at the design's (coarse) resolution is the verdict at 0.05 deg: a
+    limit broken on the fine grid is broken on the coarse one, and vice versa, except
+    for borderline cases (the amount by which it is broken is round-off)."""
+    note(json.dumps(data))
+    design = validate(data)
+    if design is None:
+        return
+    fine = design.model_copy(update={"limits": design.limits.model_copy(
+        update={"resolution_deg": 0.05})})
+    a, b = run_analysis(design, False), run_analysis(fine, False)
+    amount = {}
+    for v in [*a.violations, *b.violations]:
+        amount[v.code] = max(amount.get(v.code, 0.0), abs(v.amount))
+    differ = {v.code for v in a.violations} ^ {v.code for v in b.violations}
+    assert all(amount[c] < BORDERLINE for c in differ), (
+        [v.message for v in a.violations], [v.message for v in b.violations])
+
+
+BORDERLINE = 1e-3  # deg, mm, N or MPa (each violation's own unit): round-off, not a finding
 
 
 # Violations that make the synthesized profile not the one the follower rolls on.
@@ -325,9 +348,15 @@ def test_designs_in_range_pass_or_fail_the_geometric_check_finitely(data):
 
 
 @ci(40)
-@given(design_dicts(resolutions=st.sampled_from([0.005, 0.01, 0.05])))
+@given(design_dicts(resolutions=st.sampled_from([0.01, 0.05])))
 def test_fine_resolution_designs(data):
     prop_valid_range(data, verify=False)
+
+
+@ci(150)
+@given(design_dicts(resolutions=COARSE))
+def test_verdict_does_not_depend_on_the_resolution(data):
+    prop_verdict_independent_of_resolution(data)
 
 
 # --- 2. hostile values ---------------------------------------------------------------------
@@ -504,7 +533,7 @@ def test_slow_hostile(case):
 
 @pytest.mark.slow
 @slow(20)
-@given(design_dicts(resolutions=st.sampled_from([0.005, 0.01])))
+@given(design_dicts(resolutions=st.sampled_from([0.01])))
 def test_slow_finest_resolution(data):
     prop_valid_range(data, verify=False)
 

@@ -1,0 +1,104 @@
+"""Reading and writing the user's files safely.
+
+Reading: only regular files, and never more than a cap. ``/dev/zero`` would grow
+without end and a FIFO would block forever, so both are refused *before* any
+byte is read (a non-blocking open tells a FIFO from a file without waiting for
+a writer).
+
+Writing: to a temporary file in the same directory, then an atomic rename, so
+a failed write (disk full, killed process) never leaves a truncated file where
+the user expects a good one.
+"""
+
+from __future__ import annotations
+
+import os
+import stat
+import tempfile
+from pathlib import Path
+
+
+class FileError(ValueError):
+    """A file that cannot be read or written; the message says which and why."""
+
+
+def read_capped(path: str | Path, max_bytes: int) -> bytes:
+    """The bytes of the regular file *path*, refusing anything else or anything larger.
+
+    Parameters
+    ----------
+    path : the file to read.
+    max_bytes : the largest size accepted, in bytes.
+
+    Raises
+    ------
+    FileError
+        If *path* is missing, not a regular file (directory, FIFO, device,
+        socket), or larger than *max_bytes* (checked on the size the file
+        declares and again on the bytes actually read, for files that grow).
+    """
+    path = Path(path)
+    try:
+        # O_NONBLOCK: opening a FIFO with no writer returns at once instead of waiting.
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as exc:
+        raise FileError(f"cannot read {path}: {exc.strerror}") from None
+    try:
+        info = os.fstat(fd)
+        if not stat.S_ISREG(info.st_mode):
+            raise FileError(f"{path}: not a regular file")
+        if info.st_size > max_bytes:
+            raise FileError(f"{path}: {info.st_size} bytes; the limit is {max_bytes}")
+        chunks, size = [], 0
+        while size <= max_bytes and (chunk := os.read(fd, max_bytes + 1 - size)):
+            chunks.append(chunk)
+            size += len(chunk)
+        data = b"".join(chunks)
+    except OSError as exc:
+        raise FileError(f"cannot read {path}: {exc.strerror}") from None
+    finally:
+        os.close(fd)
+    if len(data) > max_bytes:
+        raise FileError(f"{path}: more than {max_bytes} bytes; the limit is {max_bytes}")
+    return data
+
+
+def write_atomic(path: str | Path, data: bytes) -> None:
+    """Write *data* to *path* all or nothing: a temporary file, flushed, then renamed.
+
+    Raises FileError naming the path when the directory is missing or read-only,
+    the disk is full, or *path* is a directory. An existing file at *path* is
+    left untouched unless the whole write succeeded.
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    if path.is_dir():
+        raise FileError(f"cannot write {path}: it is a directory")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    except OSError as exc:
+        raise FileError(f"cannot write {path}: {exc.strerror}") from None
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            os.unlink(tmp)
+        except OSError:
+            pass
+        raise FileError(f"cannot write {path}: {exc.strerror}") from None
+
+
+def same_file(a: str | Path, b: str | Path) -> bool:
+    """Whether two paths name the same file (existing or not), after resolving links."""
+    pa, pb = Path(a), Path(b)
+    try:
+        if pa.exists() and pb.exists():
+            return os.path.samefile(pa, pb)
+    except OSError:
+        pass
+    return pa.resolve() == pb.resolve()

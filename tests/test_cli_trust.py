@@ -1,0 +1,213 @@
+"""The command line as a hostile or careless user meets it (issue 8): devices and FIFOs,
+failed writes, outputs that collide, exit codes, strict JSON, `--set`, presets by name."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import pytest
+
+from camcore import cli, files
+from camcore.model import DesignError, design_from_json, load_preset, preset_names
+
+BREAKS = ["--set", "motion.high_dwell_deg=10"]  # below 4 psi_h: Eq. 28 fails
+
+
+def run(*args, timeout=60):
+    return subprocess.run([sys.executable, "-m", "camcore.cli", *args], capture_output=True,
+                          text=True, timeout=timeout)
+
+
+# --- reading ----------------------------------------------------------------------------
+
+
+def test_dev_zero_is_refused_at_once():
+    proc = run("report", "/dev/zero", timeout=20)
+    assert proc.returncode == 2 and "not a regular file" in proc.stderr
+
+
+def test_fifo_is_refused_without_blocking(tmp_path):
+    fifo = tmp_path / "design.json"
+    os.mkfifo(fifo)
+    proc = run("report", str(fifo), timeout=20)  # would hang forever on a blocking open
+    assert proc.returncode == 2 and "not a regular file" in proc.stderr
+
+
+def test_read_capped_stops_at_the_cap(tmp_path):
+    p = tmp_path / "f"
+    p.write_bytes(b"x" * 101)
+    assert files.read_capped(p, 101) == b"x" * 101
+    with pytest.raises(files.FileError, match="101 bytes; the limit is 100"):
+        files.read_capped(p, 100)
+
+
+# --- writing ----------------------------------------------------------------------------
+
+
+def test_failed_write_leaves_the_old_file(tmp_path, monkeypatch):
+    target = tmp_path / "cam.stl"
+    target.write_bytes(b"good old part")
+    real_fsync = os.fsync
+
+    def disk_full(fd):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(os, "fsync", disk_full)
+    with pytest.raises(files.FileError, match="No space left"):
+        files.write_atomic(target, b"new" * 1000)
+    monkeypatch.setattr(os, "fsync", real_fsync)
+    assert target.read_bytes() == b"good old part"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cam.stl"]  # no temp file left
+
+
+def test_disk_full_through_the_cli(tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(os, "fsync", lambda fd: (_ for _ in ()).throw(OSError(28, "No space")))
+    out = tmp_path / "cam.stl"
+    assert cli.main(["export", "--preset", "paper_example", "--stl", str(out)]) == 2
+    assert "No space" in capsys.readouterr().err and not out.exists()
+
+
+def test_same_output_twice_is_refused(tmp_path):
+    out = tmp_path / "cam.out"
+    proc = run("export", "--preset", "paper_example", "--stl", str(out), "--dxf",
+               str(tmp_path / "." / "cam.out"))
+    assert proc.returncode == 2 and "same file" in proc.stderr and not out.exists()
+
+
+def test_output_over_the_input_is_refused(tmp_path):
+    src = tmp_path / "d.json"
+    src.write_text(load_preset("paper_example").model_dump_json())
+    before = src.read_bytes()
+    proc = run("export", str(src), "--stl", str(src))
+    assert proc.returncode == 2 and "input design file" in proc.stderr
+    assert src.read_bytes() == before
+
+
+# --- exit codes -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("command", [["report"], ["report", "--json"], ["compare"]])
+def test_exit_codes(command):
+    assert run(*command, "--preset", "paper_example").returncode == 0
+    proc = run(*command, "--preset", "paper_example", *BREAKS)
+    assert proc.returncode == 1, proc.stderr
+    assert proc.stdout  # the report is still printed
+    if "--json" in command:
+        assert json.loads(proc.stdout)["violations"][0]["code"] == "high_dwell_arc"
+
+
+def test_export_of_a_design_that_breaks_a_limit_writes_and_exits_1(tmp_path):
+    out = tmp_path / "cam.dxf"
+    proc = run("export", "--preset", "paper_example", *BREAKS, "--dxf", str(out))
+    assert proc.returncode == 1 and out.stat().st_size > 0
+    assert "high_dwell_arc" in proc.stderr
+
+
+def test_version():
+    proc = run("--version")
+    assert proc.returncode == 0 and proc.stdout.startswith("camcore ")
+
+
+# --- --set and --tolerance-mm -----------------------------------------------------------
+
+
+def test_set_overrides_fields(capsys):
+    assert cli.main(["report", "--preset", "paper_example", "--json", "--set",
+                     "cam.base_radius_mm=90", "--set", "follower.kind=double_roller"]) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["follower"] == "double_roller"
+    assert s["dwell_radius_mm"] == pytest.approx(json.loads(
+        run("report", "--preset", "paper_example", "--json", "--follower", "double_roller",
+            "--set", "cam.base_radius_mm=90").stdout)["dwell_radius_mm"])
+
+
+@pytest.mark.parametrize("assignment, message", [
+    ("cam.base_radius=90", "no such field"),
+    ("cam.base_radius_mm=true", "cam.base_radius_mm"),
+    ('cam.base_radius_mm="90"', "cam.base_radius_mm"),
+    ("cam.base_radius_mm.x=1", "not a group"),
+    ("nonsense", "FIELD.PATH=VALUE"),
+])
+def test_set_errors_name_the_field(assignment, message):
+    proc = run("report", "--preset", "paper_example", "--set", assignment)
+    assert proc.returncode == 2 and message in proc.stderr, proc.stderr
+
+
+def test_tolerance_option_is_met(tmp_path, capsys):
+    out = tmp_path / "p.csv"
+    coarse = ["export", "--preset", "paper_example", "--set", "limits.resolution_deg=5"]
+    assert cli.main([*coarse, "--csv", str(out), "--tolerance-mm", "0.05"]) == 0
+    n_coarse = len(out.read_text().splitlines())
+    assert cli.main([*coarse, "--csv", str(out), "--tolerance-mm", "0.0001"]) == 0
+    n_fine = len(out.read_text().splitlines())
+    assert n_fine > 3 * n_coarse  # the chordal bound drives the vertex count
+    assert cli.main([*coarse, "--csv", str(out), "--tolerance-mm", "5"]) == 2
+    assert "export_tolerance_mm" in capsys.readouterr().err
+
+
+# --- strict JSON ------------------------------------------------------------------------
+
+
+def _paper() -> dict:
+    return json.loads(load_preset("paper_example").model_dump_json())
+
+
+@pytest.mark.parametrize("edit, field", [
+    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": 15.0, "lift_mm": 99'), "motion.lift_mm"),
+    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": true'), "motion.lift_mm"),
+    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": "15"'), "motion.lift_mm"),
+    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": NaN'), "motion.lift_mm"),
+    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": -Infinity'), "motion.lift_mm"),
+    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": [[[[[[[[[1]]]]]]]]]'), "nested deeper"),
+])
+def test_loose_json_is_refused_naming_the_field(edit, field):
+    text = edit(json.dumps(_paper()))
+    with pytest.raises(DesignError, match=field.replace(".", r"\.")):
+        design_from_json(text)
+
+
+def test_integers_still_count_as_numbers():
+    d = _paper()
+    d["cam"]["base_radius_mm"] = 80
+    assert design_from_json(json.dumps(d)).cam.base_radius_mm == 80.0
+
+
+# --- presets by name --------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", ["../../x", "/tmp/x", "paper_example.json", "..",
+                                  "paper_example/../paper_example", "", "\x00"])
+def test_preset_names_are_a_fixed_set(name, tmp_path):
+    (tmp_path / "x.json").write_text(json.dumps(_paper()))
+    with pytest.raises(DesignError, match="no preset"):
+        load_preset(name)
+
+
+def test_presets_are_package_data():
+    from importlib.resources import files as res
+
+    assert "paper_example" in preset_names()
+    assert res("camcore.presets").joinpath("paper_example.json").is_file()
+    assert not (Path(__file__).parents[1] / "static" / "presets").exists()
+
+
+def test_concurrent_reads_do_not_interfere(tmp_path):
+    """read_capped holds no shared state: threads reading at once all get their bytes."""
+    paths = []
+    for i in range(8):
+        p = tmp_path / f"{i}.json"
+        p.write_bytes(bytes([65 + i]) * (1000 + i))
+        paths.append(p)
+    got = {}
+    threads = [threading.Thread(target=lambda p=p: got.__setitem__(p, files.read_capped(p, 2000)))
+               for p in paths]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert all(got[p] == p.read_bytes() for p in paths)
