@@ -15,6 +15,9 @@ verdict holds for the real cam, not only at the analysed angles:
   rule, e.g. Norton, Cam Design and Manufacturing Handbook, ch. 7). A roller runs
   happily on a concave flank (rho < -r_c).
 * ``pressure_angle``    Eqs. 5/13 against the user's maximum (default 30 deg).
+* ``contact_stress``    Eq. 42: the maximum Hertz stress times the safety factor
+  (limits.contact_stress_safety_factor) against the allowable stress (the user's, or
+  the default of material.grade; see camcore.model.ALLOWABLE_CONTACT_STRESS_MPa).
 * ``high_dwell_arc``    Eq. 28, beta_h >= 4 psi_h (double followers).
 * ``low_dwell_arc``     Eq. 27, beta_l >= 0 (already enforced by the model).
 * ``jump``              Eqs. 29-41: contact force F_N <= 0 means the spring cannot
@@ -157,6 +160,27 @@ def _pressure_angle(a) -> list[Violation]:
         f"by {top - limit:.2f} deg at {_where(ranges)}", ranges, top - limit)]
 
 
+def _contact_stress(a) -> list[Violation]:
+    from .model import allowable_contact_stress_MPa
+
+    allow = allowable_contact_stress_MPa(a.design) * 1e6  # [Pa]
+    sf = a.design.limits.contact_stress_safety_factor
+    limit = allow / sf  # the largest stress the design may reach [Pa]
+    stress = np.where(a.in_contact, a.stress, 0.0)
+    bad = stress > limit
+    worst = a.worst.get("stress_max")
+    extra = worst.beyond(limit, 1.0) if worst else ()
+    if not (bad.any() or extra):
+        return []
+    top = max(float(stress.max()), worst.value if worst else 0.0)
+    ranges = runs_deg(a.theta, bad.any(0), extra)
+    return [Violation(
+        "contact_stress", "Eq. 42",
+        f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = {top * sf / 1e6:.1f} MPa "
+        f"exceeds the allowable {allow / 1e6:g} MPa by {(top * sf - allow) / 1e6:.1f} MPa "
+        f"at {_where(ranges)}", ranges, (top * sf - allow) / 1e6)]
+
+
 def _dwell_arcs(a) -> list[Violation]:
     out, design = [], a.design
     if len(a.geo.faces) == 2:
@@ -206,7 +230,8 @@ def _forces(a) -> list[Violation]:
 
 def run_all(a, lift_error: float | None) -> list[Violation]:
     """Every violation of ``a`` (a camcore.analysis.Analysis)."""
-    out = _curvature_rules(a) + _pressure_angle(a) + _dwell_arcs(a) + _forces(a)
+    out = (_curvature_rules(a) + _pressure_angle(a) + _contact_stress(a) + _dwell_arcs(a)
+           + _forces(a))
     if not a.profile.is_star_shaped():
         out.append(Violation(
             "profile_crossing", "star-shaped profile",

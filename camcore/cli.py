@@ -76,11 +76,45 @@ def _design(args) -> Design:
 
 
 def _report(args) -> int:
-    from .report import analyze_summary, report_text
+    from .analysis import analyze
+    from .report import report_text, summary
 
-    s = analyze_summary(_design(args))
+    documents = {k: p for k in ("html", "pdf") if (p := getattr(args, f"out_{k}", None))}
+    if args.design:
+        _refuse_collisions(documents, args.design)
+    a = analyze(_design(args))
+    s = summary(a)
     print(json.dumps(s, indent=2) if args.json else report_text(s))
+    _write(a, documents)
     return EXIT_VALID if s["valid"] else EXIT_BREAKS_LIMITS
+
+
+def _write(a, outputs: dict[str, str]) -> None:
+    """Build every requested file first (all or none), then write each atomically."""
+    from .export import EXPORTS
+    from .files import FileError, write_atomic
+
+    blobs = {kind: EXPORTS[kind].write(a) for kind in outputs}
+    for kind, path in outputs.items():
+        try:
+            write_atomic(path, blobs[kind])
+        except FileError as exc:
+            raise DesignError(str(exc)) from None
+        print(f"wrote {path} ({len(blobs[kind])} bytes)", file=sys.stderr)
+
+
+def _refuse_collisions(outputs: dict[str, str], design_path: str | None) -> None:
+    """Refuse an output naming the input design, or two outputs naming one file."""
+    from .files import same_file
+
+    paths = list(outputs.items())
+    for i, (k1, p1) in enumerate(paths):
+        if design_path and same_file(p1, design_path):
+            raise DesignError(f"--{k1} {p1}: that is the input design file; "
+                              "refusing to overwrite it")
+        for k2, p2 in paths[i + 1:]:
+            if same_file(p1, p2):
+                raise DesignError(f"--{k1} and --{k2} name the same file {p1}; give two paths")
 
 
 def _compare(args) -> int:
@@ -93,38 +127,21 @@ def _compare(args) -> int:
 
 def _outputs(args) -> dict[str, str]:
     """The requested output files by export kind, refusing a path used twice or the input."""
-    from .files import same_file
-
     outputs = {k: p for k in EXPORT_FLAGS if (p := getattr(args, f"out_{k}", None))}
     if not outputs:
         flags = ", ".join(f"--{k}" for k in EXPORT_FLAGS)
         raise DesignError(f"nothing to export: give one or more of {flags} FILE")
-    paths = list(outputs.items())
-    for i, (k1, p1) in enumerate(paths):
-        if args.design and same_file(p1, args.design):
-            raise DesignError(f"--{k1} {p1}: that is the input design file; "
-                              "refusing to overwrite it")
-        for k2, p2 in paths[i + 1:]:
-            if same_file(p1, p2):
-                raise DesignError(f"--{k1} and --{k2} name the same file {p1}; give two paths")
+    _refuse_collisions(outputs, args.design)
     return outputs
 
 
 def _export(args) -> int:
     from .analysis import analyze
-    from .export import EXPORTS
-    from .files import FileError, write_atomic
 
     design = _design(args)
     outputs = _outputs(args)
     a = analyze(design)
-    blobs = {kind: EXPORTS[kind].write(a) for kind in outputs}  # all or none: build first
-    for kind, path in outputs.items():
-        try:
-            write_atomic(path, blobs[kind])
-        except FileError as exc:
-            raise DesignError(str(exc)) from None
-        print(f"wrote {path} ({len(blobs[kind])} bytes)")
+    _write(a, outputs)
     if a.violations:
         names = ", ".join(sorted({v.code for v in a.violations}))
         print(f"note: the design breaks {len(a.violations)} limit(s) ({names}); "
@@ -133,7 +150,7 @@ def _export(args) -> int:
     return EXIT_VALID
 
 
-EXPORT_FLAGS = ("stl", "dxf", "csv", "angles", "json")
+EXPORT_FLAGS = ("stl", "dxf", "csv", "angles", "json", "html", "pdf")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -160,6 +177,9 @@ def _parser() -> argparse.ArgumentParser:
     r = sub.add_parser("report", help="analyse one design")
     source(r)
     r.add_argument("--json", action="store_true", help="print one JSON object")
+    r.add_argument("--html", dest="out_html", metavar="FILE",
+                   help="also write the printable report as self-contained HTML")
+    r.add_argument("--pdf", dest="out_pdf", metavar="FILE", help="also write it as PDF")
     r.set_defaults(run=_report)
 
     c = sub.add_parser("compare", help="the four followers on one design (Table 1)")

@@ -228,4 +228,14 @@ EXPORTS: dict[str, ExportKind] = {
     "angles": ExportKind("_angles.csv", "CSV of S, V, A, forces and stress per cam angle",
                          lambda a: cam_angle_csv_text(a).encode()),
     "json": ExportKind(".json", "the design as JSON", lambda a: json_text(a.design).encode()),
+    "html": ExportKind("_report.html", "the printable design report (self-contained HTML)",
+                       lambda a: _document().html_report(a).encode()),
+    "pdf": ExportKind("_report.pdf", "the printable design report as PDF",
+                      lambda a: _document().pdf_report(a)),
 }
+
+
+def _document():
+    from . import document  # matplotlib is imported only when a report is asked for
+
+    return document

@@ -182,8 +182,38 @@ class Dynamics(_Part):
     )
 
 
+class MaterialGrade(StrEnum):
+    """The cam's surface material: it sets the default allowable contact stress."""
+
+    case_hardened_steel = "case_hardened_steel"
+    through_hardened_steel = "through_hardened_steel"
+    mild_steel = "mild_steel"
+    cast_iron = "cast_iron"
+    bronze = "bronze"
+
+
+# Allowable Hertz contact stress [MPa] for ~1e8 cycles of a lubricated cam/follower
+# line contact, by the cam's surface. Order-of-magnitude design values of the cam
+# literature (surface-fatigue strengths of the common cam materials, e.g. Rothbart,
+# Cam Design Handbook, ch. on cam materials; Norton, Cam Design and Manufacturing
+# Handbook, ch. 12): a default to start from, to be replaced by the supplier's figure
+# (limits.allowable_contact_stress_MPa).
+ALLOWABLE_CONTACT_STRESS_MPa = {
+    MaterialGrade.case_hardened_steel: 1500.0,  # 58-62 HRC
+    MaterialGrade.through_hardened_steel: 1000.0,  # ~300 HB
+    MaterialGrade.mild_steel: 550.0,  # ~150 HB
+    MaterialGrade.cast_iron: 500.0,  # grey iron ~200 HB
+    MaterialGrade.bronze: 350.0,
+}
+
+
 class Material(_Part):
-    """Elastic constants for the Hertz stress (Eq. 42)."""
+    """Elastic constants for the Hertz stress (Eq. 42), and the cam's surface grade."""
+
+    grade: MaterialGrade = Field(
+        MaterialGrade.through_hardened_steel,
+        description="cam surface; sets the default allowable contact stress",
+    )
 
     cam_E_GPa: float = Field(
         210.0, ge=MIN_MODULUS_GPa, le=2000, description="Young's modulus E1 of the cam"
@@ -206,6 +236,14 @@ class Limits(_Part):
         0.001, ge=1e-5, le=1.0,
         description="largest deviation of the exported profile's chords from the exact "
         "cam [mm] (default 1 um)",
+    )
+    allowable_contact_stress_MPa: float | None = Field(
+        None, gt=0, le=1e5,
+        description="allowable Hertz stress [MPa]; empty = the default of material.grade",
+    )
+    contact_stress_safety_factor: float = Field(
+        1.25, ge=1.0, le=10.0,
+        description="the maximum Hertz stress times this must stay within the allowable",
     )
 
 
@@ -410,6 +448,12 @@ def load_preset(name: str) -> Design:
 
 
 # --- SI conversion at the edge -------------------------------------------------------
+
+
+def allowable_contact_stress_MPa(design: Design) -> float:
+    """The allowable Hertz stress [MPa]: the user's figure, else the material grade's."""
+    given = design.limits.allowable_contact_stress_MPa
+    return given if given is not None else ALLOWABLE_CONTACT_STRESS_MPa[design.material.grade]
 
 
 def omega_rad_s(design: Design) -> float:

@@ -169,7 +169,12 @@ class Segment:
 
 
 def segments(design: Design) -> tuple[Segment, ...]:
-    """The program as segments covering [0, 2 pi), zero-length dwells left out."""
+    """The program as segments covering [0, 2 pi).
+
+    A zero-length high dwell is left out. A zero-length low dwell is kept (as an empty
+    segment at 2 pi): between a fall and a rise the cam still carries a dwell arc of
+    2 psi_l (Eq. 26 with beta_l = 0) on which the two faces of a double follower meet,
+    and the profile must include it."""
     m = design.motion
     h = m.lift_mm * MM
     t1, t2, t3, t4 = boundaries_rad(design)
@@ -179,7 +184,7 @@ def segments(design: Design) -> tuple[Segment, ...]:
         Segment(FALL, t2, t3, h, 0.0, m.fall_law),
         Segment(LOW, t3, t4, 0.0, 0.0),
     )
-    return tuple(p for p in parts if p.is_motion or p.length > 1e-12)
+    return tuple(p for p in parts if p.is_motion or p.length > 1e-12 or p.code == LOW)
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import checks
 from .analysis import Analysis, analyze, compare
-from .model import Design, FollowerKind
+from .model import Design, FollowerKind, allowable_contact_stress_MPa
 from .motion import FALL, HIGH, RISE
 
 R2D = 180.0 / math.pi
@@ -73,6 +73,8 @@ def summary(a: Analysis) -> dict:
             "cycle": _max(a.stress) / 1e6,
             "high_dwell": _max(a.stress[:, high]) / 1e6 if high.any() else None,
         },
+        "contact_stress_allowable_MPa": allowable_contact_stress_MPa(a.design),
+        "contact_stress_safety_factor": a.design.limits.contact_stress_safety_factor,
         "total_load_high_dwell_N": _max(a.Ft, high),
         "profile": {
             "area_mm2": a.profile.area * 1e6,
@@ -120,6 +122,8 @@ def report_text(s: dict) -> str:
          f"{_fmt(s['guide_force_max_N']['F2'])} N"),
         ("max stress cycle / high dwell", f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
          f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa"),
+        ("allowable stress / safety factor",
+         f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}"),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
          f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
         ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "

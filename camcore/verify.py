@@ -160,13 +160,21 @@ LOCAL = 8  # vertices on each side of the face's direction in the local lower bo
 
 def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
     """max Y_C over the 2 LOCAL vertices (and their chords) nearest in polar angle to
-    where the line X = x_c meets the circle of the largest radius: a lower bound of the
-    lift, exact or close for any face width."""
+    where the line X = x_c meets the profile: a lower bound of the lift, exact or close
+    for any face width, and finite even for a roller narrower than the vertex spacing.
+
+    The meeting point's direction psi = acos(x_c / rho) needs the profile radius rho
+    there, which depends on psi: three fixed-point steps from rho_max settle it (the
+    radius changes slowly with the angle; any direction still gives a valid bound)."""
     k = min(2 * LOCAL, idx3.size // 3)
-    psi0 = math.acos(max(-1.0, min(1.0, x_c / rho_max)))  # world direction under the face
-    body = np.mod(psi0 + theta + math.pi, 2 * math.pi) - math.pi  # phi = psi + theta
-    j0 = np.searchsorted(phi3, body) - k // 2  # body >= -pi: the middle period of phi3
-    j = idx3[np.clip(j0[:, None] + np.arange(k), 0, idx3.size - 1)]
+    radius = np.hypot(pts[0], pts[1])
+    rho = np.full(theta.shape, rho_max)
+    for _ in range(3):
+        psi = np.arccos(np.clip(x_c / np.maximum(rho, 1e-300), -1.0, 1.0))
+        body = np.mod(psi + theta + math.pi, 2 * math.pi) - math.pi  # phi = psi + theta
+        j0 = np.searchsorted(phi3, body)  # body >= -pi: the middle period of phi3
+        rho = radius[idx3[np.clip(j0, 0, idx3.size - 1)]]
+    j = idx3[np.clip((j0 - k // 2)[:, None] + np.arange(k), 0, idx3.size - 1)]
     P = _rotate(c, s, pts[0][j], pts[1][j])
     Q = _rotate(c, s, nxt[0][j], nxt[1][j])
     return _face_max(P, Q, r, x_c)

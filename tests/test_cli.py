@@ -81,7 +81,7 @@ def test_export_files(tmp_path, capsys):
     assert main(["export", "--preset", "paper_example", "--stl", str(out["stl"]),
                  "--dxf", str(out["dxf"]), "--csv", str(out["csv"]),
                  "--json", str(out["json"])]) == 0
-    assert capsys.readouterr().out.count("wrote") == 4
+    assert capsys.readouterr().err.count("wrote") == 4
     s = run_json(capsys, "report", "--preset", "paper_example", "--json")
     mesh = trimesh.load(out["stl"], file_type="stl")
     assert mesh.is_watertight and mesh.is_winding_consistent

@@ -211,3 +211,30 @@ def test_concurrent_reads_do_not_interfere(tmp_path):
     for t in threads:
         t.join()
     assert all(got[p] == p.read_bytes() for p in paths)
+
+
+# --- the printable report -----------------------------------------------------------------
+
+
+def test_html_and_pdf_report(tmp_path):
+    """`report --html/--pdf`: a self-contained page (inline SVG plots, no external
+    reference) with the key numbers and the violations, the design name escaped; a PDF
+    that starts like one. stdout stays pure JSON with --json."""
+    d = json.loads(load_preset("paper_example").model_dump_json())
+    d["name"] = "<b id=inj>x</b> & co"
+    d["motion"]["high_dwell_deg"] = 10  # breaks Eq. 28
+    src = tmp_path / "d.json"
+    src.write_text(json.dumps(d))
+    page, pdf = tmp_path / "r.html", tmp_path / "r.pdf"
+    proc = run("report", str(src), "--json", "--html", str(page), "--pdf", str(pdf))
+    assert proc.returncode == 1, proc.stderr
+    assert json.loads(proc.stdout)["valid"] is False
+    text = page.read_text()
+    assert "<b id=inj>" not in text and "&lt;b id=inj&gt;x&lt;/b&gt; &amp; co" in text
+    assert text.count("<svg") == 2 and "Eq. 28" in text and "high_dwell_arc" in text
+    for external in ("<link", "<script", "<img", "src=", 'href="http', "url(http"):
+        assert external not in text  # nothing to fetch: XML namespaces only
+    assert "Hertz contact stress" in text and "Jerk" in text
+    assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 10_000
+    proc = run("report", str(src), "--html", str(src))
+    assert proc.returncode == 2 and "input design file" in proc.stderr

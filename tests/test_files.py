@@ -266,6 +266,8 @@ def test_cli_export_extreme_design(tmp_path):
     p = tmp_path / "tiny.json"
     p.write_text(json.dumps(EXTREME["min_lengths"]))
     stl, dxf = tmp_path / "t.stl", tmp_path / "t.dxf"
-    assert cli.main(["export", str(p), "--stl", str(stl), "--dxf", str(dxf)]) == 0
+    # a 1 um cam under the default load: the Hertz stress breaks the allowable (exit 1),
+    # and the files are still written
+    assert cli.main(["export", str(p), "--stl", str(stl), "--dxf", str(dxf)]) == 1
     assert trimesh.load(stl).is_watertight
     ezdxf.readfile(dxf)

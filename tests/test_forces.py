@@ -177,3 +177,42 @@ def test_hertz_against_handbook_roller_on_flat_and_concave():
 def test_hertz_no_contact_gives_zero():
     assert hertz_line_stress(-5.0, 0.008, 0.05, 0.01, 1e-11) == 0.0
     assert hertz_line_stress(5.0, -0.05, 0.06, 0.01, 1e-11) == 0.0  # rho > |r_f|
+
+
+def _with(design, **limits):
+    return design.model_copy(update={"limits": design.limits.model_copy(update=limits)})
+
+
+@pytest.mark.parametrize("kind", list(FollowerKind))
+def test_allowable_contact_stress_is_a_limit(kind):
+    """The maximum Hertz stress (Eq. 42) times the safety factor is checked against the
+    allowable: the paper example passes with the default grade (its stress is 50-220
+    MPa), and fails, naming Eq. 42 and the excess, once the allowable is set just below
+    its stress times the factor."""
+    from camcore.model import allowable_contact_stress_MPa
+
+    d = load_preset("paper_example").with_kind(kind)
+    a = analyze(d, verify=False)
+    assert allowable_contact_stress_MPa(d) == 1000.0  # through-hardened steel
+    assert "contact_stress" not in {v.code for v in a.violations}
+    peak = float(a.stress[a.in_contact].max()) / 1e6  # [MPa], at the grid
+    sf = d.limits.contact_stress_safety_factor
+    b = analyze(_with(d, allowable_contact_stress_MPa=peak * sf * 0.99), verify=False)
+    v = {v.code: v for v in b.violations}["contact_stress"]
+    assert v.equation == "Eq. 42" and v.ranges_deg
+    # the excess [MPa]: at least the grid's; the true peak between samples may be higher
+    assert peak * sf * 0.01 <= v.amount <= peak * sf * 0.02
+    c = analyze(_with(d, allowable_contact_stress_MPa=peak * sf * 1.02), verify=False)
+    assert "contact_stress" not in {v.code for v in c.violations}
+
+
+def test_material_grade_sets_the_default_allowable():
+    from camcore.model import ALLOWABLE_CONTACT_STRESS_MPa, Design, MaterialGrade
+
+    d = load_preset("paper_example").with_kind("single_roller")  # about 212 MPa
+    data = d.model_dump()
+    data["material"]["grade"] = MaterialGrade.bronze  # 350 MPa
+    data["limits"]["contact_stress_safety_factor"] = 2.0  # 424 MPa > 350
+    a = analyze(Design.model_validate(data), verify=False)
+    assert ALLOWABLE_CONTACT_STRESS_MPa[MaterialGrade.bronze] == 350.0
+    assert "contact_stress" in {v.code for v in a.violations}

@@ -357,6 +357,39 @@ def test_coarse_resolution_export_is_within_tolerance(kind):
         assert best.max() <= tol * 1.001, best.max()
 
 
+def _nearest_chord(P: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """Distance [m] of each point X to the closed polyline P (all chords, brute force)."""
+    Q = np.roll(P, -1, axis=0)
+    d = Q - P
+    t = np.clip(np.einsum("mij,ij->mi", X[:, None, :] - P[None], d) / (d * d).sum(1), 0, 1)
+    foot = P[None] + t[..., None] * d[None]
+    return np.hypot(*(foot - X[:, None, :]).transpose(2, 0, 1)).min(axis=1)
+
+
+@pytest.mark.parametrize("kind", ["double_roller", "double_concave"])
+def test_zero_low_dwell_keeps_its_arc(kind):
+    """With no low dwell (fall straight into rise) a double follower's cam still carries
+    the low-dwell arc of 2 psi_l (Eq. 26, beta_l = 0) between the fall face's last and the
+    rise face's first contact. It used to be left out: the exported cam had a chord with
+    a 2.5 mm sagitta there, and the chord from the fall to the rise was never measured.
+    Exact points on that arc (radius r_b) must lie on the polyline within tolerance."""
+    d = Design.model_validate({
+        "motion": {"lift_mm": 1, "rise_deg": 120, "high_dwell_deg": 120, "fall_deg": 120},
+        "follower": {"kind": kind, "roller_radius_mm": 1, "face_radius_mm": -100,
+                     "offset_mm": 9.5},
+        "cam": {"base_radius_mm": 18}})
+    a = analyze(d)
+    assert a.lift_error <= checks.lift_tolerance(a)
+    psi_l = a.geo.psi_l
+    assert math.degrees(psi_l) > 5  # a wide arc: the bug's chord is 0.1 mm or more off
+    # the contact at theta = 0 of the rise face is at polar pi/2 + psi_l (S1 left of the
+    # stem), the fall face's last contact at pi/2 - psi_l; the arc is between them
+    ang = np.linspace(math.pi / 2 - psi_l, math.pi / 2 + psi_l, 200)
+    X = a.geo.r_b * np.column_stack([np.cos(ang), np.sin(ang)])
+    tol = d.limits.export_tolerance_mm * 1e-3
+    assert _nearest_chord(a.profile.points, X).max() <= tol * 1.001
+
+
 def test_invalid_profile_costs_a_bounded_check(monkeypatch):
     """A profile that crosses itself (faces swapped) asks the sampler for millions of
     vertices and the unpruned check for O(N M): both are bounded."""

@@ -1,0 +1,153 @@
+"""The printable design report: one self-contained HTML page (or a PDF) with the key
+numbers, the broken limits and the curves, for a designer to file or send.
+
+The plots are drawn with matplotlib's object API (``matplotlib.figure.Figure``, no
+pyplot and no global state, so it is safe in the app's worker threads) and embedded as
+inline SVG: the page needs no other file and no network. Every string that comes from
+the user (the design name, violation messages that quote input) is HTML-escaped.
+"""
+
+from __future__ import annotations
+
+import html
+import io
+from collections.abc import Iterator
+
+import numpy as np
+
+from .analysis import Analysis
+from .report import report_text, summary
+from .units import to_deg, to_mm
+
+MAX_POINTS = 1500  # per curve in the embedded plots: the page stays a few hundred kB
+
+
+def _decimate(n: int) -> np.ndarray:
+    return np.unique(np.linspace(0, n - 1, min(n, MAX_POINTS)).astype(int))
+
+
+def _face_curves(a: Analysis, values: np.ndarray, scale: float) -> list[tuple[str, np.ndarray]]:
+    """One curve per face, NaN where the face does not touch (so gaps show)."""
+    names = ["S1 (rise face)", "S2 (fall face)"] if values.shape[0] == 2 else ["contact"]
+    return [(n, np.where(a.in_contact[i], values[i] * scale, np.nan))
+            for i, n in enumerate(names)]
+
+
+def _panels(a: Analysis) -> Iterator[tuple[str, str, list[tuple[str, np.ndarray]]]]:
+    """(title, y label, [(legend, values over a.theta)]) for each plot."""
+    p = a.prog
+    yield "Displacement", "S [mm]", [("S", to_mm(p.S))]
+    yield "Velocity", "V [mm/rad]", [("V", to_mm(p.V))]
+    yield "Acceleration", "A [mm/rad^2]", [("A", to_mm(p.A))]
+    yield "Jerk", "J [mm/rad^3]", [("J", to_mm(p.J))]
+    yield "Pressure angle (Eqs. 5, 13)", "phi [deg]", _face_curves(a, a.pressure_angle,
+                                                                    to_deg(1.0))
+    yield "Radius of curvature (Eq. 21)", "rho [mm]", _face_curves(a, a.rho, to_mm(1.0))
+    yield "Forces (Eqs. 29-41)", "F [N]", [("F_t total load", a.Ft), ("F1 guide", a.guide.F1),
+                                             ("F2 guide", a.guide.F2),
+                                             *_face_curves(a, a.FN, 1.0)]
+    yield "Hertz contact stress (Eq. 42)", "sigma [MPa]", _face_curves(a, a.stress, 1e-6)
+
+
+def _figure(a: Analysis):
+    from matplotlib.figure import Figure
+
+    panels = list(_panels(a))
+    fig = Figure(figsize=(11, 2.4 * ((len(panels) + 1) // 2)), layout="constrained")
+    axes = fig.subplots((len(panels) + 1) // 2, 2, sharex=True).ravel()
+    k = _decimate(a.theta.size)
+    th = to_deg(a.theta[k])
+    for ax, (title, ylabel, curves) in zip(axes, panels, strict=False):
+        for label, y in curves:
+            ax.plot(th, y[k], lw=1.2, label=label)
+        for s in to_deg(a.stations):
+            ax.axvline(s, color="0.8", lw=0.6, zorder=0)
+        ax.set_title(title, fontsize=10)
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+        if len(curves) > 1:
+            ax.legend(fontsize=7, loc="best")
+    for ax in axes[-2:]:
+        ax.set_xlabel("cam angle theta [deg] (grey: stations)")
+        ax.set_xlim(0, 360)
+    for ax in axes[len(panels):]:
+        ax.set_visible(False)
+    return fig
+
+
+def _profile_figure(a: Analysis):
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(5, 5), layout="constrained")
+    ax = fig.subplots()
+    P = to_mm(a.profile.points)
+    ax.fill(P[:, 0], P[:, 1], color="#c8d4e6", ec="#28508c", lw=1)
+    t = np.linspace(0, 2 * np.pi, 361)
+    rb = to_mm(a.geo.r_b)
+    ax.plot(rb * np.cos(t), rb * np.sin(t), ls="--", lw=0.7, color="0.5", label="base circle")
+    ax.plot([0], [0], "k+")
+    ax.set_aspect("equal")
+    ax.set_title("Cam profile as made (cam frame, mm)", fontsize=10)
+    ax.legend(fontsize=7, loc="lower right")
+    return fig
+
+
+def _svg(fig) -> str:
+    buf = io.StringIO()
+    fig.savefig(buf, format="svg")
+    text = buf.getvalue()
+    return text[text.index("<svg"):]  # drop the XML prolog and doctype: inline SVG
+
+
+def html_report(a: Analysis) -> str:
+    """The report of one analysis as a self-contained HTML document."""
+    s = summary(a)
+    esc = html.escape
+    verdict = ("<p class=ok>All limits met.</p>" if s["valid"] else
+               "<ul class=bad>" + "".join(
+                   f"<li><b>{esc(v['equation'])}</b> ({esc(v['code'])}): {esc(v['message'])}</li>"
+                   for v in s["violations"]) + "</ul>")
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8">
+<title>Cam design report: {esc(s['design'])}</title>
+<style>
+body {{ font-family: system-ui, sans-serif; margin: 2em auto; max-width: 60em; color: #222; }}
+pre {{ background: #f6f7f9; padding: 1em; overflow-x: auto; font-size: 0.85em; }}
+.ok {{ color: #17692e; font-weight: bold; }} .bad {{ color: #a11; }}
+svg {{ max-width: 100%; height: auto; }}
+@media print {{ body {{ margin: 0; }} }}
+</style></head><body>
+<h1>Cam design report</h1>
+<p><b>Design:</b> {esc(s['design'])} &nbsp; <b>Follower:</b> {esc(s['follower'])}</p>
+<h2>Verdict</h2>
+{verdict}
+<h2>Key numbers</h2>
+<pre>{esc(report_text(s))}</pre>
+<h2>Curves</h2>
+{_svg(_figure(a))}
+<h2>Profile</h2>
+{_svg(_profile_figure(a))}
+<p><small>Method: Chuang, Hsu &amp; Chang, disk cams with a translating follower having
+symmetrical double-concave faces (Eqs. 1-42). Generated by camcore.</small></p>
+</body></html>
+"""
+
+
+def pdf_report(a: Analysis) -> bytes:
+    """The same report as a PDF: a page of key numbers, then the curves and the profile."""
+    from matplotlib.backends.backend_pdf import PdfPages
+    from matplotlib.figure import Figure
+
+    s = summary(a)
+    text = report_text(s)
+    if not s["valid"]:
+        text += "\n\nThe design breaks the limits listed above (lines starting with '!')."
+    page = Figure(figsize=(8.27, 11.69))  # A4
+    page.text(0.06, 0.96, "Cam design report", fontsize=16, va="top")
+    page.text(0.06, 0.92, text, family="monospace", fontsize=7, va="top", wrap=True)
+    buf = io.BytesIO()
+    with PdfPages(buf, metadata={"Title": f"Cam design report: {s['design']}",
+                                 "Creator": "camcore"}) as pdf:
+        for fig in (page, _figure(a), _profile_figure(a)):
+            pdf.savefig(fig)
+    return buf.getvalue()
