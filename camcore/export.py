@@ -36,7 +36,7 @@ def _profile_mm(a) -> np.ndarray:
 
 def cam_mesh(a, max_points: int | None = None):
     """trimesh.Trimesh of the cam: profile extruded by the width, in mm, with the
-    design's shaft bore (if any) through it.
+    design's shaft bore and keyway (if any) through it.
 
     ``max_points`` thins the profile evenly for on-screen display (the exports use
     every vertex).
@@ -44,32 +44,60 @@ def cam_mesh(a, max_points: int | None = None):
     p = _profile_mm(a)
     if max_points is not None and p.shape[0] > max_points:
         p = p[:: -(-p.shape[0] // max_points)]
-    bore = a.design.cam.bore_diameter_mm / 2
-    if bore > 0 and bore >= np.hypot(p[:, 0], p[:, 1]).min():
-        raise ExportError(f"the bore (radius {bore:g} mm) cuts through the profile")
-    return extrude(p, a.design.cam.width_mm, bore)
+    return extrude(p, a.design.cam.width_mm, _checked_bore(a, p))
 
 
 BORE_SEGMENTS = 256  # polygon of the bore in the exported mesh
 
 
-def extrude(p: np.ndarray, width: float, bore: float = 0.0):
-    """Watertight prism over a polygon p (n, 2), counter-clockwise and star-shaped
-    about the origin, from z = 0 to z = width, with a round hole of radius ``bore``
-    (a 256-gon) about the origin when bore > 0.
+def bore_outline(cam) -> np.ndarray | None:
+    """The shaft hole [mm] as a closed polygon with increasing polar angle, or None.
 
-    Caps: a triangle fan around the origin, or with a bore a "zipper" strip between
+    A round bore is a BORE_SEGMENTS-gon. With a keyway (cam.keyway_width_mm b,
+    cam.keyway_depth_mm t2) the hole is the circle plus a slot of width b reaching
+    t2 beyond the bore radius, centred on +Y: the theta = 0 ray, where the follower
+    sits when the rise begins, so the key fixes the cam's phase on the shaft. The
+    outline stays star-shaped about the axis (its polar angle only increases).
+    """
+    R = cam.bore_diameter_mm / 2
+    if R <= 0:
+        return None
+    if cam.keyway_width_mm <= 0:
+        t = math.pi / 2 + 2 * math.pi * np.arange(BORE_SEGMENTS) / BORE_SEGMENTS
+        return R * np.column_stack([np.cos(t), np.sin(t)])
+    hw, top = cam.keyway_width_mm / 2, R + cam.keyway_depth_mm
+    foot = math.sqrt(R * R - hw * hw)  # where the slot's sides meet the circle
+    a_c = math.atan2(foot, hw)  # polar angle of the right foot
+    arc = np.linspace(math.pi - a_c, 2 * math.pi + a_c, BORE_SEGMENTS)
+    circle = R * np.column_stack([np.cos(arc), np.sin(arc)])
+    return np.vstack([[[hw, top], [-hw, top]], circle])
+
+
+def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
+    hole = bore_outline(a.design.cam)
+    if hole is not None and np.hypot(*hole.T).max() >= np.hypot(p[:, 0], p[:, 1]).min():
+        raise ExportError(f"the bore (and keyway) reach {np.hypot(*hole.T).max():g} mm from "
+                          "the axis and cut through the profile")
+    return hole
+
+
+def extrude(p: np.ndarray, width: float, hole: np.ndarray | None = None):
+    """Watertight prism over a polygon p (n, 2), counter-clockwise and star-shaped
+    about the origin, from z = 0 to z = width, with the polygonal ``hole`` (star-shaped
+    about the origin, increasing polar angle; see bore_outline) through it, if given.
+
+    Caps: a triangle fan around the origin, or with a hole a "zipper" strip between
     the two rings, advancing along whichever ring comes next in polar angle (valid
     because both rings are star-shaped about the origin).
     """
     import trimesh
 
     n = p.shape[0]
-    if bore > 0:
+    if hole is not None:
         a0 = math.atan2(p[0, 1], p[0, 0])
-        t = a0 + 2 * math.pi * np.arange(BORE_SEGMENTS) / BORE_SEGMENTS
-        inner = bore * np.column_stack([np.cos(t), np.sin(t)])
-        cap = _zipper(p, a0)  # indices: outer 0..n-1, inner n..n+m-1
+        ang = np.mod(np.arctan2(hole[:, 1], hole[:, 0]) - a0, 2 * math.pi)
+        inner = np.roll(hole, -int(np.argmin(ang)), axis=0)  # first at or after ray a0
+        cap = _zipper(p, inner, a0)  # indices: outer 0..n-1, inner n..n+m-1
     else:
         inner = np.zeros((1, 2))  # the axis point as the fan's centre
         i = np.arange(n)
@@ -80,7 +108,7 @@ def extrude(p: np.ndarray, width: float, bore: float = 0.0):
                        np.column_stack([ring, np.full(k, width)])])
     faces = [cap + k, cap[:, ::-1]]  # top faces +z, bottom faces -z
     faces += _wall(np.arange(n), k)  # outer wall, facing out
-    if bore > 0:
+    if hole is not None:
         faces += _wall(n + np.arange(inner.shape[0])[::-1], k)  # bore wall, facing the axis
     return trimesh.Trimesh(vertices=verts, faces=np.vstack(faces), process=False)
 
@@ -91,13 +119,15 @@ def _wall(loop: np.ndarray, k: int) -> list[np.ndarray]:
     return [np.column_stack([i, j, j + k]), np.column_stack([i, j + k, i + k])]
 
 
-def _zipper(p: np.ndarray, a0: float) -> np.ndarray:
+def _zipper(p: np.ndarray, inner: np.ndarray, a0: float) -> np.ndarray:
     """Counter-clockwise triangles between the outer ring p (n points, polar angles
-    increasing from a0) and a BORE_SEGMENTS-gon starting on the same ray."""
-    n, m = p.shape[0], BORE_SEGMENTS
+    increasing from a0) and the inner ring (m points, polar angles increasing from its
+    first point, which lies at or just after the ray a0)."""
+    n, m = p.shape[0], inner.shape[0]
     ang_o = a0 + np.mod(np.arctan2(p[:, 1], p[:, 0]) - a0, 2 * math.pi)
+    ang_i = a0 + np.mod(np.arctan2(inner[:, 1], inner[:, 0]) - a0, 2 * math.pi)
     next_o = np.append(ang_o[1:], a0 + 2 * math.pi)
-    next_i = a0 + 2 * math.pi * np.arange(1, m + 1) / m
+    next_i = np.append(ang_i[1:], ang_i[0] + 2 * math.pi)
     is_outer = np.concatenate([np.ones(n, bool), np.zeros(m, bool)])
     order = np.lexsort((~is_outer, np.concatenate([next_o, next_i])))
     step_outer = is_outer[order]
@@ -142,28 +172,49 @@ def weld_float32(p: np.ndarray) -> np.ndarray:
 def stl_bytes(a) -> bytes:
     """Binary STL of the cam solid [mm], built from the float32-welded profile."""
     p = weld_float32(_profile_mm(a))
-    bore = a.design.cam.bore_diameter_mm / 2
-    return extrude(p, a.design.cam.width_mm, bore).export(file_type="stl")
+    return extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
+
+
+DATUM_TEXT = "THETA=0: follower here as the rise starts; cam turns CW"
 
 
 def dxf_bytes(a) -> bytes:
-    """DXF (R2010, mm) with the closed profile as an LWPOLYLINE on layer PROFILE, the
-    axis as a small circle on layer AXIS and the bore (if any) as a true circle on
-    layer BORE, for CAM/CNC software."""
+    """DXF (R2010, mm) for CAM/CNC software.
+
+    Layers: PROFILE (the closed profile, one LWPOLYLINE), BORE (the shaft hole: a true
+    circle, or with a keyway its outline), and two reference layers that are not
+    features and are set not to plot: CENTERLINES (a centre cross at the axis, CENTER
+    linetype) and DATUM (the angular datum: a radial line on the theta = 0 ray, where
+    the follower sits when the rise begins, with a note; the cam turns clockwise).
+    """
     import ezdxf
 
     p = _profile_mm(a)
-    doc = ezdxf.new("R2010", setup=False)
+    cam = a.design.cam
+    doc = ezdxf.new("R2010", setup=True)  # setup: the standard linetypes (CENTER)
     doc.units = ezdxf.units.MM
     doc.layers.add("PROFILE", color=7)
-    doc.layers.add("AXIS", color=1)
+    for name, color, ltype in (("CENTERLINES", 8, "CENTER"), ("DATUM", 1, "DASHED")):
+        layer = doc.layers.add(name, color=color, linetype=ltype)
+        layer.dxf.plot = 0  # reference geometry, not a feature
     msp = doc.modelspace()
     msp.add_lwpolyline(p.tolist(), close=True, dxfattribs={"layer": "PROFILE"})
-    msp.add_circle((0.0, 0.0), radius=1.0, dxfattribs={"layer": "AXIS"})
-    if a.design.cam.bore_diameter_mm > 0:
+    r_min = float(np.hypot(p[:, 0], p[:, 1]).min())
+    c = 0.15 * r_min
+    msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTERLINES"})
+    msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
+    top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
+    msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
+    msp.add_text(DATUM_TEXT, height=0.04 * r_min,
+                 dxfattribs={"layer": "DATUM"}).set_placement((0.02 * r_min, 0.35 * r_min))
+    hole = bore_outline(cam)
+    if hole is not None:
         doc.layers.add("BORE", color=3)
-        msp.add_circle((0.0, 0.0), radius=a.design.cam.bore_diameter_mm / 2,
-                       dxfattribs={"layer": "BORE"})
+        if cam.keyway_width_mm > 0:
+            msp.add_lwpolyline(hole.tolist(), close=True, dxfattribs={"layer": "BORE"})
+        else:
+            msp.add_circle((0.0, 0.0), radius=cam.bore_diameter_mm / 2,
+                           dxfattribs={"layer": "BORE"})
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue().encode("utf-8")

@@ -150,6 +150,16 @@ class Cam(_Part):
         description="shaft bore of the exported solid [mm]; 0 = a solid blank",
     )
 
+    keyway_width_mm: float = Field(
+        0.0, ge=0, le=5000,
+        description="width b of a keyway in the bore [mm]; 0 = none. It is centred on "
+        "the theta = 0 ray (where the follower sits when the rise starts): the phase datum",
+    )
+    keyway_depth_mm: float = Field(
+        0.0, ge=0, le=5000,
+        description="depth t2 of the keyway into the hub, beyond the bore radius [mm]",
+    )
+
     @model_validator(mode="after")
     def _bore_inside_base_circle(self) -> Cam:
         if self.bore_diameter_mm >= 2 * self.base_radius_mm:
@@ -157,6 +167,23 @@ class Cam(_Part):
                 f"bore_diameter_mm = {self.bore_diameter_mm:g} mm must be below the base "
                 f"circle's diameter 2 r_b = {2 * self.base_radius_mm:g} mm"
             )
+        if (self.keyway_width_mm > 0) != (self.keyway_depth_mm > 0):
+            raise ValueError("keyway_width_mm and keyway_depth_mm: give both, or neither")
+        if self.keyway_width_mm > 0:
+            if self.bore_diameter_mm == 0:
+                raise ValueError("keyway_width_mm: a keyway needs a bore (bore_diameter_mm > 0)")
+            if self.keyway_width_mm >= self.bore_diameter_mm * 0.9:
+                raise ValueError(
+                    f"keyway_width_mm = {self.keyway_width_mm:g} mm must be below 0.9 x the "
+                    f"bore diameter ({0.9 * self.bore_diameter_mm:g} mm)"
+                )
+            top = self.bore_diameter_mm / 2 + self.keyway_depth_mm
+            if math.hypot(top, self.keyway_width_mm / 2) >= self.base_radius_mm:
+                raise ValueError(
+                    f"keyway_depth_mm: the keyway's corners reach "
+                    f"{math.hypot(top, self.keyway_width_mm / 2):g} mm from the axis, "
+                    f"past the base radius r_b = {self.base_radius_mm:g} mm"
+                )
         return self
 
 

@@ -82,3 +82,64 @@ def test_weld_refuses_a_profile_that_turns_back():
     square = np.array([[1.0, 0], [0, 1], [-1, 0], [0.5, 0.9], [0, -1]])
     with pytest.raises(export.ExportError, match="not star-shaped"):
         export.weld_float32(square)
+
+
+def _keyed(width=8.0, depth=3.3, bore=30.0, kind=FollowerKind.double_concave) -> Design:
+    data = with_bore(bore, kind).model_dump()
+    data["cam"].update(keyway_width_mm=width, keyway_depth_mm=depth)
+    return Design.model_validate(data)
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.single_roller])
+def test_keyway_solid_has_the_exact_volume(kind):
+    """A keyed bore (DIN 6885-like 8 x 3.3 mm slot in a 30 mm bore): watertight, genus 1,
+    and its volume is the profile area minus the hole's area (computed here
+    independently: the circle's polygon plus the slot), times the width."""
+    a = analyze(_keyed(kind=kind), verify=False)
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.euler_number == 0
+    R, hw, top = 15.0, 4.0, 18.3
+    foot = math.sqrt(R * R - hw * hw)
+    # hole = the circle's segment polygon without the cap under the slot + the slot
+    m = export.BORE_SEGMENTS
+    a_c = math.atan2(foot, hw)
+    sweep = 2 * math.pi - (math.pi - 2 * a_c)  # the arc the outline follows
+    arc_poly = 0.5 * R * R * (m - 1) * math.sin(sweep / (m - 1))  # fan of the arc chords
+    hole = arc_poly + 0.5 * 2 * hw * foot + 2 * hw * (top - foot)  # + triangle + slot
+    assert mesh.volume == pytest.approx((a.profile.area * 1e6 - hole) * 15.0, rel=1e-6)
+    # the slot is on the +Y ray (theta = 0): the hole reaches y = top there
+    inner = mesh.vertices[np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1]) < 20]
+    assert inner[:, 1].max() == pytest.approx(top)
+    assert inner[:, 1].min() == pytest.approx(-R, abs=0.01)
+
+
+def test_keyway_in_dxf_and_datum_layers():
+    a = analyze(_keyed(), verify=False)
+    doc = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
+    msp = doc.modelspace()
+    bore = [e for e in msp if e.dxf.layer == "BORE"]
+    assert len(bore) == 1 and bore[0].dxftype() == "LWPOLYLINE" and bore[0].closed
+    pts = np.array([p[:2] for p in bore[0].get_points()])
+    assert pts[:, 1].max() == pytest.approx(18.3)
+    # reference layers: present, not plotted, no circle that looks like a feature
+    for name in ("CENTERLINES", "DATUM"):
+        assert doc.layers.get(name).dxf.plot == 0
+    assert not [e for e in msp if e.dxftype() == "CIRCLE" and e.dxf.layer != "BORE"]
+    datum = [e for e in msp if e.dxf.layer == "DATUM" and e.dxftype() == "LINE"][0]
+    assert datum.dxf.start[0] == 0.0 == datum.dxf.end[0]  # on the theta = 0 ray (+Y)
+    profile = [e for e in msp if e.dxf.layer == "PROFILE"][0]
+    top = max(p[1] for p in profile.get_points() if abs(p[0]) < 1.0)
+    assert datum.dxf.end[1] == pytest.approx(top, abs=0.5)
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"keyway_width_mm": 8.0}, "give both"),
+    ({"keyway_width_mm": 8.0, "keyway_depth_mm": 3.0, "bore_diameter_mm": 0.0}, "needs a bore"),
+    ({"keyway_width_mm": 29.0, "keyway_depth_mm": 3.0}, "0.9 x the bore"),
+    ({"keyway_width_mm": 8.0, "keyway_depth_mm": 70.0}, "past the base radius"),
+])
+def test_keyway_limits(change, message):
+    data = with_bore(30.0).model_dump()
+    data["cam"].update(change)
+    with pytest.raises(ValidationError, match=message):
+        Design.model_validate(data)
