@@ -6,12 +6,12 @@ import numpy as np
 from pydantic import ValidationError
 
 from camcore.analysis import analyze
-from camcore.model import Design, FollowerKind, format_validation_error
+from camcore.model import PAPER_FOLLOWERS, Design, format_validation_error
 from camcore.report import PAPER_TABLE1_N, summary
 
 from .plots import COLORS, stride_index
 
-KINDS = tuple(FollowerKind)
+KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
 
 def compute(design: Design) -> dict:

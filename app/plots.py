@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from camcore.checks import rho_reference_mm
+
 MAX_POINTS = 720
 X_AXIS = {"label": "cam angle θ [°]", "size": 36}
 RED_FILL = "rgba(220,20,30,0.18)"
@@ -101,20 +103,15 @@ def _primary_deg(a):
 def build_curves(gui, a) -> list[Curve]:
     """The plots of the Curves tab."""
     lim = a.design.limits.max_pressure_angle_deg
-    f = a.design.follower
-    ref = f.roller_radius_mm if f.kind.is_roller else -f.face_radius_mm
-    ref_label = "r_c" if f.kind.is_roller else "|r_f|"
+    ref_label, ref = rho_reference_mm(a.design)
 
     def rho_mm(a):
         r = a.primary(a.rho) * 1e3
-        fl = a.design.follower
-        cap = 3 * (fl.roller_radius_mm if fl.kind.is_roller else -fl.face_radius_mm)
-        cap = max(cap, 2 * a.design.cam.base_radius_mm)
+        cap = max(3 * rho_reference_mm(a.design)[1], 2 * a.design.cam.base_radius_mm)
         return np.clip(np.nan_to_num(r, nan=cap, posinf=cap, neginf=-cap), -cap, cap)
 
     def limit(a, which):
-        fl = a.design.follower
-        v = fl.roller_radius_mm if fl.kind.is_roller else -fl.face_radius_mm
+        v = rho_reference_mm(a.design)[1]
         return np.full(a.theta.size, v if which == "rho" else 0.0)
 
     curves = [
@@ -156,9 +153,7 @@ def build_curves(gui, a) -> list[Curve]:
 
 def relabel_limits(curves: list[Curve], a) -> None:
     """Legend labels that carry the current limit values."""
-    f = a.design.follower
-    ref = f.roller_radius_mm if f.kind.is_roller else -f.face_radius_mm
-    ref_label = "r_c" if f.kind.is_roller else "|r_f|"
+    ref_label, ref = rho_reference_mm(a.design)
     lim = a.design.limits.max_pressure_angle_deg
     labels = {2: (2, f"+limit {lim:g}°"), 3: (2, f"{ref_label} = {ref:g} mm (limit)")}
     for ci, (si, text) in labels.items():

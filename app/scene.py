@@ -65,6 +65,36 @@ def _box(x0, x1, y0, y1, z0, z1) -> trimesh.Trimesh:
     return b
 
 
+def _prism(poly: np.ndarray, z0: float, z1: float) -> trimesh.Trimesh:
+    """A convex polygon (n, 2), counter-clockwise, extruded from z0 to z1."""
+    n = poly.shape[0]
+    verts = np.vstack([np.column_stack([poly, np.full(n, z0)]),
+                       np.column_stack([poly, np.full(n, z1)])])
+    i = np.arange(1, n - 1)
+    caps = [np.column_stack([np.zeros_like(i), i + 1, i]),
+            np.column_stack([np.full_like(i, n), n + i, n + i + 1])]
+    j, k = np.arange(n), (np.arange(n) + 1) % n
+    walls = [np.column_stack([j, k, n + k]), np.column_stack([j, n + k, n + j])]
+    return trimesh.Trimesh(verts, np.vstack(caps + walls), process=True)
+
+
+def _classic_body(a, f, z0: float, z1: float):
+    """A flat-faced tappet (a plate as wide as the contact wanders, camcore's
+    flat_face_width) or a knife edge (a wedge with its tip at the contact), at zero
+    lift; returns (mesh, top y, x extent) [m]."""
+    geo = a.geo
+    rb = geo.r_b
+    if geo.flat:
+        half = max(0.6 * float(np.abs(a.prog.V + geo.stem_x).max()) * 2, 0.15 * rb)
+        lo, hi = geo.stem_x - half, geo.stem_x + half
+        top = geo.y0 + PAD_T
+        return _box(lo, hi, geo.y0, top, z0, z1), top, lo, hi
+    wide, tall = 0.12 * rb, 0.2 * rb
+    tip = np.array([f.x_c, geo.y0])
+    tri = np.array([tip, tip + (wide / 2, tall), tip + (-wide / 2, tall)])
+    return _prism(tri, z0, z1), geo.y0 + tall, f.x_c - wide / 2, f.x_c + wide / 2
+
+
 def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]:
     """Meshes of the follower (at zero lift, world frame) and the fixed guide [m]."""
     d, geo = a.design, a.geo
@@ -73,7 +103,12 @@ def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]
     parts: dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]] = {}
     tops, xs = [], []
     for i, f in enumerate(geo.faces):
-        if f.r > 0:  # roller
+        if geo.flat or f.r == 0:  # flat-faced tappet or knife edge (issue 10)
+            mesh, top, x_lo, x_hi = _classic_body(a, f, z0, z1)
+            parts[f"face{i}"] = (mesh, FOLLOWER_RGB)
+            tops.append(top)
+            xs += [x_lo, x_hi]
+        elif f.r > 0:  # roller
             cyl = trimesh.creation.cylinder(radius=f.r, height=w * 0.9, sections=48)
             cyl.apply_translation((f.x_c, geo.y0, 0.0))
             parts[f"face{i}"] = (cyl, FOLLOWER_RGB)
@@ -102,17 +137,18 @@ def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]
             xs += ends
     sw = d.dynamics.guide_width_mm * 1e-3
     y_yoke = max(tops)
-    x_lo, x_hi = min(min(xs), -sw / 2), max(max(xs), sw / 2)
+    sx = geo.stem_x  # a single follower's axis (its offset)
+    x_lo, x_hi = min(min(xs), sx - sw / 2), max(max(xs), sx + sw / 2)
     parts["yoke"] = (_box(x_lo, x_hi, y_yoke - 1e-4, y_yoke + YOKE_T, z0, z1), STEM_RGB)
     l1, l2 = d.dynamics.overhang_mm * 1e-3, d.dynamics.guide_length_mm * 1e-3
     g0 = y_yoke + YOKE_T + l1
     stem_top = g0 + l2 + max(0.02, 1.2 * geo.h)
-    parts["stem"] = (_box(-sw / 2, sw / 2, y_yoke + YOKE_T - 1e-4, stem_top,
+    parts["stem"] = (_box(sx - sw / 2, sx + sw / 2, y_yoke + YOKE_T - 1e-4, stem_top,
                           -min(sw, w) / 2, min(sw, w) / 2), STEM_RGB)
     gw = max(0.006, sw * 0.8)
     guide = trimesh.util.concatenate([
-        _box(-sw / 2 - gw, -sw / 2 - 2e-4, g0, g0 + l2, z0, z1),
-        _box(sw / 2 + 2e-4, sw / 2 + gw, g0, g0 + l2, z0, z1),
+        _box(sx - sw / 2 - gw, sx - sw / 2 - 2e-4, g0, g0 + l2, z0, z1),
+        _box(sx + sw / 2 + 2e-4, sx + sw / 2 + gw, g0, g0 + l2, z0, z1),
     ])
     parts["guide"] = (guide, GUIDE_RGB)
     return parts
@@ -324,7 +360,7 @@ class SceneView:
             f = a.geo.faces[i]
             c = (f.x_c, a.geo.y0 + S)
             lines.append(((q[0], q[1], z), (float(pw[i, 0]), float(pw[i, 1]), z)))
-            if f.r > 0:
+            if 0 < f.r < math.inf:
                 lines.append(((q[0], q[1], z), (c[0], c[1], z)))
         self.nodes["q_lines"].points = np.array(lines, np.float32)
         self.nodes["q_lines"].visible = self.show["instant_centre"]

@@ -174,9 +174,10 @@ class Session:
 
     def _enable_for_kind(self, design: Design) -> None:
         k = design.follower.kind
-        self.controls["follower.face_radius_mm"].disabled = k.is_roller
+        self.controls["follower.face_radius_mm"].disabled = not k.is_concave
         self.controls["follower.roller_radius_mm"].disabled = not k.is_roller
         self.controls["follower.offset_mm"].disabled = not k.is_double
+        self.controls["follower.single_offset_mm"].disabled = k.is_double
 
     # --- design changes -------------------------------------------------------------
     def on_control(self) -> None:

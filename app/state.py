@@ -48,6 +48,9 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         Spec("follower.kind", "Kind", "dropdown", options=KINDS),
         Spec("follower.offset_mm", "Offset e [mm]", "slider", 0, 60, 0.5,
              hint="offset of each face/roller of a double follower"),
+        Spec("follower.single_offset_mm", "Axis offset e_s [mm]", "slider", -60, 60, 0.5,
+             hint="single followers: the axis moved left (> 0) lowers the rise's "
+                  "pressure angle"),
         Spec("follower.face_radius_mm", "Face radius r_f [mm]", "slider", -1000, -20, 1,
              hint="concave faces: negative, |r_f| must exceed r_b"),
         Spec("follower.roller_radius_mm", "Roller radius r_c [mm]", "slider", 1, 50, 0.5),

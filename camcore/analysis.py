@@ -18,7 +18,7 @@ import numpy as np
 
 from . import checks, extremes, forces, motion, profile, sampling
 from .contact import contact_stress
-from .model import Design, FollowerKind
+from .model import PAPER_FOLLOWERS, Design, FollowerKind
 from .units import MM
 
 
@@ -57,8 +57,9 @@ def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, 
                                                                            strict=True)])
     windows, part = profile.contact_windows(geo, prog, segs)
     Ft = forces.total_load(design, prog.S, prog.A)
-    x_c = np.array([f.x_c for f in geo.faces])
-    guide = forces.follower_forces(design, Ft, windows, normal, x_c, geo.r, prog.S, prog.V)
+    lever = np.stack([profile.lever_x(geo, f, prog) for f in geo.faces])
+    r_arm = 0.0 if geo.flat else geo.r  # the guide arms are measured to the face centre
+    guide = forces.follower_forces(design, Ft, windows, normal, lever, r_arm, prog.S, prog.V)
     FN = np.where(windows, guide.FN[None, :], 0.0)
     return Local(
         prog=prog, in_contact=windows, part=part, point_world=point_world,
@@ -156,6 +157,8 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     return replace(result, violations=violations, lift_error=lift_error)
 
 
-def compare(design: Design, verify: bool = False) -> dict[FollowerKind, Analysis]:
-    """The same design with each of the four followers (Table 1, Figs. 11-13)."""
-    return {k: analyze(design.with_kind(k), verify=verify) for k in FollowerKind}
+def compare(design: Design, verify: bool = False,
+            kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS) -> dict[FollowerKind, Analysis]:
+    """The same design with each follower in ``kinds`` (default: the paper's four,
+    Table 1, Figs. 11-13)."""
+    return {k: analyze(design.with_kind(k), verify=verify) for k in kinds}

@@ -9,7 +9,9 @@ verdict holds for the real cam, not only at the analysed angles:
 * ``curvature_convex``  concave faces, Eq. 22, rho > 0: the cam must be convex; where
   the pitch-curve radius 1/kappa_p reaches |r_f| the profile folds back (rho < 0).
 * ``curvature_face``    concave faces, Eq. 22, rho < |r_f|: a cam flatter than the
-  face touches it at two points or at the wrong one.
+  face touches it at two points or at the wrong one. A flat face needs a convex cam
+  too: ``curvature_convex`` when rho = r_b + S + S'' <= 0 (a cusp, the classic rule);
+  a knife edge has no curvature rule (it follows concave flanks).
 * ``roller_undercut``   rollers: the pitch curve's radius must not lie in (0, r_c]
   (the parallel curve at r_c folds back there; not in the paper, the classic undercut
   rule, e.g. Norton, Cam Design and Manufacturing Handbook, ch. 7). A roller runs
@@ -96,10 +98,41 @@ def _where(ranges: tuple[tuple[float, float], ...]) -> str:
     return f"theta = {shown} deg{more}"
 
 
+def rho_reference_mm(design) -> tuple[str, float]:
+    """(label, value [mm]) of the radius that bounds the cam's radius of curvature for
+    the design's follower, as the curvature rules below use it: |r_f| for a concave
+    face (0 < rho < |r_f|, Eq. 22), r_c for a roller (the undercut rule on the pitch
+    radius), 0 for a flat face (rho > 0) and a knife edge (no rule: drawn at 0)."""
+    f = design.follower
+    if f.kind.is_concave:
+        return "|r_f|", -f.face_radius_mm
+    if f.kind.is_roller:
+        return "r_c", f.roller_radius_mm
+    return "0", 0.0
+
+
 def _curvature_rules(a) -> list[Violation]:
     """Eq. 22 for concave faces, the undercut rule for rollers, in terms of the
     pitch-curve curvature kappa_p (rho = sigma / kappa_p - r, camcore.profile)."""
     on, k, out = a.on_curve, a.kappa_pitch, []
+    if a.geo.r == 0.0:  # knife edge: the pitch curve is the profile, concave flanks are fine
+        return out
+    if a.geo.flat:  # flat face: rho = r_b + S + S'' > 0, kappa_p its reciprocal
+        worst = a.worst.get("kappa_pitch_min")
+        cands = worst.others if worst else ()
+        bad = on & (k <= 0)
+        extra = tuple((lo, hi) for v, lo, hi in cands if v <= 0)
+        if bad.any() or extra:
+            rho = [float(np.min(a.rho[bad]))] if bad.any() else []
+            rho += [1.0 / v for v, _, _ in cands if v < 0]
+            ranges = runs_deg(a.theta, bad.any(0), extra)
+            low = min(rho) if rho else 0.0
+            out.append(Violation(
+                "curvature_convex", "flat face: rho = r_b + S + S'' > 0",
+                f"cam not convex under the flat face: rho = r_b + S + S'' falls to "
+                f"{to_mm(low):.4g} mm (a cusp; raise r_b or soften the law) at "
+                f"{_where(ranges)}", ranges, -to_mm(low)))
+        return out
     if a.geo.r > 0:  # rollers: the pitch radius 1/kappa_p must not lie in (0, r_c]
         rc = a.geo.r
         worst = a.worst.get("kappa_pitch_max")
@@ -163,6 +196,8 @@ def _pressure_angle(a) -> list[Violation]:
 def _contact_stress(a) -> list[Violation]:
     from .model import allowable_contact_stress_MPa
 
+    if a.geo.r == 0.0:  # knife edge: no Hertz stress to check (camcore.contact)
+        return []
     allow = allowable_contact_stress_MPa(a.design) * 1e6  # [Pa]
     sf = a.design.limits.contact_stress_safety_factor
     limit = allow / sf  # the largest stress the design may reach [Pa]

@@ -18,7 +18,15 @@ from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
-from .model import Design, DesignError, FollowerKind, load_design, load_preset, preset_names
+from .model import (
+    PAPER_FOLLOWERS,
+    Design,
+    DesignError,
+    FollowerKind,
+    load_design,
+    load_preset,
+    preset_names,
+)
 
 EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT = 0, 1, 2
 
@@ -120,7 +128,15 @@ def _refuse_collisions(outputs: dict[str, str], design_path: str | None) -> None
 def _compare(args) -> int:
     from .report import compare_rows, compare_text
 
-    rows = compare_rows(_design(args))
+    kinds = PAPER_FOLLOWERS
+    if args.followers:
+        names = [n.strip() for n in args.followers.split(",") if n.strip()]
+        bad = [n for n in names if n not in FollowerKind.__members__]
+        if bad or not names:
+            raise DesignError(f"--followers: unknown {', '.join(bad) or '(empty)'}; "
+                              f"choose from {', '.join(k.value for k in FollowerKind)}")
+        kinds = tuple(FollowerKind(n) for n in dict.fromkeys(names))
+    rows = compare_rows(_design(args), kinds)
     print(json.dumps(rows, indent=2) if args.json else compare_text(rows))
     return EXIT_VALID if all(r["valid"] for r in rows) else EXIT_BREAKS_LIMITS
 
@@ -182,8 +198,11 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--pdf", dest="out_pdf", metavar="FILE", help="also write it as PDF")
     r.set_defaults(run=_report)
 
-    c = sub.add_parser("compare", help="the four followers on one design (Table 1)")
+    c = sub.add_parser("compare", help="followers side by side on one design (Table 1)")
     source(c, follower=False)
+    c.add_argument("--followers", metavar="KIND,KIND,...",
+                   help="the followers to compare (default: the paper's four: "
+                        f"{','.join(k.value for k in PAPER_FOLLOWERS)})")
     c.add_argument("--json", action="store_true", help="print JSON rows")
     c.set_defaults(run=_compare)
 

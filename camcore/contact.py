@@ -39,7 +39,14 @@ def hertz_line_stress(FN, r, rho, width, compliance_per_Pa):
 
 
 def contact_stress(design: Design, FN, rho) -> np.ndarray:
-    """Eq. 42 for this design's follower radius, width and materials [Pa]."""
+    """Eq. 42 for this design's follower radius, width and materials [Pa].
+
+    A flat face (r = inf) is a cylinder of radius rho on a plane (1/r = 0). A knife edge
+    (r = 0) touches along a line of zero radius: the Hertz stress is not defined
+    (infinite in theory), so it is NaN and no stress limit is checked for it."""
+    r = design.follower.radius_mm * MM
+    if r == 0.0:
+        return np.full(np.shape(FN), np.nan)
     return hertz_line_stress(
-        FN, design.follower.radius_mm * MM, rho, design.cam.width_mm * MM, compliance(design)
+        FN, r, rho, design.cam.width_mm * MM, compliance(design)
     )

@@ -114,13 +114,14 @@ def two_contacts(Ft, normal) -> GuideSolution:
 def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V) -> GuideSolution:
     """Guide and contact forces at each cam angle for the faces in contact.
 
-    in_contact, normal : (n_faces, N) and (n_faces, N, 2); x_c : (n_faces,) [m].
+    in_contact, normal : (n_faces, N) and (n_faces, N, 2); x_c : (n_faces, N) [m], the
+    lever of each face's contact force from the follower's axis (profile.lever_x).
     Both faces touching: Eqs. 36-38. One face: Eqs. 33-35 / 39-41 with that face's
     normal and centre. No face (a broken high dwell, Eq. 28): all forces zero.
     """
     lead = np.where(in_contact[0], 0, in_contact.shape[0] - 1)
     idx = np.arange(Ft.size)
-    one = one_contact(design, Ft, normal[lead, idx], x_c[lead], r, S, V)
+    one = one_contact(design, Ft, normal[lead, idx], x_c[lead, idx], r, S, V)
     two = two_contacts(Ft, normal[0])
     both = in_contact.all(axis=0) & (in_contact.shape[0] == 2)
     touching = in_contact.any(axis=0)

@@ -37,12 +37,18 @@ MIN_MOTION_DEG = 0.01  # a rise or fall over less than this: V, A, J overflow (E
 
 
 class FollowerKind(StrEnum):
-    """The four translating followers of the paper's Fig. 9."""
+    """Translating followers: the four of the paper's Fig. 9, and the two classics.
+
+    ``flat_face`` is the limit r_f -> infinity of the face (a flat-faced tappet, its
+    face perpendicular to the stem); ``knife_edge`` is the limit r_c -> 0 of the roller.
+    """
 
     single_roller = "single_roller"
     double_roller = "double_roller"
     single_concave = "single_concave"
     double_concave = "double_concave"
+    flat_face = "flat_face"
+    knife_edge = "knife_edge"
 
     @property
     def is_double(self) -> bool:
@@ -50,11 +56,21 @@ class FollowerKind(StrEnum):
 
     @property
     def is_roller(self) -> bool:
+        """A roller of radius r_c (single or double); not the knife edge."""
         return self in (FollowerKind.single_roller, FollowerKind.double_roller)
+
+    @property
+    def is_concave(self) -> bool:
+        return self in (FollowerKind.single_concave, FollowerKind.double_concave)
 
     @property
     def label(self) -> str:
         return self.value.replace("_", " ")
+
+
+# The paper's four followers (Fig. 9, Table 1): the default set of the comparison.
+PAPER_FOLLOWERS = (FollowerKind.single_roller, FollowerKind.double_roller,
+                   FollowerKind.single_concave, FollowerKind.double_concave)
 
 
 class MotionLaw(StrEnum):
@@ -120,15 +136,33 @@ class Follower(_Part):
         "single followers run on the stem centreline (e = 0), as in the paper",
     )
 
-    @field_validator("offset_mm")
+    single_offset_mm: float = Field(
+        0.0, ge=-1000, le=1000,
+        description="offset e_s of a single follower's axis from the cam centre [mm]: "
+        "positive to the left (-X in Fig. 2), the side that lowers the rise's pressure "
+        "angle for the clockwise cam (and raises the fall's); 0 = on the centreline, "
+        "as in the paper. Double followers use offset_mm",
+    )
+
+    @field_validator("offset_mm", "single_offset_mm")
     @classmethod
     def _no_negative_zero(cls, v: float) -> float:
         return v + 0.0  # -0.0 mm is 0 mm (it printed psi_h = -0.0)
 
     @property
     def radius_mm(self) -> float:
-        """Signed radius of the active kind: r_c > 0 for rollers, r_f < 0 for faces."""
-        return self.roller_radius_mm if self.kind.is_roller else self.face_radius_mm
+        """Signed radius of the active kind: r_c > 0 for rollers, r_f < 0 for concave
+        faces, +inf for a flat face, 0 for a knife edge."""
+        if self.kind.is_roller:
+            return self.roller_radius_mm
+        if self.kind.is_concave:
+            return self.face_radius_mm
+        return math.inf if self.kind is FollowerKind.flat_face else 0.0
+
+    @property
+    def stem_x_mm(self) -> float:
+        """World X of a single follower's axis [mm] (-e_s); 0 for double followers."""
+        return 0.0 if self.kind.is_double else -self.single_offset_mm + 0.0
 
     @property
     def effective_offset_mm(self) -> float:
@@ -290,8 +324,12 @@ class Design(_Part):
     def _equations_can_be_evaluated(self) -> Design:
         """Geometry for which Eqs. 3 and 20 have no real answer is not a design."""
         f, rb, h = self.follower, self.cam.base_radius_mm, self.motion.lift_mm
-        r, e = f.radius_mm, f.effective_offset_mm
-        if not f.kind.is_roller and -r <= rb:
+        if f.kind is FollowerKind.flat_face:
+            return self  # the face is a line at r_b + S: any offset, any lift
+        r = f.radius_mm
+        e, field = ((f.offset_mm, "offset_mm") if f.kind.is_double
+                    else (abs(f.single_offset_mm), "single_offset_mm"))
+        if f.kind.is_concave and -r <= rb:
             raise ValueError(
                 f"follower.face_radius_mm: |r_f| = {-r:g} mm must exceed the base radius "
                 f"r_b = {rb:g} mm (a concave face must wrap the cam, Eq. 3)"
@@ -299,10 +337,10 @@ class Design(_Part):
         reach = abs(r + rb)
         if e >= reach * (1.0 - 1e-9):  # margin: e == |r + r_b| to round-off puts C on O's level
             raise ValueError(
-                f"follower.offset_mm: e = {e:g} mm must be below |r + r_b| = {reach:g} mm "
+                f"follower.{field}: e = {e:g} mm must be below |r + r_b| = {reach:g} mm "
                 f"(the square root in Eq. 3 needs (r + r_b)^2 - e^2 > 0)"
             )
-        if not f.kind.is_roller:
+        if f.kind.is_concave:
             l0 = math.sqrt(reach**2 - e**2)
             if h >= l0 * (1.0 - 1e-9):  # margin: h == L(0) to round-off in SI is L = 0
                 raise ValueError(

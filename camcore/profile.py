@@ -53,39 +53,53 @@ class Geometry:
     """Closed-form geometry of a design (Eqs. 3, 20, 23, 25)."""
 
     faces: tuple[Face, ...]  # (rise face, fall face); one face for single followers
-    r: float  # signed follower radius [m]
+    r: float  # signed follower radius [m]: +inf flat face, 0 knife edge
     r_b: float  # base radius [m]
-    e: float  # offset [m]
+    e: float  # offset of the two faces of a double follower [m] (0 for singles)
     h: float  # lift [m]
     sigma: float
-    y0: float  # Y_C at S = 0 [m] (Eq. 3 with S = 0; the paper's -L(0))
+    y0: float  # Y_C at S = 0 [m] (Eq. 3 with S = 0; the paper's -L(0)); r_b for a flat face
     dwell_radius: float  # R of the high-dwell arc [m] (Eq. 20)
     psi_h: float  # [rad] (Eq. 23)
     psi_l: float  # [rad] (Eq. 25)
+    stem_x: float = 0.0  # world X of the follower's axis [m] (a single follower's offset)
+
+    @property
+    def flat(self) -> bool:
+        """A flat face (r = +inf): the contact lies where the face meets the normal
+        through the instant centre, X = -V, not below a centre."""
+        return math.isinf(self.r)
 
 
 def geometry(design: Design) -> Geometry:
     """The closed-form geometry of ``design``.
 
     A double follower with e = 0 is a valid, degenerate design: its two faces coincide,
-    so it is one face on the stem centreline (nothing to share the load with).
+    so it is one face on the stem centreline (nothing to share the load with). A single
+    follower sits on its axis at X = stem_x (offset e_s, positive to the left). A flat
+    face is a line at Y = r_b + S; a knife edge is a roller of radius 0.
     """
     f = design.follower
     r, e = f.radius_mm * MM, abs(f.effective_offset_mm) * MM  # abs: -0.0 mm is 0
     r_b, h = design.cam.base_radius_mm * MM, design.motion.lift_mm * MM
+    stem_x = f.stem_x_mm * MM
     sigma = 1.0 if r + r_b > 0 else -1.0
-    tag = "roller" if f.kind.is_roller else "face"
+    tag = "roller" if f.kind.is_roller else "face" if f.kind.is_concave else f.kind.label
     if f.kind.is_double and e > 0:
         faces = (Face(f"S1 (left {tag})", r, -sigma * e), Face(f"S2 (right {tag})", r, sigma * e))
     elif f.kind.is_double:
         faces = (Face(f"S1 = S2 ({tag}s coincide, e = 0)", r, 0.0),)
     else:
-        faces = (Face(tag, r, 0.0),)
-    y0 = sigma * math.sqrt((r + r_b) ** 2 - e**2)
-    R = dwell_radius(r, r_b, e, h)
+        faces = (Face(tag, r, stem_x),)
+    x = max(e, abs(stem_x))
+    if math.isinf(r):  # flat face: no centre; the face itself rises from r_b
+        y0, R = r_b, r_b + h
+    else:
+        y0 = sigma * math.sqrt((r + r_b) ** 2 - x**2)
+        R = dwell_radius(r, r_b, x, h)
     return Geometry(
         faces=faces, r=r, r_b=r_b, e=e, h=h, sigma=sigma, y0=y0, dwell_radius=R,
-        psi_h=psi(e, R, r), psi_l=psi(e, r_b, r),
+        psi_h=psi(e, R, r), psi_l=psi(e, r_b, r), stem_x=stem_x,
     )
 
 
@@ -107,6 +121,8 @@ def psi(e: float, radius: float, r: float) -> float:
     psi = asin(e / |radius + r|): Eq. 23 with radius = R, Eq. 25 with radius = r_b
     (for r = r_f < 0, |R + r_f| = -R - r_f as printed). Zero for single followers.
     """
+    if e == 0.0:
+        return 0.0
     return math.asin(min(1.0, e / abs(radius + r)))
 
 
@@ -120,8 +136,17 @@ class FaceContact:
 
 
 def face_contact(geo: Geometry, face: Face, prog: Program) -> FaceContact:
-    """Contact point and normal of ``face`` for the program ``prog`` (Eqs. 3-10, 13-18)."""
+    """Contact point and normal of ``face`` for the program ``prog`` (Eqs. 3-10, 13-18).
+
+    A flat face (r = inf) has the vertical normal everywhere: it passes through the
+    instant centre Q at X = -V (Eqs. 1-4), so the contact is at (-V, r_b + S) and the
+    pressure angle is 0 (the classic flat-faced follower, e.g. Norton, Cam Design and
+    Manufacturing Handbook, ch. 7)."""
     yc = geo.y0 + prog.S
+    if geo.flat:
+        n = np.broadcast_to(np.array([0.0, 1.0]), (prog.S.size, 2)).copy()
+        point = np.stack([-prog.V, yc], axis=-1)
+        return FaceContact(n, point, np.zeros_like(prog.S))
     ux, uy = face.x_c + prog.V, yc
     m = np.hypot(ux, uy)
     n = geo.sigma * np.stack([ux, uy], axis=-1) / m[:, None]
@@ -149,6 +174,9 @@ def pitch_curvature(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
     model accepts (the face centre never reaches the cam axis), so kappa_p is finite.
     """
     Y = geo.y0 + prog.S
+    if geo.flat:  # no pitch curve: the profile's own curvature, 1 / (r_b + S + S'')
+        with np.errstate(divide="ignore"):
+            return 1.0 / (Y + prog.A)
     u = face.x_c + prog.V
     return (Y * Y + u * (u + prog.V) - prog.A * Y) / (Y * Y + u * u) ** 1.5
 
@@ -157,6 +185,8 @@ def curvature_radius(geo: Geometry, face: Face, kappa_p: np.ndarray) -> np.ndarr
     """Signed radius of curvature rho [m] of the cam profile at the contact (Eq. 21).
 
     The profile is the parallel curve at distance r of the pitch curve, so
+    A flat face: rho = r_b + S + S'' (the classic closed form), whose reciprocal is
+    its kappa_p. Otherwise
     rho = sigma / kappa_p - r (sigma = +1 roller, -1 concave face): cheaper than
     evaluating Eq. 21 on the traced profile, and right in sign where the profile folds
     back on itself, where the traced curve turns round and Eq. 21 flips sign (a roller
@@ -164,8 +194,19 @@ def curvature_radius(geo: Geometry, face: Face, kappa_p: np.ndarray) -> np.ndarr
     cam is convex; +inf where the pitch curve is straight (kappa_p = 0).
     ``kappa_p`` is ``pitch_curvature(geo, face, prog)``.
     """
+    r = 0.0 if geo.flat else face.r  # flat face: kappa_p is the profile's curvature
     with np.errstate(divide="ignore"):
-        return np.where(kappa_p == 0.0, np.inf, geo.sigma / kappa_p - face.r)
+        return np.where(kappa_p == 0.0, np.inf, geo.sigma / kappa_p - r)
+
+
+def lever_x(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
+    """Horizontal distance [m] from the follower's axis to the point through which the
+    contact force acts, per cam angle: the face centre C (x_c - stem_x: +-e for double
+    followers, 0 for a single one on its axis), or for a flat face the contact point
+    itself, X = -V (the flat face's contact wanders across the face)."""
+    if geo.flat:
+        return -prog.V - geo.stem_x
+    return np.full(prog.S.shape, face.x_c - geo.stem_x)
 
 
 def face_sides(geo: Geometry) -> tuple[float, ...]:

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import checks
 from .analysis import Analysis, analyze, compare
-from .model import Design, FollowerKind, allowable_contact_stress_MPa
+from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa
 from .motion import FALL, HIGH, RISE
 
 R2D = 180.0 / math.pi
@@ -26,8 +26,14 @@ PAPER_TABLE1_N = {
 
 
 def _max(x: np.ndarray, mask: np.ndarray | None = None) -> float | None:
+    """The largest value, or None if there is none (no samples, or all undefined)."""
     x = x if mask is None else x[..., mask]
+    x = x[~np.isnan(x)]
     return float(np.max(x)) if x.size else None
+
+
+def _scaled(x: float | None, factor: float) -> float | None:
+    return None if x is None else x * factor
 
 
 def _range_mm(a: Analysis, part: int) -> list[float] | None:
@@ -36,6 +42,16 @@ def _range_mm(a: Analysis, part: int) -> list[float] | None:
         return None
     rho = a.rho[m] * 1e3
     return [float(rho.min()), float(rho.max())]
+
+
+def _flat_face_width_mm(a: Analysis) -> float | None:
+    """A flat face must reach the contact wherever it wanders: X = -V about the axis,
+    so a face symmetric about the stem needs width 2 max |V + stem_x| (plus the edge
+    margin the designer adds). None for other followers."""
+    if not a.geo.flat:
+        return None
+    x = -a.prog.V - a.geo.stem_x
+    return 2.0 * float(np.max(np.abs(x))) * 1e3
 
 
 def summary(a: Analysis) -> dict:
@@ -70,12 +86,13 @@ def summary(a: Analysis) -> dict:
         },
         "guide_force_max_N": {"F1": _max(a.guide.F1), "F2": _max(a.guide.F2)},
         "contact_stress_max_MPa": {
-            "cycle": _max(a.stress) / 1e6,
-            "high_dwell": _max(a.stress[:, high]) / 1e6 if high.any() else None,
+            "cycle": _scaled(_max(a.stress), 1e-6),
+            "high_dwell": _scaled(_max(a.stress[:, high]), 1e-6) if high.any() else None,
         },
         "contact_stress_allowable_MPa": allowable_contact_stress_MPa(a.design),
         "contact_stress_safety_factor": a.design.limits.contact_stress_safety_factor,
         "total_load_high_dwell_N": _max(a.Ft, high),
+        "flat_face_width_min_mm": _flat_face_width_mm(a),
         "profile": {
             "area_mm2": a.profile.area * 1e6,
             "perimeter_mm": a.profile.perimeter * 1e3,
@@ -122,6 +139,7 @@ def report_text(s: dict) -> str:
          f"{_fmt(s['guide_force_max_N']['F2'])} N"),
         ("max stress cycle / high dwell", f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
          f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa"),
+        ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),
         ("allowable stress / safety factor",
          f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}"),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
@@ -140,17 +158,19 @@ def report_text(s: dict) -> str:
     return "\n".join(lines)
 
 
-def compare_rows(design: Design) -> list[dict]:
-    """Table 1 quantities and the stress maxima for the four followers."""
+def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS
+                 ) -> list[dict]:
+    """Table 1 quantities and the stress maxima for each follower in ``kinds`` (default
+    the paper's four; ``paper_table1_N`` is None for the others)."""
     rows = []
-    for kind, a in compare(design, verify=True).items():
+    for kind, a in compare(design, verify=True, kinds=kinds).items():
         s = summary(a)
         rows.append({
             "follower": kind.value,
             "valid": s["valid"],
             "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
             "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
-            "paper_table1_N": PAPER_TABLE1_N[kind],
+            "paper_table1_N": PAPER_TABLE1_N.get(kind),
             "FN_cycle_N": s["contact_force_max_N"]["cycle"],
             "F1_max_N": s["guide_force_max_N"]["F1"],
             "F2_max_N": s["guide_force_max_N"]["F2"],

@@ -48,8 +48,11 @@ def density(a, geo: profile.Geometry, tol: float) -> np.ndarray:
     g = np.zeros(a.prog.theta.size)
     for i, f in enumerate(geo.faces):
         k = a.kappa_pitch[i]
-        speed = np.hypot(Y, f.x_c + a.prog.V) * np.abs(geo.sigma - f.r * k)
         rho = np.abs(a.rho[i])
+        if geo.flat:  # the contact's tangent turns with the cam: ds/dtheta = rho
+            speed = rho
+        else:
+            speed = np.hypot(Y, f.x_c + a.prog.V) * np.abs(geo.sigma - f.r * k)
         with np.errstate(divide="ignore", invalid="ignore"):
             need = np.where(np.isfinite(rho) & (rho > 0), speed / np.sqrt(8 * rho * tol), 0.0)
         need = np.where(np.isfinite(need), need, 1e12)

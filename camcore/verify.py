@@ -77,6 +77,8 @@ def _face_max(P, Q, r, x_c) -> np.ndarray:
     """Lowest centre height Y_C of a face (r, x_c) above the vertices P and, for a
     roller (r >= 0), the chords P -> Q; P, Q: (X, Y) arrays of shape (angles, m)."""
     X, Y = P
+    if math.isinf(r):  # a flat face (wide enough) rests on the highest vertex
+        return np.max(Y, axis=1)
     dx2 = (X - x_c) ** 2
     reach = dx2 <= r * r
     yc = Y + math.copysign(1.0, r) * np.sqrt(np.where(reach, r * r - dx2, 0.0))
@@ -99,7 +101,10 @@ def _wedge(L, r, x_c, rho_max):
     hw = np.full(L.shape, 4.0)
     ctr = np.full(L.shape, math.pi / 2)
     fin = np.isfinite(L)
-    if r > 0:
+    if math.isinf(r):  # flat face: a vertex at radius <= rho_max reaches Y >= L only
+        ok = fin & (L > 0) & (L < rho_max)  # within acos(L / rho_max) of straight up
+        hw[ok] = np.arccos(L[ok] / rho_max)
+    elif r >= 0:  # rollers, and the knife edge (r = 0)
         ymin = L - r
         ok = fin & (ymin > 0)
         hw[ok] = np.arctan2(abs(x_c) + r, ymin[ok])
@@ -183,6 +188,8 @@ def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
 def _vertex_max(P, r, x_c) -> np.ndarray:
     """The vertex part of _face_max (a lower bound of the lift for any face)."""
     X, Y = P
+    if math.isinf(r):
+        return np.max(Y, axis=1)
     dx2 = (X - x_c) ** 2
     reach = dx2 <= r * r
     yc = Y + math.copysign(1.0, r) * np.sqrt(np.where(reach, r * r - dx2, 0.0))
@@ -206,7 +213,8 @@ def follower_lift(
     """
     r0, x0 = faces[0]
     sigma = 1.0 if r0 + r_b > 0 else -1.0
-    rest = sigma * math.sqrt((r0 + r_b) ** 2 - x0**2)
+    # the face centre's height (the face's own for a flat face) when S = 0 (Eq. 3)
+    rest = r_b if math.isinf(r0) else sigma * math.sqrt((r0 + r_b) ** 2 - x0**2)
     pts = (points[:, 0], points[:, 1])
     nxt = (np.roll(points[:, 0], -1), np.roll(points[:, 1], -1))
     theta = np.asarray(theta, dtype=float)

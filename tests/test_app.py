@@ -263,3 +263,21 @@ def test_tabs_are_isolated_and_freed(app):
     assert wait_for(lambda: not any(t.is_alive() for t in s1.threads), 5.0)
     t2.close()
     assert wait_for(lambda: len(app.sessions) == n - 2)
+
+
+@pytest.mark.parametrize("kind", ["flat_face", "knife_edge"])
+def test_new_follower_kinds_render_and_offset(tab, kind):
+    """The flat-faced tappet and the knife edge are drawn and animated; a single
+    follower's axis offset is a live control (greyed out for double followers)."""
+    s = tab
+    s.controls["follower.kind"].value = kind
+    assert s.design.follower.kind.value == kind and s.error is None
+    assert "face0" in s.view.nodes and "face1" not in s.view.nodes
+    assert not s.controls["follower.single_offset_mm"].disabled
+    assert s.controls["follower.face_radius_mm"].disabled
+    assert s.controls["follower.roller_radius_mm"].disabled
+    s.controls["follower.single_offset_mm"].value = 12.0
+    assert s.design.follower.single_offset_mm == 12.0 and s.analysis.geo.stem_x < 0
+    s.view.pose(len(s.analysis.theta) // 3)  # animate a frame
+    s.controls["follower.kind"].value = "double_concave"
+    assert s.controls["follower.single_offset_mm"].disabled

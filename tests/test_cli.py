@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from camcore.cli import main
-from camcore.model import FollowerKind, load_preset, preset_names
+from camcore.model import PAPER_FOLLOWERS, FollowerKind, load_preset, preset_names
 
 KEYS = {
     "follower", "valid", "violations", "dwell_radius_mm", "psi_h_deg", "psi_l_deg",
@@ -71,9 +71,15 @@ def test_violations_are_reported_with_equation(capsys):
 
 def test_compare_table(capsys):
     rows = run_json(capsys, "compare", "--preset", "paper_example", "--json")
-    assert [r["follower"] for r in rows] == [k.value for k in FollowerKind]
+    assert [r["follower"] for r in rows] == [k.value for k in PAPER_FOLLOWERS]
     assert main(["compare", "--preset", "paper_example"]) == 0
     assert "Table 1" in capsys.readouterr().out
+    rows = run_json(capsys, "compare", "--preset", "paper_example", "--json",
+                    "--followers", "flat_face,single_roller,knife_edge")
+    assert [r["follower"] for r in rows] == ["flat_face", "single_roller", "knife_edge"]
+    assert rows[0]["paper_table1_N"] is None and rows[1]["paper_table1_N"] == 133.496
+    assert rows[2]["stress_max_MPa"] is None  # a knife edge has no Hertz stress
+    assert main(["compare", "--preset", "paper_example", "--followers", "wheel"]) == 2
 
 
 def test_export_files(tmp_path, capsys):

@@ -84,27 +84,41 @@ def test_first_valid_mode_is_chosen():
     assert len(seen) >= 2  # the rise and fall load the guide from opposite sides
 
 
-@pytest.mark.parametrize("kind", list(FollowerKind))
-def test_equilibrium_about_the_cam_axis(kind):
+def _offset(design, e_s_mm: float):
+    data = design.model_dump()
+    data["follower"]["single_offset_mm"] = e_s_mm
+    return type(design).model_validate(data)
+
+
+@pytest.mark.parametrize("kind, e_s", [*((k, 0.0) for k in FollowerKind),
+                                       (FollowerKind.single_roller, 20.0),
+                                       (FollowerKind.single_concave, -15.0),
+                                       (FollowerKind.flat_face, 12.0),
+                                       (FollowerKind.knife_edge, 25.0)])
+def test_equilibrium_about_the_cam_axis(kind, e_s):
     """Re-derive equilibrium with moments about O2 (not the face centre the solver uses),
-    with friction opposing the motion, for every one-contact angle and whatever mode."""
-    a = analyze(PAPER.with_kind(kind), verify=False)
+    with friction opposing the motion, for every one-contact angle and whatever mode;
+    also for single followers offset from the cam centre (their axis, guide and load at
+    X = -e_s) and the flat face (force through the contact point, X = -V)."""
+    a = analyze(_offset(PAPER.with_kind(kind), e_s), verify=False)
     one = (a.n_contacts == 1) & (a.guide.mode >= 0)
     g = a.guide
+    stem = -e_s * 1e-3 if not kind.is_double else 0.0
+    assert a.geo.stem_x == pytest.approx(stem)
     for k in np.flatnonzero(one)[::25]:
         f = 0 if a.in_contact[0, k] else 1
         n = a.normal[f, k]
-        C = np.array([a.geo.faces[f].x_c, a.geo.y0 + a.prog.S[k]])
         contact = a.point_world[f, k]
+        Y = a.geo.y0 + a.prog.S[k]  # the face centre's height; the face's for a flat one
         l1 = L10 - a.prog.S[k]
-        y1 = C[1] + l1 - a.geo.r
+        y1 = Y + l1 - (0.0 if kind is FollowerKind.flat_face else a.geo.r)
         y2 = y1 + L2
         fric = -np.sign(a.prog.V[k]) * MU
         forces = [  # (point, force)
             (contact, g.FN[k] * n),
-            (np.array([0.0, C[1]]), np.array([0.0, -a.Ft[k]])),
-            (np.array([g.side1[k] * D / 2, y1]), np.array([-g.side1[k], fric]) * g.F1[k]),
-            (np.array([g.side2[k] * D / 2, y2]), np.array([-g.side2[k], fric]) * g.F2[k]),
+            (np.array([stem, Y]), np.array([0.0, -a.Ft[k]])),
+            (np.array([stem + g.side1[k] * D / 2, y1]), np.array([-g.side1[k], fric]) * g.F1[k]),
+            (np.array([stem + g.side2[k] * D / 2, y2]), np.array([-g.side2[k], fric]) * g.F2[k]),
         ]
         Fsum = sum(F for _, F in forces)
         Msum = sum(p[0] * F[1] - p[1] * F[0] for p, F in forces)
@@ -183,7 +197,7 @@ def _with(design, **limits):
     return design.model_copy(update={"limits": design.limits.model_copy(update=limits)})
 
 
-@pytest.mark.parametrize("kind", list(FollowerKind))
+@pytest.mark.parametrize("kind", [k for k in FollowerKind if k is not FollowerKind.knife_edge])
 def test_allowable_contact_stress_is_a_limit(kind):
     """The maximum Hertz stress (Eq. 42) times the safety factor is checked against the
     allowable: the paper example passes with the default grade (its stress is 50-220
@@ -201,7 +215,7 @@ def test_allowable_contact_stress_is_a_limit(kind):
     v = {v.code: v for v in b.violations}["contact_stress"]
     assert v.equation == "Eq. 42" and v.ranges_deg
     # the excess [MPa]: at least the grid's; the true peak between samples may be higher
-    assert peak * sf * 0.01 <= v.amount <= peak * sf * 0.02
+    assert peak * sf * 0.01 * (1 - 1e-9) <= v.amount <= peak * sf * 0.02
     c = analyze(_with(d, allowable_contact_stress_MPa=peak * sf * 1.02), verify=False)
     assert "contact_stress" not in {v.code for v in c.violations}
 

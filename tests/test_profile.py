@@ -140,9 +140,12 @@ def eq21_exact(g, face, p):
     dn = s * (du / m - u * dm / m**2)
     ddn = s * (ddu / m - 2 * du * dm / m**2 - u * ddm / m**2 + 2 * u * dm**2 / m**3)
     zero = np.zeros_like(V)
-    A = np.stack([face.x_c + zero, yc], -1) - face.r * n
-    dA = np.stack([zero, V], -1) - face.r * dn
-    ddA = np.stack([zero, Ac], -1) - face.r * ddn
+    if math.isinf(face.r):  # flat face: the contact (-V, Y) in the world frame
+        A, dA, ddA = (np.stack(c, -1) for c in ((-V, yc), (-Ac, V), (-Jk, Ac)))
+    else:
+        A = np.stack([face.x_c + zero, yc], -1) - face.r * n
+        dA = np.stack([zero, V], -1) - face.r * dn
+        ddA = np.stack([zero, Ac], -1) - face.r * ddn
     rot = np.array([[0.0, -1.0], [1.0, 0.0]])
     p1 = A @ rot.T + dA
     p2 = -A + 2 * dA @ rot.T + ddA

@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import warnings
 from dataclasses import fields
 
@@ -175,14 +176,19 @@ def design_dicts(draw, resolutions=None) -> dict:
     f, rb = data["follower"], data["cam"]["base_radius_mm"]
     dependent = draw(st.floats(0, 1)) < 0.85
     if dependent:
-        if not kind.is_roller:  # |r_f| > r_b, up to the model's limit
+        if kind.is_concave:  # |r_f| > r_b, up to the model's limit
             f["face_radius_mm"] = max(-rb * (1.0 + draw(log_uniform(1e-9, 1e4))), -1e5)
-        r = f["roller_radius_mm"] if kind.is_roller else f["face_radius_mm"]
+        r = (f["roller_radius_mm"] if kind.is_roller else f["face_radius_mm"]
+             if kind.is_concave else 0.0)  # flat face: any offset; knife edge: r = 0
         reach = abs(r + rb)
         if kind.is_double:
             f["offset_mm"] = min(1000.0, reach * draw(near_one()))
-        e = f["offset_mm"] if kind.is_double else 0.0
-        if not kind.is_roller and reach > e:
+        elif draw(st.booleans()):  # an offset single follower, up to its limit
+            f["single_offset_mm"] = max(-1000.0, min(1000.0, reach * draw(st.floats(-1, 1))))
+        else:
+            f["single_offset_mm"] = 0.0
+        e = f["offset_mm"] if kind.is_double else abs(f["single_offset_mm"])
+        if kind.is_concave and reach > e:
             l0 = math.sqrt(reach**2 - e**2)
             data["motion"]["lift_mm"] = min(1000.0, l0 * max(draw(near_one()), 1e-12))
     return data
@@ -245,8 +251,16 @@ def _arrays(obj, path="analysis", seen=None):
 
 def check_analysis(a: Analysis) -> dict:
     """All numbers finite, summary JSON-clean, violations consistent; returns summary."""
+    kind = a.design.follower.kind
     for path, arr in _arrays(a):
         if path.startswith("analysis.design"):
+            continue
+        if kind is FollowerKind.flat_face and re.fullmatch(r"analysis\.geo(\.faces\[\d\])?\.r",
+                                                           path):
+            assert np.all(arr == np.inf), path  # the flat face's radius, by definition
+            continue
+        if kind is FollowerKind.knife_edge and path == "analysis.stress":
+            assert np.all(np.isnan(arr)), path  # no Hertz stress for a point contact
             continue
         bad = ~np.isfinite(arr)
         assert not bad.any(), f"{path}: {int(bad.sum())} non-finite values, e.g. {arr[bad][:3]}"

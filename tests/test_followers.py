@@ -1,0 +1,183 @@
+"""The followers beyond the paper's four (issue 10): offset single followers, the
+flat-faced follower and the knife edge, each checked against a closed form or an
+independent construction, not against the code path that produced it."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camcore import checks
+from camcore.analysis import analyze
+from camcore.model import Design, FollowerKind, load_preset
+from camcore.motion import program
+from camcore.report import summary
+
+PAPER = load_preset("paper_example")
+
+
+def design(kind: str, e_s: float = 0.0, **changes) -> Design:
+    data = PAPER.with_kind(kind).model_dump()
+    data["follower"]["single_offset_mm"] = e_s
+    for path, value in changes.items():
+        part, name = path.split("__")
+        data[part][name] = value
+    return Design.model_validate(data)
+
+
+# --- flat face ----------------------------------------------------------------------------
+
+
+def test_flat_face_profile_is_the_envelope_of_the_face_lines():
+    """The classic construction: in the cam frame the face at cam angle theta is the line
+    n(theta) . p = r_b + S(theta), n = R(theta) (0, 1). Consecutive lines intersect on the
+    envelope; those intersections (computed by solving 2x2 systems, nothing from
+    camcore.profile) must lie on the exported polyline, and rho = r_b + S + S'' must
+    match the envelope's curvature from three neighbouring intersections."""
+    a = analyze(design("flat_face"))
+    assert a.valid, [v.message for v in a.violations]
+    th = np.radians(np.linspace(0, 360, 7201))
+    p = program(a.design, th)
+    Y = a.geo.r_b + p.S
+    n = np.stack([-np.sin(th), np.cos(th)], -1)  # R(theta) (0, 1), Eq. 11
+    # intersection of line k and line k + 1
+    a11, a12, a21, a22 = n[:-1, 0], n[:-1, 1], n[1:, 0], n[1:, 1]
+    det = a11 * a22 - a12 * a21
+    x = (Y[:-1] * a22 - a12 * Y[1:]) / det
+    y = (a11 * Y[1:] - a21 * Y[:-1]) / det
+    env = np.stack([x, y], -1)
+    # every envelope point on the polyline (to the chordal tolerance + the O(dtheta^2)
+    # error of the intersection construction)
+    P = a.profile.points
+    ang = np.arctan2(P[:, 1], P[:, 0])
+    order = np.argsort(ang)
+    k = order[np.searchsorted(ang[order], np.arctan2(env[:, 1], env[:, 0])) % len(P)]
+    Q = np.roll(P, -1, axis=0)
+    best = np.full(len(env), np.inf)
+    for shift in range(-3, 3):
+        i = (k + shift) % len(P)
+        d = Q[i] - P[i]
+        t = np.clip(np.einsum("ij,ij->i", env - P[i], d) / np.einsum("ij,ij->i", d, d), 0, 1)
+        best = np.minimum(best, np.hypot(*(P[i] + t[:, None] * d - env).T))
+    assert best.max() < 2e-6  # metres
+    # curvature of the envelope through three consecutive points (circumradius)
+    p0, p1, p2 = env[:-2], env[1:-1], env[2:]
+    l01, l12, l02 = (np.hypot(*(u - v).T) for u, v in ((p0, p1), (p1, p2), (p0, p2)))
+    cross = np.abs((p1 - p0)[:, 0] * (p2 - p0)[:, 1] - (p1 - p0)[:, 1] * (p2 - p0)[:, 0])
+    circum = l01 * l12 * l02 / (2 * cross)
+    mid = 0.5 * (th[1:-2] + th[2:-1])
+    q = program(a.design, mid)
+    classic = a.geo.r_b + q.S + q.A  # rho = r_b + S + S''
+    np.testing.assert_allclose(circum, classic, rtol=2e-3)
+    # and what the analysis reports is that closed form
+    np.testing.assert_allclose(a.rho[0], a.geo.r_b + a.prog.S + a.prog.A, rtol=1e-12)
+
+
+def test_flat_face_pressure_angle_zero_and_face_width():
+    a = analyze(design("flat_face", e_s=7.0))
+    assert np.all(a.pressure_angle == 0.0)
+    s = summary(a)
+    # the contact wanders to X = -V; from the axis at X = -7 mm: 2 max |V - 7 mm|
+    V = a.prog.V * 1e3
+    assert s["flat_face_width_min_mm"] == pytest.approx(2 * np.abs(-V + 7.0).max())
+    # cycloidal rise h = 15 mm over 100 deg: V_max = 2 h / beta = 17.19 mm/rad
+    assert np.abs(V).max() == pytest.approx(2 * 15 / math.radians(100), rel=1e-4)
+
+
+def test_flat_face_cusp_is_a_violation():
+    """rho = r_b + S + S'' < 0: a small base circle under a fast modified-sine rise."""
+    d = design("flat_face", cam__base_radius_mm=10.0, motion__rise_deg=40.0)
+    a = analyze(d)
+    v = {v.code: v for v in a.violations}["curvature_convex"]
+    rho_min = float((a.geo.r_b + a.prog.S + a.prog.A).min()) * 1e3
+    assert rho_min < 0 and v.amount >= -rho_min * 0.999 and v.ranges_deg
+
+
+# --- offset single followers ----------------------------------------------------------------
+
+
+@pytest.mark.parametrize("kind, e_s", [("single_roller", 20.0), ("single_roller", -12.0),
+                                       ("single_concave", 30.0), ("knife_edge", 15.0)])
+def test_offset_single_follower_pressure_angle_from_the_made_cam(kind, e_s):
+    """The pressure angle measured on the finished polyline: at each cam angle take the
+    exported profile near the contact point, its tangent by a chord through the two
+    neighbouring vertices, and the angle between the normal and the follower's axis.
+    It must equal Norton's closed form for an offset roller follower,
+    phi = atan((V - e) / (S + sqrt(R_p^2 - e^2))), R_p = r_b + r (Cam Design and
+    Manufacturing Handbook, ch. 7), here with e = e_s, and the geometric check pass."""
+    d = design(kind, e_s=e_s)
+    a = analyze(d)
+    assert a.lift_error <= checks.lift_tolerance(a)
+    r = a.geo.r
+    e = e_s * 1e-3
+    Rp = abs(a.geo.r_b + r)
+    norton = np.arctan((a.prog.V - e) / (a.prog.S + math.sqrt(Rp**2 - e**2)))
+    if r < 0:  # a concave face: the centre is below the axis (Y_C = -(L)), same formula
+        norton = np.arctan((a.prog.V - e) / np.abs(a.geo.y0 + a.prog.S))
+    np.testing.assert_allclose(a.pressure_angle[0], norton, atol=1e-12)
+    # the same angle from the polyline (independent of the synthesis formulas): the
+    # normal of the circle through the three vertices nearest the contact point
+    P = a.profile.points
+    for k in range(0, a.theta.size, 37):
+        body = a.point_body[0, k]
+        j = int(np.argmin(np.hypot(*(P - body).T)))
+        centre = _circumcentre(P[j - 1], P[j], P[(j + 1) % len(P)])
+        normal = body - centre
+        c, s = math.cos(a.theta[k]), math.sin(a.theta[k])
+        world = np.array([c * normal[0] + s * normal[1], -s * normal[0] + c * normal[1]])
+        measured = math.atan(world[0] / world[1])  # the normal's tilt from the axis
+        assert abs(abs(measured) - abs(a.pressure_angle[0, k])) < 2e-4, k
+
+
+def _circumcentre(p, q, r):
+    d = 2 * (p[0] * (q[1] - r[1]) + q[0] * (r[1] - p[1]) + r[0] * (p[1] - q[1]))
+    ux = ((p @ p) * (q[1] - r[1]) + (q @ q) * (r[1] - p[1]) + (r @ r) * (p[1] - q[1])) / d
+    uy = ((p @ p) * (r[0] - q[0]) + (q @ q) * (p[0] - r[0]) + (r @ r) * (q[0] - p[0])) / d
+    return np.array([ux, uy])
+
+
+def test_offset_lowers_the_rise_pressure_angle():
+    """The documented sign: e_s > 0 (axis to the left) lowers the rise's maximum
+    pressure angle and raises the fall's, for the clockwise cam."""
+    base = summary(analyze(design("single_roller"), verify=False))["pressure_angle_max_deg"]
+    off = summary(analyze(design("single_roller", e_s=15.0), verify=False))
+    off = off["pressure_angle_max_deg"]
+    assert off["rise"] < base["rise"] and off["fall"] > base["fall"]
+
+
+def test_offset_beyond_the_reach_is_refused():
+    with pytest.raises(ValueError, match="single_offset_mm"):
+        design("single_roller", e_s=90.0)  # r_b + r_c = 88 mm
+
+
+# --- knife edge ---------------------------------------------------------------------------
+
+
+def test_knife_edge_profile_is_the_pitch_curve():
+    """r = 0: the profile point is the follower's tip (x_c, r_b' + S) turned into the cam
+    frame, so its distance from the axis is hypot(e, sqrt(r_b^2 - e^2) + S)."""
+    a = analyze(design("knife_edge", e_s=10.0))
+    assert a.lift_error <= checks.lift_tolerance(a)
+    e = 10e-3
+    expect = np.hypot(e, math.sqrt(a.geo.r_b**2 - e**2) + a.prog.S)
+    np.testing.assert_allclose(np.hypot(*a.point_body[0].T), expect, rtol=1e-12)
+    assert np.all(np.isnan(a.stress))
+    s = summary(a)
+    assert s["contact_stress_max_MPa"]["cycle"] is None
+    assert "contact_stress" not in {v.code for v in a.violations}
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.flat_face, FollowerKind.knife_edge])
+def test_new_followers_export_watertight(kind):
+    import io
+
+    import trimesh
+
+    from camcore import export
+
+    a = analyze(design(kind.value, e_s=5.0))
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight
+    assert mesh.volume == pytest.approx(a.profile.area * 1e9 * 15.0 / 1e3, rel=1e-6)
