@@ -145,6 +145,8 @@ class Session:
 
     def _add_control(self, gui, spec: state.Spec):
         v = state.get_path(self.base, spec.path)
+        if v is None:  # e.g. a classic slider on another program: the default's value
+            v = state.get_path(Design(), spec.path)
         if spec.widget == "slider":
             lo, hi = min(spec.lo, v), max(spec.hi, v)
             h = gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)
@@ -163,9 +165,14 @@ class Session:
     def _sync_controls(self, design: Design) -> None:
         self._syncing = True
         try:
+            classic = design.motion.classic is not None
             for spec in state.SPECS:
                 h = self.controls[spec.path]
                 v = state.get_path(design, spec.path)
+                if spec.path.startswith("motion."):
+                    h.disabled = not classic  # other programs: edited as segments
+                if v is None:
+                    continue
                 if spec.widget == "slider":
                     h.min, h.max = min(h.min, v), max(h.max, v)
                 h.value = v
@@ -218,7 +225,7 @@ class Session:
                 c.update(a, k)
             plots.relabel_limits(self.curves, a)
             self._enable_for_kind(design)
-            self.low_dwell_md.content = state.low_dwell_text(self.values())
+            self.low_dwell_md.content = state.low_dwell_text(self.values(), design)
             self.summary_md.content = state.summary_markdown(summary(a))
             self._show_where(k)
             self._show_status()

@@ -87,17 +87,27 @@ SPECS: tuple[Spec, ...] = tuple(s for _, _, specs in FOLDERS for s in specs)
 
 
 def get_path(design: Design, path: str):
+    """The design's value at a control's path, or None where the design has none (the
+    classic motion sliders on a program that is not rise-dwell-fall-dwell)."""
     obj = design
-    for part in path.split("."):
-        obj = getattr(obj, part)
+    try:
+        for part in path.split("."):
+            obj = getattr(obj, part)
+    except ValueError:
+        return None
     return obj.value if hasattr(obj, "value") else obj
 
 
 def merged(base: Design, values: dict[str, object]) -> dict:
-    """The design dict of ``base`` with control values (by path) written in."""
+    """The design dict of ``base`` with control values (by path) written in. The
+    classic motion sliders only edit a classic program; another program keeps its
+    segments (edited as a whole, e.g. through a design file)."""
     data = base.model_dump(mode="json")
+    classic = base.motion.classic is not None
     for path, v in values.items():
         group, key = path.split(".")
+        if group == "motion" and not classic:
+            continue
         data[group][key] = v
     return data
 
@@ -110,7 +120,19 @@ def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, 
         return None, format_validation_error(exc)
 
 
-def low_dwell_text(values: dict[str, object]) -> str:
+def program_text(design: Design) -> str:
+    """One line describing a program the classic sliders cannot edit."""
+    parts = []
+    for g in design.motion.segments:
+        lift = f" {g.lift_mm:g} mm {g.law.value}" if g.lift_mm else ""
+        parts.append(f"{g.kind.value} {g.angle_deg:g}°{lift}")
+    return ("Program of " + str(len(parts)) + " segments (edit it in the design file): "
+            + "; ".join(parts))
+
+
+def low_dwell_text(values: dict[str, object], design: Design | None = None) -> str:
+    if design is not None and design.motion.classic is None:
+        return program_text(design)
     try:
         bl = 360.0 - float(values["motion.rise_deg"]) - float(values["motion.high_dwell_deg"]) \
             - float(values["motion.fall_deg"])

@@ -78,7 +78,7 @@ class Analysis(Local):
     segments: tuple[motion.Segment, ...]
     profile: profile.Polyline  # the cam as made: sampled to the export tolerance
     chord_error: float  # largest deviation of a profile chord from the exact cam [m]
-    stations: np.ndarray  # (6,) cam angles of stations 0-5 [rad]
+    stations: np.ndarray  # cam angles of the stations [rad] (0-5 for the paper's program)
     worst: dict = field(default_factory=dict)  # camcore.extremes.worst_values
     violations: list[checks.Violation] = field(default_factory=list)
     lift_error: float | None = None  # max |lift - S| [m] of the geometric check
@@ -115,13 +115,39 @@ class Analysis(Local):
 
 
 def stations(design: Design, geo: profile.Geometry) -> np.ndarray:
-    """Cam angles of stations 0-5 [rad] (Sec. 4, Fig. 4; station 3 with the sign fixed).
+    """Cam angles of the stations [rad]: where a segment ends or the faces in contact
+    change (one face -> two faces -> one face).
 
-    0: 0; 1: beta_r; 2: beta_r + 2 psi_h; 3: beta_r + beta_h - 2 psi_h;
-    4: beta_r + beta_h; 5: beta_r + beta_h + beta_f.
+    For the paper's program these are its stations 0-5 (Sec. 4, Fig. 4; station 3 with
+    the sign fixed), in the paper's numbering: 0: 0; 1: beta_r; 2: beta_r + 2 psi_h;
+    3: beta_r + beta_h - 2 psi_h; 4: beta_r + beta_h; 5: beta_r + beta_h + beta_f.
+    For any other program, every such angle in increasing order (``contact_changes``).
     """
-    t1, t2, t3, _ = motion.boundaries_rad(design)
-    return np.array([0.0, t1, t1 + 2 * geo.psi_h, t2 - 2 * geo.psi_h, t2, t3])
+    if design.motion.classic is not None:
+        t1, t2, t3, _ = motion.boundaries_rad(design)
+        return np.array([0.0, t1, t1 + 2 * geo.psi_h, t2 - 2 * geo.psi_h, t2, t3])
+    return contact_changes(geo, motion.segments(design))
+
+
+def contact_changes(geo: profile.Geometry, segs: tuple[motion.Segment, ...]) -> np.ndarray:
+    """Segment boundaries and the angles where a face starts or stops resting on a
+    dwell arc (the ends of its window, see profile.contact_windows), sorted in
+    [0, 2 pi); an angle where nothing changes (a face hands over to itself) is kept
+    only if it is a segment boundary."""
+    two_pi = 2 * np.pi
+    cand = {g.start % two_pi for g in segs}
+    if len(geo.faces) == 2:
+        for j, g in enumerate(segs):
+            if g.is_motion:
+                continue
+            start, end = profile.arc_span(geo, segs, j)
+            psi_j = profile.dwell_psi(geo, g.S0)
+            for side in profile.face_sides(geo):
+                lo, hi = max(g.start, start - side * psi_j), min(g.end, end - side * psi_j)
+                if lo <= hi:
+                    cand |= {lo % two_pi, hi % two_pi}
+    out = sorted(cand)
+    return np.array([t for i, t in enumerate(out) if i == 0 or t - out[i - 1] > 1e-12])
 
 
 def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None) -> Analysis:

@@ -21,7 +21,11 @@ verdict holds for the real cam, not only at the analysed angles:
   (limits.contact_stress_safety_factor) against the allowable stress (the user's, or
   the default of material.grade; see camcore.model.ALLOWABLE_CONTACT_STRESS_MPa).
 * ``high_dwell_arc``    Eq. 28, beta_h >= 4 psi_h (double followers).
-* ``low_dwell_arc``     Eq. 27, beta_l >= 0 (already enforced by the model).
+* ``low_dwell_arc``     Eq. 27, beta_l >= 0: enforced by the model (the angles of a
+  program sum to 360 deg), so never reported.
+* ``velocity_jump``, ``acceleration_jump``  the fundamental law of cam design: V and A
+  continuous where segments meet (an infinite acceleration or jerk otherwise); the
+  second can be waived (limits.require_continuous_acceleration).
 * ``jump``              Eqs. 29-41: contact force F_N <= 0 means the spring cannot
   keep the follower on the cam.
 * ``guide_jam``         Eqs. 33-41: no guide-contact mode of Fig. 6 balances the
@@ -217,19 +221,70 @@ def _contact_stress(a) -> list[Violation]:
 
 
 def _dwell_arcs(a) -> list[Violation]:
-    out, design = [], a.design
-    if len(a.geo.faces) == 2:
-        need = to_deg(4 * a.geo.psi_h)
-        have = design.motion.high_dwell_deg
+    """Eq. 28 for every dwell a double follower enters on its rise face and leaves on
+    its fall face (a rise, then the dwell, then a fall; a rise straight into a fall is
+    such a dwell of length 0): beta >= 4 psi at the dwell's own radius, so that both
+    faces can rest on its arc (Eq. 24: the arc is beta - 2 psi). Dwells between a fall
+    and a rise (Eqs. 26, 27) or between two motions the same way need nothing."""
+    from .motion import FALL, RISE, segments
+    from .profile import dwell_psi
+
+    out = []
+    if len(a.geo.faces) != 2:
+        return out
+    segs = segments(a.design)
+    for i, g in enumerate(segs):
+        before, after = segs[i - 1], segs[(i + 1) % len(segs)]
+        if g.code == RISE and after.code == FALL:  # no dwell at all between them
+            g, before, after = replace_dwell(g), g, after
+        elif g.is_motion or not (before.code == RISE and after.code == FALL):
+            continue
+        need = to_deg(4 * dwell_psi(a.geo, g.S0))
+        have = to_deg(g.length)
         if have < need - 1e-9:
+            name = "high dwell beta_h" if a.design.motion.classic else (
+                f"dwell at {to_deg(g.start):.2f} deg")
             out.append(Violation(
                 "high_dwell_arc", "Eq. 28",
-                f"high dwell beta_h = {have:g} deg is below 4 psi_h = {need:.3f} deg "
+                f"{name} = {have:g} deg is below 4 psi = {need:.3f} deg "
                 f"(short by {need - have:.3f} deg): both faces cannot rest on the dwell arc",
-                (), need - have))
-    if design.motion.low_dwell_deg < 0:
-        out.append(Violation("low_dwell_arc", "Eq. 27", "beta_l < 0", (),
-                             -design.motion.low_dwell_deg))
+                ((to_deg(g.start), to_deg(g.end)),), need - have))
+    return out
+
+
+def replace_dwell(rise):
+    """The empty dwell where a rise meets a fall directly (at the top of the rise)."""
+    from dataclasses import replace
+
+    from .motion import HIGH
+
+    return replace(rise, code=HIGH, start=rise.end, S0=rise.S1, law=None, coeffs=None)
+
+
+def _continuity(a) -> list[Violation]:
+    """The fundamental law of cam design: S, V and A continuous over the whole cycle
+    (a jump in V is an infinite acceleration, one in A an infinite jerk). A jump in A
+    is allowed when limits.require_continuous_acceleration is off."""
+    from .motion import continuity_jumps, segments
+
+    out = []
+    for at, what, jump in continuity_jumps(segments(a.design)):
+        if what == "A" and not a.design.limits.require_continuous_acceleration:
+            continue
+        deg = to_deg(at)
+        if what == "V":
+            out.append(Violation(
+                "velocity_jump", "continuity (V)",
+                f"the velocity jumps by {to_mm(jump):.4g} mm/rad at theta = {deg:.3f} deg: "
+                "an infinite acceleration (use laws that meet at the same velocity)",
+                ((deg, deg),), abs(to_mm(jump))))
+        else:
+            out.append(Violation(
+                "acceleration_jump", "continuity (A)",
+                f"the acceleration jumps by {to_mm(jump):.4g} mm/rad^2 at theta = "
+                f"{deg:.3f} deg: an infinite jerk (a law with zero end acceleration, or "
+                "limits.require_continuous_acceleration = false to accept it)",
+                ((deg, deg),), abs(to_mm(jump))))
     return out
 
 
@@ -266,7 +321,7 @@ def _forces(a) -> list[Violation]:
 def run_all(a, lift_error: float | None) -> list[Violation]:
     """Every violation of ``a`` (a camcore.analysis.Analysis)."""
     out = (_curvature_rules(a) + _pressure_angle(a) + _contact_stress(a) + _dwell_arcs(a)
-           + _forces(a))
+           + _continuity(a) + _forces(a))
     if not a.profile.is_star_shaped():
         out.append(Violation(
             "profile_crossing", "star-shaped profile",

@@ -51,12 +51,31 @@ def _apply_set(data: dict, assignment: str) -> None:
         value = raw  # a bare word, e.g. follower.kind=double_roller
     node = data
     for i, key in enumerate(keys[:-1]):
-        node = node.get(key) if isinstance(node, dict) else None
-        if not isinstance(node, dict):
+        node = _child(node, key)
+        if not isinstance(node, dict | list):
             raise DesignError(f"--set {path}: {'.'.join(keys[: i + 1])} is not a group of fields")
-    if keys[-1] not in node:
+    last = keys[-1]
+    if isinstance(node, list):
+        _child(node, last)  # the index must exist
+        node[int(last)] = value
+        return
+    from .model import CLASSIC_KEYS
+
+    classic = keys[:-1] == ["motion"] and last in CLASSIC_KEYS  # edits a classic program
+    if last not in node and not classic:
         raise DesignError(f"--set {path}: no such field; fields here: {', '.join(node)}")
-    node[keys[-1]] = value
+    node[last] = value
+
+
+def _child(node, key: str):
+    """node[key] for a dict, node[int(key)] for a list; None if there is none."""
+    if isinstance(node, dict):
+        return node.get(key)
+    if isinstance(node, list) and key.isdigit() and int(key) < len(node):
+        return node[int(key)]
+    if isinstance(node, list):
+        raise DesignError(f"--set: {key!r} is not an index of a list of {len(node)}")
+    return None
 
 
 def _design(args) -> Design:

@@ -24,10 +24,11 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 
 from .units import DEG, MM, RPM  # noqa: F401  (MM, DEG re-exported for older imports)
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
 # Upgrades of older design files: MIGRATIONS[v] turns a format-v dict into format v + 1.
-# Format 1 is the first published one, so there are none yet.
-MIGRATIONS: dict = {}
+# Format 1 -> 2: motion became a list of segments (the classic keys still load, see
+# Motion), so the upgrade only restates the version.
+MIGRATIONS: dict = {1: lambda data: data}
 MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd files
 # Smallest length and modulus a design may have: 1 um and 1 MPa. Below these the SI
 # arithmetic underflows (a radius of 1e-320 mm is 0 m) and results turn into inf/NaN.
@@ -74,7 +75,8 @@ PAPER_FOLLOWERS = (FollowerKind.single_roller, FollowerKind.double_roller,
 
 
 class MotionLaw(StrEnum):
-    """Normalized rise laws (see camcore.motion)."""
+    """Laws of a rise or fall (see camcore.motion). ``family`` names each after the
+    motion tasks of the VDI 2143 guideline (R rest, G constant velocity)."""
 
     cycloidal = "cycloidal"
     simple_harmonic = "simple_harmonic"
@@ -82,14 +84,28 @@ class MotionLaw(StrEnum):
     poly_4567 = "poly_4567"
     modified_trapezoid = "modified_trapezoid"
     modified_sine = "modified_sine"
+    constant_velocity = "constant_velocity"
+    polynomial = "polynomial"
+
+    @property
+    def family(self) -> str:
+        if self is MotionLaw.constant_velocity:
+            return "VDI 2143 G-G: constant velocity (a straight line S(theta))"
+        if self is MotionLaw.polynomial:
+            return ("VDI 2143 polynomial of degree 5 fitted to the end conditions "
+                    "(S, V, A of the neighbouring segments): R-G, G-R, G-G or R-R")
+        return "VDI 2143 R-R: rest to rest (zero velocity at both ends)"
 
 
 class _Part(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
 
 
-class Motion(_Part):
-    """Motion program: rise, high dwell, fall; the low dwell is the rest of 360 deg."""
+class ClassicMotion(_Part):
+    """The paper's program: rise, high dwell, fall; the low dwell is the rest of 360 deg.
+
+    This was the ``motion`` of format 1 files; it is still accepted wherever a motion
+    is (the app's sliders edit it), and turned into segments (``to_segments``)."""
 
     lift_mm: float = Field(15.0, ge=MIN_LENGTH_MM, le=1000, description="total lift h [mm]")
     rise_deg: float = Field(
@@ -108,7 +124,7 @@ class Motion(_Part):
         return 360.0 - self.rise_deg - self.high_dwell_deg - self.fall_deg
 
     @model_validator(mode="after")
-    def _fits_in_a_turn(self) -> Motion:
+    def _fits_in_a_turn(self) -> ClassicMotion:
         if self.low_dwell_deg < -1e-9:
             raise ValueError(
                 f"rise_deg + high_dwell_deg + fall_deg = "
@@ -116,6 +132,167 @@ class Motion(_Part):
                 f"{-self.low_dwell_deg:g} deg (the low dwell beta_l must be >= 0, Eq. 27)"
             )
         return self
+
+    def to_segments(self) -> list[dict]:
+        low = max(0.0, self.low_dwell_deg)
+        return [
+            {"kind": "rise", "angle_deg": self.rise_deg, "lift_mm": self.lift_mm,
+             "law": self.rise_law.value},
+            {"kind": "dwell", "angle_deg": self.high_dwell_deg},
+            {"kind": "fall", "angle_deg": self.fall_deg, "lift_mm": self.lift_mm,
+             "law": self.fall_law.value},
+            {"kind": "dwell", "angle_deg": low},
+        ]
+
+
+CLASSIC_KEYS = frozenset(ClassicMotion.model_fields)
+MAX_SEGMENTS = 48  # a program of more pieces is not a cam a machine runs
+
+
+class SegmentKind(StrEnum):
+    rise = "rise"
+    fall = "fall"
+    dwell = "dwell"
+
+
+class MotionSegment(_Part):
+    """One piece of a motion program: a rise or fall of ``lift_mm`` over ``angle_deg``
+    with a law, or a dwell (no lift, no law)."""
+
+    kind: SegmentKind
+    angle_deg: float = Field(ge=0, le=360, description="cam angle the segment spans [deg]")
+    lift_mm: float | None = Field(
+        None, ge=MIN_LENGTH_MM, le=1000, description="rise/fall: its lift [mm] (> 0)")
+    law: MotionLaw | None = Field(None, description="rise/fall: the law (default cycloidal)")
+
+    @model_validator(mode="after")
+    def _complete(self) -> MotionSegment:
+        if self.kind is SegmentKind.dwell:
+            if self.lift_mm is not None or self.law is not None:
+                raise ValueError("a dwell has no lift_mm and no law")
+            return self
+        if self.lift_mm is None:
+            raise ValueError(f"lift_mm: a {self.kind.value} needs its lift (> 0 mm)")
+        if self.angle_deg < MIN_MOTION_DEG:
+            raise ValueError(f"angle_deg: a {self.kind.value} spans at least "
+                             f"{MIN_MOTION_DEG} deg, got {self.angle_deg:g}")
+        if self.law is None:
+            self.__dict__["law"] = MotionLaw.cycloidal
+        return self
+
+    @property
+    def signed_lift_mm(self) -> float:
+        return {"rise": 1.0, "fall": -1.0, "dwell": 0.0}[self.kind.value] * (self.lift_mm or 0.0)
+
+
+def _paper_program() -> list[MotionSegment]:
+    return [MotionSegment.model_validate(g) for g in ClassicMotion().to_segments()]
+
+
+class Motion(_Part):
+    """The motion program: segments (rise, fall, dwell) that fill 360 deg, in order from
+    theta = 0, whose lifts close the cycle. The lowest displacement of the program is
+    S = 0, on the base circle.
+
+    The paper's program (rise, high dwell, fall, low dwell) may also be given in its
+    classic form (lift_mm, rise_deg, high_dwell_deg, fall_deg, rise_law, fall_law: the
+    format 1 ``motion``); those keys next to ``segments`` edit a classic program."""
+
+    segments: list[MotionSegment] = Field(
+        default_factory=_paper_program, min_length=1, max_length=MAX_SEGMENTS)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _classic_form(cls, data):
+        if not isinstance(data, dict) or not (CLASSIC_KEYS & data.keys()):
+            return data
+        flat = {k: data[k] for k in CLASSIC_KEYS & data.keys()}
+        for k, v in flat.items():  # as strict as the rest of a design file: no "15", true
+            if k.endswith(("_mm", "_deg")) and (isinstance(v, bool)
+                                                or not isinstance(v, int | float)):
+                raise ValueError(f"{k}: a number is required, got {v!r}")
+        rest = {k: v for k, v in data.items() if k not in CLASSIC_KEYS}
+        if "segments" in rest:  # edit the classic program the segments hold
+            current = classic_of(rest["segments"])
+            if current is None:
+                raise ValueError(
+                    f"{', '.join(sorted(flat))}: these edit a rise-dwell-fall-dwell "
+                    "program; this one has other segments, so edit motion.segments")
+            flat = {**current, **flat}
+        return {**rest, "segments": ClassicMotion.model_validate(flat).to_segments()}
+
+    @model_validator(mode="after")
+    def _closes(self) -> Motion:
+        total = sum(g.angle_deg for g in self.segments)
+        if abs(total - 360.0) > 1e-6:
+            raise ValueError(f"segments: the angles sum to {total:g} deg, not 360 deg "
+                             f"({'over' if total > 360 else 'short'} by "
+                             f"{abs(total - 360):g} deg)")
+        net = sum(g.signed_lift_mm for g in self.segments)
+        scale = sum(g.lift_mm or 0.0 for g in self.segments)
+        if abs(net) > 1e-9 * max(scale, 1.0):
+            raise ValueError(f"segments: the lifts do not close the cycle (rises minus "
+                             f"falls = {net:g} mm, must be 0)")
+        if scale == 0.0:
+            raise ValueError("segments: a program needs at least one rise and one fall")
+        return self
+
+    @property
+    def classic(self) -> ClassicMotion | None:
+        """The program as the paper's rise-dwell-fall-dwell, or None if it is not one."""
+        flat = classic_of(self.segments)
+        return None if flat is None else ClassicMotion.model_validate(flat)
+
+    def _classic(self, name: str):
+        c = self.classic
+        if c is None:
+            raise ValueError(f"motion.{name}: this program is not rise-dwell-fall-dwell")
+        return getattr(c, name)
+
+    @property
+    def lift_mm(self) -> float:
+        """The largest displacement of the program [mm] (the paper's h)."""
+        S = s_max = 0.0
+        low = 0.0
+        for g in self.segments:
+            S += g.signed_lift_mm
+            s_max, low = max(s_max, S), min(low, S)
+        return s_max - low
+
+    rise_deg = property(lambda self: self._classic("rise_deg"))
+    high_dwell_deg = property(lambda self: self._classic("high_dwell_deg"))
+    fall_deg = property(lambda self: self._classic("fall_deg"))
+    low_dwell_deg = property(lambda self: self._classic("low_dwell_deg"))
+    rise_law = property(lambda self: self._classic("rise_law"))
+    fall_law = property(lambda self: self._classic("fall_law"))
+
+
+def classic_of(segments) -> dict | None:
+    """The classic keys of a rise-dwell-fall-dwell program (segments as models or
+    dicts), or None. A program of rise, fall (no dwells) or with one dwell missing is
+    classic too when it starts with the rise."""
+    def get(g, k):
+        return g.get(k) if isinstance(g, dict) else getattr(g, k)
+
+    kinds = [str(get(g, "kind")).removeprefix("SegmentKind.") for g in segments]
+    if not kinds or kinds[0] != "rise":
+        return None
+    motions = [i for i, k in enumerate(kinds) if k != "dwell"]
+    if [kinds[i] for i in motions] != ["rise", "fall"] or len(segments) > 4:
+        return None
+    i_fall = motions[1]
+    if i_fall > 2 or (len(segments) == 4 and i_fall != 2):
+        return None
+    rise, fall = segments[0], segments[i_fall]
+    if get(rise, "lift_mm") != get(fall, "lift_mm"):
+        return None
+    high = sum(float(get(g, "angle_deg")) for g in segments[1:i_fall])
+    def law(g):
+        return get(g, "law") or MotionLaw.cycloidal
+
+    return {"lift_mm": get(rise, "lift_mm"), "rise_deg": float(get(rise, "angle_deg")),
+            "high_dwell_deg": high, "fall_deg": float(get(fall, "angle_deg")),
+            "rise_law": MotionLaw(law(rise)), "fall_law": MotionLaw(law(fall))}
 
 
 class Follower(_Part):
@@ -302,6 +479,10 @@ class Limits(_Part):
         None, gt=0, le=1e5,
         description="allowable Hertz stress [MPa]; empty = the default of material.grade",
     )
+    require_continuous_acceleration: bool = Field(
+        True, description="report a jump in acceleration (an infinite jerk) where "
+        "segments meet as a broken limit; off accepts it (e.g. simple harmonic laws)",
+    )
     contact_stress_safety_factor: float = Field(
         1.25, ge=1.0, le=10.0,
         description="the maximum Hertz stress times this must stay within the allowable",
@@ -311,7 +492,7 @@ class Limits(_Part):
 class Design(_Part):
     """A complete disk-cam design. Save with :func:`save_design`, load with :func:`load_design`."""
 
-    schema_version: Literal[1] = SCHEMA_VERSION
+    schema_version: Literal[2] = SCHEMA_VERSION
     name: str = Field("untitled", max_length=200)
     motion: Motion = Motion()
     follower: Follower = Follower()
@@ -463,6 +644,9 @@ def format_validation_error(exc) -> str:
     for err in exc.errors()[:8]:
         loc = ".".join(str(p) for p in err["loc"])
         msg = err["msg"].removeprefix("Value error, ")
+        head, sep, tail = msg.partition(": ")
+        if loc and sep and head.replace(".", "").replace("_", "").isalnum():
+            loc, msg = f"{loc}.{head}", tail  # a validator naming a field inside loc
         parts.append(f"{loc}: {msg}" if loc else msg)
     return "; ".join(parts)
 
@@ -479,7 +663,9 @@ def load_design(path: str | Path) -> Design:
 
 
 def design_to_json(design: Design) -> str:
-    return design.model_dump_json(indent=2)
+    """The design as JSON (format 2). Fields that are unset (a dwell's lift and law,
+    an allowable stress left to the material's default) are left out."""
+    return design.model_dump_json(indent=2, exclude_none=True)
 
 
 def save_design(design: Design, path: str | Path) -> None:

@@ -21,7 +21,7 @@ omega, omega^2, omega^3 for time derivatives.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 import numpy as np
@@ -125,10 +125,34 @@ def _sinusoid(law: MotionLaw, x: np.ndarray) -> Normalized:
 
 
 def rise(law: MotionLaw, x: np.ndarray) -> Normalized:
-    """Normalized rise s(x), x in [0, 1] (values outside are clipped)."""
+    """Normalized rise s(x), x in [0, 1] (values outside are clipped).
+
+    ``constant_velocity`` is s = x. ``polynomial`` has no normalized form (it is fitted
+    to its neighbours, see ``fit_quintic``); here it is the rest-to-rest quintic 3-4-5."""
     x = np.clip(np.asarray(x, dtype=float), 0.0, 1.0)
     law = MotionLaw(law)
+    if law is MotionLaw.constant_velocity:
+        return Normalized(x.copy(), np.ones_like(x), np.zeros_like(x), np.zeros_like(x))
+    if law is MotionLaw.polynomial:
+        law = MotionLaw.poly_345
     return _poly(_POLY[law], x) if law in _POLY else _sinusoid(law, x)
+
+
+def fit_quintic(S0: float, V0: float, A0: float, S1: float, V1: float, A1: float,
+                beta: float) -> tuple[float, ...]:
+    """Coefficients c_0..c_5 of S(x) = sum c_k x^k, x = (theta - start) / beta in [0, 1],
+    with S, dS/dtheta, d2S/dtheta2 given at both ends (SI: m, m/rad, m/rad^2).
+
+    The general degree-5 polynomial of the cam literature (Norton, Cam Design and
+    Manufacturing Handbook, ch. 4; VDI 2143's 'Polynom 5. Grades'): with x-derivatives
+    v = V beta, a = A beta^2 the first three coefficients are the start values and the
+    last three solve a 3x3 system for the end values."""
+    v0, a0, v1, a1 = V0 * beta, A0 * beta**2, V1 * beta, A1 * beta**2
+    c0, c1, c2 = S0, v0, a0 / 2
+    rhs = np.array([S1 - c0 - c1 - c2, v1 - c1 - 2 * c2, a1 - 2 * c2])
+    m = np.array([[1.0, 1.0, 1.0], [3.0, 4.0, 5.0], [6.0, 12.0, 20.0]])
+    c3, c4, c5 = np.linalg.solve(m, rhs)
+    return (c0, c1, c2, float(c3), float(c4), float(c5))
 
 
 def peak_factors(law: MotionLaw, n: int = 20001) -> tuple[float, float, float]:
@@ -150,14 +174,16 @@ MIN_DWELL_STEPS = 4
 @dataclass(frozen=True)
 class Segment:
     """One piece of the motion program: [start, end] cam angles [rad], the displacement
-    S0 at its start and S1 at its end [m], and the law of a rise or fall."""
+    S0 at its start and S1 at its end [m], the law of a rise or fall, and for a
+    ``polynomial`` law its coefficients in x = (theta - start) / length (fit_quintic)."""
 
-    code: int  # RISE, HIGH, FALL or LOW
+    code: int  # RISE, HIGH, FALL or LOW (a dwell at S = 0 is LOW, any other HIGH)
     start: float
     end: float
     S0: float
     S1: float
     law: MotionLaw | None = None
+    coeffs: tuple[float, ...] | None = None
 
     @property
     def is_motion(self) -> bool:
@@ -167,24 +193,73 @@ class Segment:
     def length(self) -> float:
         return self.end - self.start
 
+    def ends(self) -> tuple[float, float, float, float]:
+        """(V, A) at the start and (V, A) at the end [m/rad, m/rad^2], from the closed
+        forms (not sampled): what the continuity check compares across boundaries."""
+        if not self.is_motion:
+            return 0.0, 0.0, 0.0, 0.0
+        beta = self.length
+        if self.coeffs is not None:
+            c = self.coeffs
+            return (c[1] / beta, 2 * c[2] / beta**2,
+                    (c[1] + 2 * c[2] + 3 * c[3] + 4 * c[4] + 5 * c[5]) / beta,
+                    (2 * c[2] + 6 * c[3] + 12 * c[4] + 20 * c[5]) / beta**2)
+        H = self.S1 - self.S0
+        n = rise(self.law, np.array([0.0, 1.0]))
+        return (H * n.v[0] / beta, H * n.a[0] / beta**2, H * n.v[1] / beta,
+                H * n.a[1] / beta**2)
+
 
 def segments(design: Design) -> tuple[Segment, ...]:
-    """The program as segments covering [0, 2 pi).
+    """The program as segments covering [0, 2 pi), in order from theta = 0.
 
-    A zero-length high dwell is left out. A zero-length low dwell is kept (as an empty
-    segment at 2 pi): between a fall and a rise the cam still carries a dwell arc of
-    2 psi_l (Eq. 26 with beta_l = 0) on which the two faces of a double follower meet,
-    and the profile must include it."""
-    m = design.motion
-    h = m.lift_mm * MM
-    t1, t2, t3, t4 = boundaries_rad(design)
-    parts = (
-        Segment(RISE, 0.0, t1, 0.0, h, m.rise_law),
-        Segment(HIGH, t1, t2, h, h),
-        Segment(FALL, t2, t3, h, 0.0, m.fall_law),
-        Segment(LOW, t3, t4, 0.0, 0.0),
-    )
-    return tuple(p for p in parts if p.is_motion or p.length > 1e-12 or p.code == LOW)
+    Displacements are offset so that the lowest is S = 0 (the base circle). Zero-length
+    dwells are left out, except between a fall and a rise: there the cam still carries
+    a dwell arc of 2 psi (Eq. 26 with beta = 0) on which the two faces of a double
+    follower meet, so an empty dwell segment is kept (or added) there. A ``polynomial``
+    segment is fitted to the velocity and acceleration its neighbours end and start
+    with (0 next to a dwell or another polynomial)."""
+    spec = design.motion.segments
+    S, low = 0.0, 0.0
+    for g in spec:
+        S += g.signed_lift_mm * MM
+        low = min(low, S)
+    S, t, raw = -low, 0.0, []
+    for g in spec:
+        S1 = S + g.signed_lift_mm * MM
+        t1 = t + g.angle_deg * DEG
+        if g.kind.value == "dwell":
+            raw.append(Segment(LOW if abs(S) <= 1e-15 else HIGH, t, t1, S, S))
+        else:
+            raw.append(Segment(RISE if g.kind.value == "rise" else FALL, t, t1, S, S1, g.law))
+        S, t = S1, t1
+    raw[-1] = replace(raw[-1], end=2 * math.pi)  # the angles sum to 360 deg to round-off
+    kept: list[Segment] = []
+    for i, g in enumerate(raw):
+        before, after = raw[i - 1], raw[(i + 1) % len(raw)]
+        if g.is_motion or g.length > 1e-12:
+            kept.append(g)
+        elif before.code == FALL and after.code == RISE:
+            kept.append(g)  # the empty dwell of a fall into a rise: it has an arc
+    for i, g in enumerate(list(kept)):  # a fall straight into a rise: add the empty dwell
+        after = kept[(i + 1) % len(kept)]
+        if g.code == FALL and after.code == RISE:
+            code = LOW if abs(g.S1) <= 1e-15 else HIGH
+            kept.insert(kept.index(g) + 1, Segment(code, g.end, g.end, g.S1, g.S1))
+    return _fit_polynomials(tuple(kept))
+
+
+def _fit_polynomials(segs: tuple[Segment, ...]) -> tuple[Segment, ...]:
+    out = list(segs)
+    for i, g in enumerate(segs):
+        if g.law is not MotionLaw.polynomial:
+            continue
+        before, after = segs[i - 1], segs[(i + 1) % len(segs)]
+        poly = MotionLaw.polynomial
+        V0, A0 = before.ends()[2:] if before.law is not poly else (0.0, 0.0)
+        V1, A1 = after.ends()[:2] if after.law is not poly else (0.0, 0.0)
+        out[i] = replace(g, coeffs=fit_quintic(g.S0, V0, A0, g.S1, V1, A1, g.length))
+    return tuple(out)
 
 
 @dataclass(frozen=True)
@@ -201,7 +276,8 @@ class Program:
 
 
 def boundaries_rad(design: Design) -> tuple[float, float, float, float]:
-    """Cam angles [rad] where rise ends, high dwell ends, fall ends, and 2 pi."""
+    """Cam angles [rad] where rise ends, high dwell ends, fall ends, and 2 pi (the
+    paper's program; see Motion.classic)."""
     m = design.motion
     t1 = m.rise_deg * DEG
     t2 = t1 + m.high_dwell_deg * DEG
@@ -246,12 +322,47 @@ def program(design: Design, theta: np.ndarray) -> Program:
         if not g.is_motion:
             S[m] = g.S0
             continue
+        if g.coeffs is not None:
+            S[m], V[m], A[m], J[m] = _polynomial(g, th[m])
+            continue
         H, beta = g.S1 - g.S0, g.length
         n = rise(g.law, (th[m] - g.start) / beta)
         S[m] = g.S0 + H * n.s
         V[m], A[m], J[m] = H * n.v / beta, H * n.a / beta**2, H * n.j / beta**3
     codes = np.array([g.code for g in segs], dtype=np.int8)
     return Program(th, S, V, A, J, codes[idx], idx)
+
+
+def _polynomial(g: Segment, theta: np.ndarray):
+    """S, V, A, J of a fitted polynomial segment at the cam angles ``theta``."""
+    beta = g.length
+    x = np.clip((theta - g.start) / beta, 0.0, 1.0)
+    c = g.coeffs
+    S = sum(ck * x**k for k, ck in enumerate(c))
+    V = sum(k * ck * x ** (k - 1) for k, ck in enumerate(c) if k >= 1) / beta
+    A = sum(k * (k - 1) * ck * x ** (k - 2) for k, ck in enumerate(c) if k >= 2) / beta**2
+    J = sum(k * (k - 1) * (k - 2) * ck * x ** (k - 3) for k, ck in enumerate(c) if k >= 3)
+    return S, V, A, J / beta**3
+
+
+def continuity_jumps(segs: tuple[Segment, ...]) -> list[tuple[float, str, float]]:
+    """Jumps of V or A where one segment meets the next: (cam angle [rad], "V" or "A",
+    the jump [m/rad or m/rad^2]). A jump in V means an infinite acceleration, a jump
+    in A an infinite jerk (the fundamental law of cam design: S, V, A continuous)."""
+    out = []
+    moving = [g for g in segs if g.is_motion]  # the program's own scales H/beta, H/beta^2
+    scale_v = max(abs(g.S1 - g.S0) / g.length for g in moving)
+    scale_a = max(abs(g.S1 - g.S0) / g.length**2 for g in moving)
+    for i, g in enumerate(segs):
+        nxt = segs[(i + 1) % len(segs)]
+        _, _, v1, a1 = g.ends()
+        v0, a0, _, _ = nxt.ends()
+        at = g.end % (2 * math.pi)
+        if abs(v1 - v0) > 1e-9 * scale_v:
+            out.append((at, "V", v0 - v1))
+        if abs(a1 - a0) > 1e-9 * scale_a:
+            out.append((at, "A", a0 - a1))
+    return out
 
 
 def theta_grid(design: Design, extra: tuple[float, ...] = ()) -> np.ndarray:

@@ -54,6 +54,42 @@ def _flat_face_width_mm(a: Analysis) -> float | None:
     return 2.0 * float(np.max(np.abs(x))) * 1e3
 
 
+def _classic_arcs(a: Analysis) -> dict:
+    """Angles the high and low dwell arcs subtend on the cam (Eqs. 24, 26), for the
+    paper's program; None for other programs (see ``dwells``)."""
+    m = a.design.motion.classic
+    if m is None:
+        return {"high": None, "low": None}
+    return {"high": m.high_dwell_deg - 2 * a.geo.psi_h * R2D,
+            "low": m.low_dwell_deg + 2 * a.geo.psi_l * R2D}
+
+
+def _dwells(a: Analysis) -> list[dict]:
+    """Every dwell of the program with its own arc (Eq. 20 radius, Eqs. 23-26 psi, and
+    the arc it subtends on the cam) and its Eq. 28 margin where it applies."""
+    from .profile import arc_span, dwell_psi
+
+    out = []
+    for j, g in enumerate(a.segments):
+        if g.is_motion:
+            continue
+        start, end = arc_span(a.geo, a.segments, j)
+        psi = dwell_psi(a.geo, g.S0)
+        out.append({"start_deg": g.start * R2D, "angle_deg": g.length * R2D,
+                    "S_mm": g.S0 * 1e3, "psi_deg": psi * R2D,
+                    "arc_deg": (end - start) * R2D})
+    return out
+
+
+def _station_list(a: Analysis) -> list[dict]:
+    """The stations in order, with the faces touching just after each."""
+    names = [f.name.split(" ")[0] for f in a.geo.faces]
+    after = a.local(np.mod(a.stations + 1e-7, 2 * math.pi)).in_contact
+    return [{"theta_deg": float(t * R2D),
+             "contacts": [names[i] for i in range(len(names)) if after[i, k]]}
+            for k, t in enumerate(a.stations)]
+
+
 def summary(a: Analysis) -> dict:
     """The report of one analysis as a JSON-ready dict (see README for the keys)."""
     seg = a.prog.segment
@@ -70,10 +106,9 @@ def summary(a: Analysis) -> dict:
         "psi_h_deg": a.geo.psi_h * R2D,
         "psi_l_deg": a.geo.psi_l * R2D,
         "stations_deg": [float(s) for s in a.stations * R2D],
-        "dwell_arc_deg": {  # angles the dwell arcs subtend on the cam (Eqs. 24, 26)
-            "high": a.design.motion.high_dwell_deg - 2 * a.geo.psi_h * R2D,
-            "low": a.design.motion.low_dwell_deg + 2 * a.geo.psi_l * R2D,
-        },
+        "dwell_arc_deg": _classic_arcs(a),
+        "dwells": _dwells(a),
+        "stations": _station_list(a),
         "pressure_angle_max_deg": {
             "rise": _max(phi[on & (a.segment_code == RISE)]),
             "fall": _max(phi[on & (a.segment_code == FALL)]),
@@ -123,9 +158,12 @@ def report_text(s: dict) -> str:
         ("high-dwell radius R (Eq. 20)", f"{_fmt(s['dwell_radius_mm'], 4)} mm"),
         ("psi_h / psi_l (Eqs. 23, 25)",
          f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg"),
-        ("stations 0-5", " ".join(f"{v:.3f}" for v in s["stations_deg"]) + " deg"),
+        ("stations", " ".join(f"{v:.3f}" for v in s["stations_deg"]) + " deg"),
         ("dwell arcs high / low (Eqs. 24, 26)",
          f"{_fmt(s['dwell_arc_deg']['high'], 3)} / {_fmt(s['dwell_arc_deg']['low'], 3)} deg"),
+        ("dwells (start: angle, arc)", "; ".join(
+            f"{d['start_deg']:.1f}: {d['angle_deg']:.1f}, {d['arc_deg']:.2f} deg"
+            for d in s["dwells"]) or "-"),
         ("max pressure angle rise / fall",
          f"{_fmt(s['pressure_angle_max_deg']['rise'], 2)} / "
          f"{_fmt(s['pressure_angle_max_deg']['fall'], 2)} deg"),

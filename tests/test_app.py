@@ -281,3 +281,18 @@ def test_new_follower_kinds_render_and_offset(tab, kind):
     s.view.pose(len(s.analysis.theta) // 3)  # animate a frame
     s.controls["follower.kind"].value = "double_concave"
     assert s.controls["follower.single_offset_mm"].disabled
+
+
+def test_a_multi_segment_program_loads_and_keeps_its_segments(tab):
+    """The double-indexing preset is not rise-dwell-fall-dwell: the classic motion
+    sliders are greyed out, say so, and editing another control keeps the segments."""
+    s = tab
+    s.load_preset("double_index")
+    assert s.error is None and len(s.design.motion.segments) == 8
+    assert s.controls["motion.rise_deg"].disabled and s.controls["motion.lift_mm"].disabled
+    assert "Program of 8 segments" in s.low_dwell_md.content
+    s.controls["cam.base_radius_mm"].value = 90.0
+    assert s.design.cam.base_radius_mm == 90.0 and len(s.design.motion.segments) == 8
+    assert len(s.analysis.stations) == 12
+    s.load_preset("paper_example")
+    assert not s.controls["motion.rise_deg"].disabled

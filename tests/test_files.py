@@ -82,7 +82,7 @@ BAD_FILES: dict[str, tuple[bytes, tuple[str, ...]]] = {
                        ("360",)),
     "offset_at_limit": (_doc(follower={"kind": "double_roller", "roller_radius_mm": 10,
                                        "offset_mm": 90}).encode(), ("follower.offset_mm",)),
-    "schema_2": (_doc(schema_version=2).encode(), ("schema_version", "2")),
+    "schema_3": (_doc(schema_version=3).encode(), ("schema_version", "3")),
     "schema_0_older": (_doc(schema_version=0).encode(), ("schema_version", "0")),
     "schema_string": (_doc(schema_version="1.0").encode(), ("schema_version",)),
     "schema_null": (_doc(schema_version=None).encode(), ("schema_version",)),

@@ -1,5 +1,6 @@
 """The design model: lossless JSON, schema versions and migrations, re-validation."""
 
+import importlib.resources
 import json
 
 import pytest
@@ -17,24 +18,42 @@ def test_json_roundtrip_is_lossless():
 
 
 def test_an_older_format_is_upgraded_through_migrations(monkeypatch):
-    """A format-0 file whose lift was called 'h_mm' loads once a migration exists."""
+    """A format-0 file whose lift was called 'h_mm' loads once a migration exists, and
+    goes on through 1 -> 2 (motion as segments)."""
     def v0_to_v1(data):
         data["motion"] = dict(data["motion"])
         data["motion"]["lift_mm"] = data["motion"].pop("h_mm")
         return data
 
-    old = json.loads(load_preset("paper_example").model_dump_json())
+    old = json.loads(importlib.resources.files("camcore.presets")
+                     .joinpath("paper_example.json").read_text())
+    assert old["schema_version"] == 1
     old["schema_version"] = 0
     old["motion"]["h_mm"] = old["motion"].pop("lift_mm") + 1.0
     with pytest.raises(DesignError, match="format 0, older than any this program can upgrade"):
         design_from_json(json.dumps(old))
     monkeypatch.setitem(model.MIGRATIONS, 0, v0_to_v1)
     d = design_from_json(json.dumps(old))
-    assert d.schema_version == 1 and d.motion.lift_mm == 16.0
+    assert d.schema_version == 2 and d.motion.lift_mm == 16.0
+    assert [g.kind.value for g in d.motion.segments] == ["rise", "dwell", "fall", "dwell"]
+
+
+def test_format_1_files_load_and_save_as_format_2():
+    """Every shipped preset is a format 1 file: it loads, saves as format 2 with
+    segments, and the saved file loads back to the same design."""
+    from camcore.model import design_to_json, preset_names
+
+    for name in preset_names():
+        d = load_preset(name)
+        text = design_to_json(d)
+        saved = json.loads(text)
+        assert saved["schema_version"] == 2 and "segments" in saved["motion"]
+        assert "lift_mm" not in saved["motion"]
+        assert design_from_json(text) == d
 
 
 @pytest.mark.parametrize("version, message", [
-    (2, "written by a newer program"),
+    (3, "written by a newer program"),
     (True, "must be an integer"),
     ("1", "must be an integer"),
 ])

@@ -37,6 +37,7 @@ from pydantic import BaseModel, ValidationError
 from camcore import checks
 from camcore.analysis import Analysis, analyze
 from camcore.model import (
+    ClassicMotion,
     Design,
     DesignError,
     FollowerKind,
@@ -94,6 +95,9 @@ PARTS: dict[str, type[BaseModel]] = {
     for name, f in Design.model_fields.items()
     if isinstance(f.annotation, type) and issubclass(f.annotation, BaseModel)
 }
+# the motion's scalar fields are those of its classic form (a design may give them
+# instead of segments); random segment lists are drawn by programs() below
+PARTS["motion"] = ClassicMotion
 # (part, field) -> FieldInfo for every leaf field of the design
 LEAVES = {(p, n): f for p, cls in PARTS.items() for n, f in cls.model_fields.items()}
 NUMERIC = sorted(k for k, f in LEAVES.items() if f.annotation is float)
@@ -373,6 +377,50 @@ def test_verdict_does_not_depend_on_the_resolution(data):
     prop_verdict_independent_of_resolution(data)
 
 
+# --- 1b. any motion program ----------------------------------------------------------------
+
+
+@st.composite
+def programs(draw) -> list[dict]:
+    """A random program: 2-8 motions with dwells between some of them, random laws,
+    lifts that close the cycle, angles that sum to 360 deg."""
+    n = draw(st.integers(2, 8))
+    lifts = [draw(st.floats(0.5, 20.0)) for _ in range(n - 1)]
+    signs = [draw(st.sampled_from([1.0, -1.0])) for _ in range(n - 1)]
+    steps = [sg * h for sg, h in zip(signs, lifts, strict=True)]
+    steps.append(-sum(steps))  # the last motion closes the cycle
+    if abs(steps[-1]) < 0.5:
+        steps[-1] = 0.0
+    motions = [x for x in steps if x != 0.0]
+    if len(motions) < 2:
+        motions = [5.0, -5.0]
+    laws = st.sampled_from(list(MotionLaw))
+    segs = []
+    for x in motions:
+        segs.append({"kind": "rise" if x > 0 else "fall", "lift_mm": abs(x),
+                     "law": draw(laws).value, "w": draw(st.floats(0.2, 1.0))})
+        if draw(st.booleans()):
+            segs.append({"kind": "dwell", "w": draw(st.floats(0.0, 1.0))})
+    total = sum(g["w"] for g in segs)
+    for g in segs:
+        g["angle_deg"] = 360.0 * g.pop("w") / total
+    segs[-1]["angle_deg"] += 360.0 - sum(g["angle_deg"] for g in segs)
+    return segs
+
+
+@st.composite
+def program_designs(draw) -> dict:
+    data = draw(design_dicts(resolutions=COARSE))
+    data["motion"] = {"segments": draw(programs())}
+    return data
+
+
+@ci(150)
+@given(program_designs())
+def test_any_program_analyses_and_verifies(data):
+    prop_valid_range(data, verify=True)
+
+
 # --- 2. hostile values ---------------------------------------------------------------------
 
 NOT_A_NUMBER = st.one_of(
@@ -452,7 +500,7 @@ def hostile(draw) -> tuple[dict, list[tuple[tuple[str, ...], str]]]:
             data[part][name] = draw(st.sampled_from(["", "roller", "CYCLOIDAL", 1, None]))
         else:  # top level: schema version, name, unknown keys
             key, val = draw(st.sampled_from([
-                ("schema_version", 0), ("schema_version", 2), ("schema_version", "1"),
+                ("schema_version", 0), ("schema_version", 3), ("schema_version", "1"),
                 ("schema_version", None), ("schema_version", -1), ("schema_version", 1e9),
                 ("name", "x" * 201), ("name", None), ("name", 3), ("version", 1),
                 ("", {}),

@@ -1,0 +1,173 @@
+"""Motion programs beyond the paper's one (issue 10): any sequence of rises, falls and
+dwells, constant velocity and polynomial segments fitted to their neighbours, the
+continuity check, generalized stations and dwell arcs. Checked against closed forms
+and the independent geometric check."""
+
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+import pytest
+import trimesh
+from pydantic import ValidationError
+
+from camcore import checks, export, motion
+from camcore.analysis import analyze
+from camcore.model import Design, MotionLaw, load_preset
+from camcore.report import summary
+
+PAPER = load_preset("paper_example")
+
+
+def with_program(segments, kind="double_concave", **limits) -> Design:
+    data = PAPER.with_kind(kind).model_dump(mode="json")
+    data["motion"] = {"segments": segments}
+    data["limits"].update(limits)
+    return Design.model_validate(data)
+
+
+def test_double_indexing_preset_is_analysed_verified_exported():
+    d = load_preset("double_index")
+    a = analyze(d)
+    assert a.valid, [v.message for v in a.violations]
+    assert a.lift_error <= checks.lift_tolerance(a)  # the independent check
+    # the program repeats every 180 deg
+    th = np.linspace(0, math.pi, 500, endpoint=False)
+    p0, p1 = motion.program(d, th), motion.program(d, th + math.pi)
+    np.testing.assert_allclose(p0.S, p1.S, atol=1e-15)
+    # stations: each high dwell [start, end] has its two-contact window from
+    # start + 2 psi to end - 2 psi (Eqs. 23-24 at the dwell's own radius)
+    psi = a.geo.psi_h
+    deg = np.degrees(a.stations)
+    for start, end in ((60, 110), (240, 290)):
+        for expect in (start, start + math.degrees(2 * psi), end - math.degrees(2 * psi), end):
+            assert np.min(np.abs(deg - expect)) < 1e-9, expect
+    s = summary(a)
+    both = [st for st in s["stations"] if st["contacts"] == ["S1", "S2"]]
+    assert len(both) == 4  # two high dwells and two low dwells start two-contact spans
+    assert len(s["dwells"]) == 4
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight
+    assert mesh.volume == pytest.approx(a.profile.area * 1e9 * d.cam.width_mm / 1e3, rel=1e-6)
+
+
+def test_constant_velocity_with_polynomial_blends():
+    """A constant-velocity working stroke (20 mm over 100 deg) entered and left through
+    degree-5 polynomials fitted to the neighbours: S, V, A continuous everywhere; the
+    blend's ends take the dwell's (0, 0) and the stroke's (V = 20 mm / 100 deg, A = 0)
+    exactly; the constant-velocity segment has A = J = 0."""
+    segs = [
+        {"kind": "dwell", "angle_deg": 30},
+        {"kind": "rise", "angle_deg": 40, "lift_mm": 5, "law": "polynomial"},
+        {"kind": "rise", "angle_deg": 100, "lift_mm": 20, "law": "constant_velocity"},
+        {"kind": "rise", "angle_deg": 40, "lift_mm": 5, "law": "polynomial"},
+        {"kind": "dwell", "angle_deg": 30},
+        {"kind": "fall", "angle_deg": 120, "lift_mm": 30, "law": "cycloidal"},
+    ]
+    d = with_program(segs, kind="single_roller")
+    g = motion.segments(d)
+    assert motion.continuity_jumps(g) == []
+    v_cv = 20e-3 / math.radians(100)
+    blend_in, cv, blend_out = g[1], g[2], g[3]
+    np.testing.assert_allclose(blend_in.ends(), (0.0, 0.0, v_cv, 0.0), atol=1e-15)
+    np.testing.assert_allclose(blend_out.ends(), (v_cv, 0.0, 0.0, 0.0), atol=1e-15)
+    th = np.linspace(cv.start, cv.end, 50)[1:-1]
+    p = motion.program(d, th)
+    np.testing.assert_allclose(p.V, v_cv, rtol=1e-12)
+    assert np.all(p.A == 0) and np.all(p.J == 0)
+    # S at the segment ends: 0, 5, 25, 30 mm (lifts add up), the blends hit them exactly
+    ends = motion.program(d, np.array([blend_in.start, cv.start, cv.end, blend_out.end]))
+    np.testing.assert_allclose(ends.S * 1e3, [0, 5, 25, 30], atol=1e-12)
+    a = analyze(d)
+    assert a.valid, [v.message for v in a.violations]
+    assert a.lift_error <= checks.lift_tolerance(a)
+
+
+def test_velocity_jump_is_reported_with_its_angle():
+    """Constant velocity straight out of a dwell: V jumps by h / beta (an infinite
+    acceleration) at both ends."""
+    segs = [{"kind": "rise", "angle_deg": 90, "lift_mm": 9, "law": "constant_velocity"},
+            {"kind": "dwell", "angle_deg": 90},
+            {"kind": "fall", "angle_deg": 90, "lift_mm": 9, "law": "cycloidal"},
+            {"kind": "dwell", "angle_deg": 90}]
+    a = analyze(with_program(segs, kind="single_roller"), verify=False)
+    jumps = [v for v in a.violations if v.code == "velocity_jump"]
+    assert sorted(v.ranges_deg[0][0] for v in jumps) == pytest.approx([0.0, 90.0])
+    assert all(v.amount == pytest.approx(9 / math.radians(90)) for v in jumps)  # mm/rad
+
+
+def test_acceleration_jump_can_be_waived():
+    segs = [{"kind": "rise", "angle_deg": 120, "lift_mm": 10, "law": "simple_harmonic"},
+            {"kind": "dwell", "angle_deg": 60},
+            {"kind": "fall", "angle_deg": 120, "lift_mm": 10, "law": "simple_harmonic"},
+            {"kind": "dwell", "angle_deg": 60}]
+    a = analyze(with_program(segs, kind="single_roller"), verify=False)
+    jumps = [v for v in a.violations if v.code == "acceleration_jump"]
+    # SHM: A = h pi^2 / (2 beta^2) at each end, four ends meet dwells
+    peak = 10 * math.pi**2 / (2 * math.radians(120) ** 2)
+    assert len(jumps) == 4 and all(v.amount == pytest.approx(peak) for v in jumps)
+    b = analyze(with_program(segs, kind="single_roller",
+                             require_continuous_acceleration=False), verify=False)
+    assert not {v.code for v in b.violations} & {"acceleration_jump", "velocity_jump"}
+
+
+def test_rise_straight_into_fall_breaks_eq28_for_double_followers():
+    segs = [{"kind": "rise", "angle_deg": 120, "lift_mm": 10},
+            {"kind": "fall", "angle_deg": 120, "lift_mm": 10},
+            {"kind": "dwell", "angle_deg": 120}]
+    a = analyze(with_program(segs), verify=False)
+    v = {v.code: v for v in a.violations}["high_dwell_arc"]
+    assert v.equation == "Eq. 28"
+    assert v.amount == pytest.approx(math.degrees(4 * a.geo.psi_h), rel=1e-9)
+    single = analyze(with_program(segs, kind="single_roller"), verify=False)
+    assert "high_dwell_arc" not in {v.code for v in single.violations}
+
+
+def test_a_program_starting_with_a_fall_sits_on_the_base_circle_at_its_lowest():
+    segs = [{"kind": "fall", "angle_deg": 90, "lift_mm": 8},
+            {"kind": "dwell", "angle_deg": 90},
+            {"kind": "rise", "angle_deg": 90, "lift_mm": 8},
+            {"kind": "dwell", "angle_deg": 90}]
+    d = with_program(segs, kind="single_roller")
+    p = motion.program(d, np.linspace(0, 2 * math.pi, 721, endpoint=False))
+    assert p.S.min() == pytest.approx(0.0, abs=1e-15) and p.S[0] == pytest.approx(8e-3)
+    a = analyze(d)
+    assert a.lift_error <= checks.lift_tolerance(a)
+
+
+@pytest.mark.parametrize("segments, message", [
+    ([{"kind": "rise", "angle_deg": 100, "lift_mm": 5},
+      {"kind": "fall", "angle_deg": 100, "lift_mm": 5}], "motion.segments: the angles sum to 200"),
+    ([{"kind": "rise", "angle_deg": 180, "lift_mm": 5},
+      {"kind": "fall", "angle_deg": 180, "lift_mm": 4}], "do not close the cycle"),
+    ([{"kind": "rise", "angle_deg": 180},
+      {"kind": "fall", "angle_deg": 180, "lift_mm": 4}], "lift_mm"),
+    ([{"kind": "dwell", "angle_deg": 180, "lift_mm": 3},
+      {"kind": "dwell", "angle_deg": 180}], "a dwell has no lift_mm"),
+    ([{"kind": "dwell", "angle_deg": 360}], "at least one rise and one fall"),
+    ([{"kind": "spin", "angle_deg": 360}], "kind"),
+])
+def test_bad_programs_say_which_field(segments, message):
+    from camcore.model import format_validation_error
+
+    with pytest.raises(ValidationError) as info:
+        with_program(segments)
+    assert message in format_validation_error(info.value)
+
+
+def test_classic_keys_edit_a_classic_program_only():
+    d = Design.model_validate({"motion": {"lift_mm": 12, "rise_deg": 90}})
+    assert d.motion.lift_mm == 12 and d.motion.rise_deg == 90
+    assert d.motion.classic.high_dwell_deg == 70  # the default program's other values
+    data = load_preset("double_index").model_dump(mode="json")
+    data["motion"]["lift_mm"] = 12
+    with pytest.raises(ValidationError, match="edit motion.segments"):
+        Design.model_validate(data)
+
+
+def test_law_families_name_vdi_2143_tasks():
+    assert "R-R" in MotionLaw.cycloidal.family
+    assert "G-G" in MotionLaw.constant_velocity.family
+    assert "degree 5" in MotionLaw.polynomial.family
