@@ -10,6 +10,7 @@ from camcore.model import PAPER_FOLLOWERS, Design, format_validation_error
 from camcore.report import PAPER_TABLE1_N, summary
 
 from .plots import COLORS, stride_index
+from .state import esc
 
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
@@ -38,7 +39,7 @@ def table_markdown(results: dict) -> str:
     for k, a in results.items():
         if isinstance(a, str):
             lines.append(f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | not computable |")
-            notes.append(f"- *{k.label}*: {a}")
+            notes.append(f"- *{k.label}*: {esc(a)}")
             continue
         s = summary(a)
         ok = "✔" if s["valid"] else f"⚠ {len(s['violations'])}"

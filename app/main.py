@@ -17,6 +17,7 @@ import warnings
 
 import viser
 
+from . import uploads
 from .session import Session
 
 # A tab that closes while its redraw is in flight makes viser warn once per queued
@@ -49,6 +50,7 @@ class App:
 
     def __init__(self, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False,
                  animate: bool = True):
+        uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
         self.server = viser.ViserServer(host=host, port=port, label="Disk-cam designer",
                                         verbose=verbose)
         self.server.gui.configure_theme(control_width="large", show_share_button=False,
@@ -84,6 +86,12 @@ class App:
             del s
             _trim_heap()
 
+    def _upload_refused(self, client_id: int, filename: str, size: int) -> None:
+        with self._lock:
+            s = self.sessions.get(client_id)
+        if s is not None:
+            s.upload_refused(filename, size)
+
     def _disconnect(self, client) -> None:
         with self._lock:
             s = self.sessions.pop(client.client_id, None)
@@ -102,6 +110,18 @@ class App:
         self.server.stop()
 
 
+def _port_free(host: str, port: int) -> bool:
+    """Whether ``port`` can be bound on ``host`` now (viser would silently move on)."""
+    import socket
+
+    try:
+        with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as sock:
+            sock.bind((host, port))
+        return True
+    except OSError:
+        return False
+
+
 def _interrupt(signum, frame) -> None:
     raise KeyboardInterrupt
 
@@ -111,9 +131,12 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to bind (default 127.0.0.1, this machine only); "
                    "0.0.0.0 serves every network interface: see the README")
-    p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free "
-                   "one is used if it is busy)")
+    p.add_argument("--port", type=int, default=8080,
+                   help="port (default 8080); a busy port is an error")
     args = p.parse_args(argv)
+    if not _port_free(args.host, args.port):
+        p.exit(2, f"camdesigner: error: port {args.port} on {args.host} is busy (another "
+                  "program, or camdesigner already running?); choose one with --port N\n")
     # Ctrl-C and SIGTERM stop cleanly, even when started with SIGINT ignored (a
     # background job of a non-interactive shell inherits that).
     for sig in (signal.SIGINT, signal.SIGTERM):

@@ -7,6 +7,7 @@ callbacks in a thread pool; programmatic value changes call callbacks inline).
 
 from __future__ import annotations
 
+import json
 import math
 import re
 import threading
@@ -20,13 +21,14 @@ from camcore.model import (
     Design,
     DesignError,
     design_from_json,
+    design_to_json,
     load_preset,
     preset_names,
 )
 from camcore.motion import FALL, HIGH, LOW, RISE
 from camcore.report import summary
 
-from . import compare, plots, state
+from . import compare, plots, state, storage, uploads
 from .scene import OVERLAYS, SceneView
 
 DEFAULT_PRESET = "paper_example"
@@ -43,7 +45,17 @@ OVERLAY_LABELS = {
 
 def slug(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
-    return (s or "cam")[:40]
+    return (s or "cam")[:40].rstrip("_")
+
+
+def file_stem(design: Design) -> str:
+    """A download's name: the design, its follower, and a short fingerprint of the
+    whole design, so two files of different (edited) designs never share a name and a
+    file says which design it holds."""
+    import hashlib
+
+    digest = hashlib.sha256(design_to_json(design).encode()).hexdigest()[:6]
+    return f"{slug(design.name)}-{design.follower.kind.value}-{digest}"
 
 
 class Session:
@@ -70,12 +82,19 @@ class Session:
         self._ticket = 0  # newest design-control change (see on_control)
         self._wake_anim = threading.Event()
         self._wake_settle = threading.Event()
+        self.store = storage.BrowserStore(client)
+        self.saved: dict[str, str] = {}
+        self._persist = False  # on once the browser's stored design has been read
         with self.lock:
             self._build_gui()
             self.view = SceneView(client.scene)
             client.scene.set_up_direction("+y")
             self._apply(self.base, reset_camera=True)
         self.threads = []
+        restore = threading.Thread(target=self._restore, daemon=True,
+                                   name=f"cam-restore-{id(self)}")
+        restore.start()
+        self.threads.append(restore)
         if animate:
             for target in (self._animate, self._settle):
                 t = threading.Thread(target=target, daemon=True,
@@ -133,15 +152,92 @@ class Session:
                                                     mime_type="application/json")
             self.upload_btn.on_upload(lambda e: self.upload(e.target.value.name,
                                                             e.target.value.content))
+            gui.add_markdown("**Kept in this browser** (only you see them)")
+            self.save_name = gui.add_text("Name", "my cam")
+            self.save_btn = gui.add_button("Save in this browser")
+            self.save_btn.on_click(lambda _: self.save_named(self.save_name.value))
+            self.saved_dd = gui.add_dropdown("Saved designs", ("–",), initial_value="–")
+            self.open_saved_btn = gui.add_button("Open saved")
+            self.open_saved_btn.on_click(lambda _: self.open_saved(self.saved_dd.value))
+            self.delete_saved_btn = gui.add_button("Delete saved")
+            self.delete_saved_btn.on_click(lambda _: self.delete_saved(self.saved_dd.value))
             gui.add_markdown("**Download**")
             self.download_btns = {}
             for kind, label in (("json", "Design JSON"), ("stl", "Cam STL (mm)"),
                                 ("dxf", "Profile DXF (mm)"), ("csv", "Profile CSV"),
-                                ("angles", "Per-angle CSV")):
+                                ("angles", "Per-angle CSV"), ("html", "Printable report"),
+                                ("pdf", "Report PDF")):
                 b = gui.add_button(label)
                 b.on_click(lambda _, k=kind: self.download(k))
                 self.download_btns[kind] = b
             self.files_md = gui.add_markdown("")
+
+    # --- the browser's storage ---------------------------------------------------------
+    def _restore(self) -> None:
+        """Read this browser's working design and saved list (a reload, or a server
+        restart, brings the user back to them). Until the read returns nothing is
+        written, so the default design never overwrites what the browser kept."""
+        gen0 = self.gen
+        working = storage.parse_working(self.store.read(storage.WORKING_KEY))
+        saved = storage.parse_saved(self.store.read(storage.SAVED_KEY))
+        if self.closed.is_set():
+            return
+        with self.lock:
+            self.saved = saved
+            self._show_saved()
+            restore = working is not None and self.gen == gen0 and working != self.design
+            self._persist = True
+        if restore:
+            self.set_design(working)
+            with self.lock:
+                self.files_md.content = (f"Restored your last design from this browser: "
+                                         f"*{state.esc(working.name)}*.")
+        else:
+            with self.lock:
+                self._save_working()
+
+    def _save_working(self) -> None:
+        if self._persist and self.error is None:
+            self.store.write(storage.WORKING_KEY, design_to_json(self.design))
+
+    def _show_saved(self) -> None:
+        names = tuple(self.saved) or ("–",)
+        self.saved_dd.options = names
+        if self.saved_dd.value not in names:
+            self.saved_dd.value = names[0]
+
+    def save_named(self, name: str) -> None:
+        with self.lock:
+            try:
+                self.saved = storage.with_saved(self.saved, str(name), self.design)
+            except ValueError as exc:
+                self.files_md.content = f"✖ Not saved: {state.esc(exc)}."
+                return
+            self.store.write(storage.SAVED_KEY, json.dumps(self.saved))
+            self._show_saved()
+            self.saved_dd.value = str(name).strip()
+            self.files_md.content = f"Saved **{state.esc(str(name).strip())}** in this browser."
+
+    def open_saved(self, name: str) -> None:
+        text = self.saved.get(name) if isinstance(name, str) else None
+        design = storage.parse_working(text)
+        if design is None:
+            with self.lock:
+                self.files_md.content = "✖ Choose a saved design first."
+            return
+        self.set_design(design)
+        with self.lock:
+            self.files_md.content = f"Opened **{state.esc(name)}** from this browser."
+
+    def delete_saved(self, name: str) -> None:
+        with self.lock:
+            if not isinstance(name, str) or name not in self.saved:
+                self.files_md.content = "✖ Choose a saved design first."
+                return
+            self.saved = {k: v for k, v in self.saved.items() if k != name}
+            self.store.write(storage.SAVED_KEY, json.dumps(self.saved))
+            self._show_saved()
+            self.files_md.content = f"Deleted **{state.esc(name)}** from this browser."
 
     def _add_control(self, gui, spec: state.Spec):
         v = state.get_path(self.base, spec.path)
@@ -229,6 +325,7 @@ class Session:
             self.summary_md.content = state.summary_markdown(summary(a))
             self._show_where(k)
             self._show_status()
+        self._save_working()
         if reset_camera:
             self.reset_camera()
         self.timings.append(time.perf_counter() - t0)
@@ -254,6 +351,12 @@ class Session:
             self._apply(design, reset_camera=reset_camera)
 
     def load_preset(self, name: str) -> None:
+        # viser does not check a dropdown's value against its options: only a shipped
+        # name is looked up (camcore.model.load_preset never joins it onto a path)
+        if name not in preset_names():
+            with self.lock:
+                self.files_md.content = f"✖ No preset {state.esc(str(name)[:60])}."
+            return
         try:
             d = load_preset(name)
         except DesignError as exc:
@@ -263,7 +366,7 @@ class Session:
             return
         self.set_design(d)
         with self.lock:
-            self.files_md.content = f"Loaded preset **{name}**."
+            self.files_md.content = f"Loaded preset **{state.esc(name)}**."
 
     def upload(self, name: str, content: bytes) -> None:
         try:
@@ -272,24 +375,37 @@ class Session:
             with self.lock:
                 self.error = f"file {name or 'upload'}: {exc} (the current design is kept)"
                 self._show_status()
-                self.files_md.content = f"✖ Could not open **{name}**: {exc}"
+                self.files_md.content = (f"✖ Could not open **{state.esc(name)}**: "
+                                         f"{state.esc(exc)}")
             return
         self.set_design(d)
         with self.lock:
-            self.files_md.content = f"Opened **{name}** ({d.name})."
+            self.files_md.content = f"Opened **{state.esc(name)}** ({state.esc(d.name)})."
+
+    def upload_refused(self, name: str, size: int) -> None:
+        """The upload guard (app.uploads) dropped a transfer larger than its cap."""
+        with self.lock:
+            self.files_md.content = (
+                f"✖ **{state.esc(name)}** refused: {size:,} bytes, more than the "
+                f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB).")
 
     def download(self, kind: str) -> None:
         with self.lock:
             a, d = self.analysis, self.design
-            base = slug(d.name)
+            if self.error is not None:  # the controls no longer describe d: say so
+                self.files_md.content = (
+                    "✖ Download refused: the input is invalid (see the red panel). "
+                    "Fix it, or load a design, and the files will hold what you see.")
+                return
             try:
                 spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
-                name, data = f"{base}{spec.suffix}", spec.write(a)
+                name, data = f"{file_stem(d)}{spec.suffix}", spec.write(a)
             except (KeyError, export.ExportError) as exc:
-                self.files_md.content = f"✖ Cannot export {kind.upper()}: {exc}"
+                self.files_md.content = f"✖ Cannot export {state.esc(kind)}: {state.esc(exc)}"
                 return
             self.last_download = (name, data)
-            self.files_md.content = f"Sent **{name}** ({len(data):,} bytes)."
+            self.files_md.content = (f"Sent **{state.esc(name)}** ({len(data):,} bytes) of "
+                                     f"*{state.esc(d.name)}*, {d.follower.kind.label}.")
         self.client.send_file_download(name, data, save_immediately=True)
 
     # --- angle, stations, animation ------------------------------------------------

@@ -9,6 +9,7 @@ the last valid design stays on screen meanwhile.
 from __future__ import annotations
 
 import html
+import re
 from dataclasses import dataclass, field
 
 from pydantic import ValidationError
@@ -148,9 +149,24 @@ _BOX = ("<div style='border-radius:6px;padding:6px 10px;margin:2px 0;font-size:0
         "line-height:1.35;background:{bg};border:2px solid {fg};color:#222'>{body}</div>")
 
 
+_MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
+
+
+def esc(text: object) -> str:
+    """User-provided text (a design or file name, a message quoting input) made safe for
+    viser's Markdown, which renders raw HTML: HTML-escaped, and Markdown's special
+    characters backslash-escaped so they show as typed. Every such string goes through
+    here before it is shown."""
+    return _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
+
+
 def status_html(error: str | None, violations, lift_error: float | None,
                 verified: bool) -> str:
-    """The always-visible panel: input errors (red), limit violations (amber), or OK."""
+    """The always-visible panel: input errors (red), limit violations (amber), or OK.
+
+    With an input error the panel says so and nothing green: the limits shown below it
+    are those of the last valid design, which stays on screen (and in the downloads'
+    refusal) until the input is fixed."""
     parts = []
     if error:
         items = "".join(f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
@@ -168,6 +184,13 @@ def status_html(error: str | None, violations, lift_error: float | None,
             body=f"<b>⚠ {len(violations)} design-limit violation"
                  f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
                  f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+    if error:
+        parts.append(_BOX.format(
+            bg="#eeeeee", fg="#555555",
+            body=f"Last valid design: {len(violations) or 'no'} limit violation"
+                 f"{'' if len(violations) == 1 else 's'}. Downloads are refused until the "
+                 "input is valid."))
+        return "".join(parts)
     if not violations:
         check = ""
         if verified and lift_error is not None:

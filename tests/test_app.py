@@ -296,3 +296,92 @@ def test_a_multi_segment_program_loads_and_keeps_its_segments(tab):
     assert len(s.analysis.stations) == 12
     s.load_preset("paper_example")
     assert not s.controls["motion.rise_deg"].disabled
+
+
+def test_a_dropdown_value_outside_the_presets_reads_no_file(tab, tmp_path):
+    """viser does not check a dropdown's value against its options: '../..' names and
+    absolute paths are refused before any lookup, and the message is escaped."""
+    s = tab
+    before = s.design
+    (tmp_path / "x.json").write_text(before.model_dump_json())
+    for name in ("../../x", str(tmp_path / "x"), "<b id=inj>x</b>"):
+        s.load_preset(name)
+        assert s.design == before and "No preset" in s.files_md.content
+        assert "<b" not in s.files_md.content
+
+
+def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
+    """app.uploads: a transfer declaring more than the cap is never buffered; one whose
+    parts pass the cap (or their own declared size) is dropped at the first such part.
+    The tab says why."""
+    from viser import _messages
+
+    from app import uploads
+
+    s = tab
+    gui_api = s.client.gui  # the tab's own GUI API holds its upload button
+    button = s.upload_btn._impl.uuid
+    cid = s.client.client_id
+    big = _messages.FileTransferStartUpload(
+        source_component_uuid=button, transfer_uuid="t-big", filename="<i>big</i>.json",
+        mime_type="application/json", part_count=50, size_bytes=45_000_000)
+    gui_api._handle_file_transfer_start(cid, big)
+    assert "t-big" not in gui_api._current_file_upload_states
+    assert "refused" in s.files_md.content and "<i>" not in s.files_md.content
+    liar = _messages.FileTransferStartUpload(
+        source_component_uuid=button, transfer_uuid="t-liar", filename="liar.json",
+        mime_type="application/json", part_count=3, size_bytes=10)
+    gui_api._handle_file_transfer_start(cid, liar)
+    assert "t-liar" in gui_api._current_file_upload_states
+    part = _messages.FileTransferPart(source_component_uuid=button, transfer_uuid="t-liar",
+                                      part_index=0, content=b"x" * 600_000)
+    gui_api._handle_file_transfer_part(cid, part)
+    assert "t-liar" not in gui_api._current_file_upload_states  # dropped, not buffered
+    assert uploads.MAX_UPLOAD_BYTES == 1_000_000
+
+
+def test_browser_storage_values_are_untrusted():
+    from app import storage
+    from camcore.model import design_to_json
+
+    d = load_preset("paper_example")
+    assert storage.parse_working(design_to_json(d)) == d
+    for junk in (None, "", "{", "[]", '{"cam": {"base_radius_mm": -1}}', "x" * 2_000_000):
+        assert storage.parse_working(junk) is None
+    many = {f"n{i}": design_to_json(d) for i in range(50)}
+    many[""] = "x"
+    many["y" * 100] = "x"
+    saved = storage.parse_saved(__import__("json").dumps(many))
+    assert len(saved) == storage.MAX_SAVED and all(0 < len(k) <= 60 for k in saved)
+    assert storage.parse_saved("[1, 2]") == {} and storage.parse_saved("nonsense") == {}
+    full = {f"n{i}": "{}" for i in range(storage.MAX_SAVED)}
+    with pytest.raises(ValueError, match="delete one first"):
+        storage.with_saved(full, "another", d)
+    assert "n0" in storage.with_saved(full, "n0", d)  # replacing one is fine
+    with pytest.raises(ValueError, match="1 to 60"):
+        storage.with_saved({}, "   ", d)
+
+
+def test_download_names_say_which_design_they_hold(tab):
+    from app.session import file_stem
+
+    s = tab
+    stem = file_stem(s.design)
+    assert stem.startswith("chuang_hsu_chang_section_6_example_doubl-double_concave-")
+    s.controls["cam.base_radius_mm"].value = 85.0
+    assert file_stem(s.design) != stem  # an edited design gets another name
+
+
+def test_busy_port_is_an_error_that_says_so():
+    """viser moves to the next port silently; camdesigner refuses and says why."""
+    import socket
+    import subprocess
+    import sys
+
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        sock.listen()
+        port = sock.getsockname()[1]
+        proc = subprocess.run([sys.executable, "-m", "app.main", "--port", str(port)],
+                              capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 2 and f"port {port}" in proc.stderr and "busy" in proc.stderr

@@ -87,3 +87,61 @@ def test_app_in_headless_chromium(tmp_path):
             browser.close()
     finally:
         app.stop()
+
+
+@pytest.mark.browser
+def test_trust_in_the_browser(tmp_path):
+    """Issue 8 in a real browser: an uploaded design whose name is HTML is shown as
+    text, never injected; the tab's design survives a reload (browser storage), and a
+    named save too; a download while the input is invalid is refused, with the reason."""
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("no /usr/bin/chromium")
+    import json
+
+    from playwright.sync_api import sync_playwright
+
+    from app.main import App
+    from camcore.model import design_from_json, load_preset
+
+    design = json.loads(load_preset("paper_example").model_dump_json())
+    design["name"] = "<b id=inj>x</b> & co"
+    design["cam"]["base_radius_mm"] = 91.0
+    app = App(host="127.0.0.1", port=0)
+    try:
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+            page = browser.new_page(viewport={"width": 1000, "height": 700})
+            page.set_default_timeout(T)
+            page.goto(f"http://127.0.0.1:{app.port}/")
+            page.get_by_text("All design limits met").first.wait_for()
+            page.get_by_role("tab", name="Files").click()
+            page.locator("input[type=file]").first.set_input_files({
+                "name": "<i id=inj2>evil</i>.json", "mimeType": "application/json",
+                "buffer": json.dumps(design).encode()})
+            page.get_by_text("<b id=inj>x</b> & co").first.wait_for()  # shown as text
+            assert page.locator("#inj").count() == 0 and page.locator("#inj2").count() == 0
+            page.get_by_text("<i id=inj2>evil</i>.json").first.wait_for()
+            (session,) = app.sessions.values()
+            assert session.design.cam.base_radius_mm == 91.0
+
+            # a named save, then a reload: the working design and the save come back
+            page.get_by_role("button", name="Save in this browser").click()
+            page.get_by_text("Saved ").first.wait_for()
+            page.reload()
+            page.get_by_text("All design limits met").first.wait_for()
+            page.get_by_role("tab", name="Files").click()
+            page.get_by_text("Restored your last design").first.wait_for()
+            (session,) = [s for s in app.sessions.values() if not s.closed.is_set()]
+            assert session.design == design_from_json(json.dumps(design))
+            assert "my cam" in session.saved
+
+            # invalid input: the download is refused and says why
+            session.controls["follower.face_radius_mm"].value = -70.0  # |r_f| < r_b
+            page.get_by_text("Invalid input").first.wait_for()
+            page.get_by_role("tab", name="Files").click()
+            page.get_by_role("button", name="Cam STL (mm)").click()
+            page.get_by_text("Download refused").first.wait_for()
+            assert page.locator("text=All design limits met").count() == 0
+            browser.close()
+    finally:
+        app.stop()

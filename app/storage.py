@@ -1,0 +1,90 @@
+"""No lost work: each tab's design kept in its own browser (localStorage).
+
+The working design is written on every change and read back when the tab opens, so a
+reload or a server restart returns the user to what they had. Named designs the user
+saves live in the same place (a short, bounded list). Nothing of one browser is
+visible to another: viser's ``client.local_storage`` is the browser's own storage for
+this origin, and the server keeps no copy beyond the open tab.
+
+What comes back from a browser is untrusted: every design is parsed with the same
+strict, size-capped parser as an uploaded file, and the saved list is bounded.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+from camcore.model import MAX_DESIGN_BYTES, Design, DesignError, design_from_json, design_to_json
+
+WORKING_KEY = "camdesigner.working"
+SAVED_KEY = "camdesigner.saved"
+MAX_SAVED = 20  # named designs per browser
+MAX_NAME = 60  # characters of a saved design's name
+READ_TIMEOUT_S = 5.0  # a tab that never answers (e.g. a test client) costs this, once
+
+
+def parse_working(text: str | None) -> Design | None:
+    """The stored working design, or None if there is none or it is not a valid design."""
+    if not text:
+        return None
+    try:
+        return design_from_json(text)
+    except DesignError:
+        return None
+
+
+def parse_saved(text: str | None) -> dict[str, str]:
+    """{name: design JSON} from storage, keeping only well-formed entries, at most
+    MAX_SAVED of them (a tampered value never grows the server's memory)."""
+    if not text or len(text) > MAX_SAVED * MAX_DESIGN_BYTES:
+        return {}
+    try:
+        raw = json.loads(text)
+    except ValueError:
+        return {}
+    if not isinstance(raw, dict):
+        return {}
+    out = {}
+    for name, value in list(raw.items())[:MAX_SAVED]:
+        if (isinstance(name, str) and 0 < len(name) <= MAX_NAME and isinstance(value, str)
+                and len(value) <= MAX_DESIGN_BYTES):
+            out[name] = value
+    return out
+
+
+def with_saved(saved: dict[str, str], name: str, design: Design) -> dict[str, str]:
+    """The list with ``design`` saved under ``name`` (replacing one of the same name).
+
+    Raises ValueError for an empty or too long name, or a full list."""
+    name = name.strip()
+    if not name or len(name) > MAX_NAME:
+        raise ValueError(f"a name of 1 to {MAX_NAME} characters, please")
+    if name not in saved and len(saved) >= MAX_SAVED:
+        raise ValueError(f"this browser already keeps {MAX_SAVED} designs; delete one first")
+    return {**saved, name: design_to_json(design)}
+
+
+class BrowserStore:
+    """The browser-side storage of one tab (``client.local_storage``)."""
+
+    def __init__(self, client):
+        self._storage = client.local_storage
+
+    def read(self, key: str) -> str | None:
+        """The stored string, or None if absent, unreadable or the browser is silent."""
+        try:
+            with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
+                warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
+                value = self._storage.get_item(key, timeout=READ_TIMEOUT_S)
+        except (RuntimeError, TimeoutError):
+            return None
+        return value if isinstance(value, str) else None
+
+    def write(self, key: str, value: str) -> None:
+        try:
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
+                self._storage.set_item(key, value)
+        except Exception:  # the tab is gone: nothing to keep
+            pass
