@@ -34,6 +34,23 @@ def _load_malloc_trim():
 
 _MALLOC_TRIM = _load_malloc_trim()
 
+M_MMAP_THRESHOLD, M_ARENA_MAX = -3, -8  # glibc mallopt parameters (malloc.h)
+
+
+def _tune_malloc() -> None:
+    """Keep numpy's large temporaries out of the heap. glibc raises its mmap threshold
+    each time a large block is freed (up to 32 MB), after which the analysis' arrays
+    (tens to hundreds of kB each) land in the per-thread heaps and fragment them: 30
+    busy tabs left the server at 3-6x its idle RSS after they closed. A fixed 128 kB
+    threshold maps every larger array on its own (returned to the OS when freed), and
+    4 arenas instead of 8 per core bound the per-thread heaps. No effect off glibc."""
+    try:
+        mallopt = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").mallopt
+    except (OSError, AttributeError):
+        return
+    mallopt(M_MMAP_THRESHOLD, 128 * 1024)
+    mallopt(M_ARENA_MAX, 4)
+
 
 def _trim_heap() -> None:
     """Give the memory a closed tab freed back to the OS. glibc keeps freed blocks in
@@ -50,6 +67,7 @@ class App:
 
     def __init__(self, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False,
                  animate: bool = True):
+        _tune_malloc()  # before the server's threads create their arenas
         uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
         self.server = viser.ViserServer(host=host, port=port, label="Disk-cam designer",
                                         verbose=verbose)

@@ -43,6 +43,12 @@ OVERLAY_LABELS = {
 }
 
 
+# Background work (the verified analysis and the comparison: ~0.1 s each) waits until a
+# tab has been still this long, and runs for one tab at a time across the server.
+SETTLE_S = 0.6
+BACKGROUND = threading.BoundedSemaphore(1)
+
+
 def slug(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
     return (s or "cam")[:40].rstrip("_")
@@ -519,20 +525,27 @@ class Session:
             time.sleep(max(0.0, period - (time.perf_counter() - now)))
 
     def _settle(self) -> None:
-        """Background: verified analysis and the four-follower comparison."""
+        """Background: verified analysis and the four-follower comparison, once the tab
+        has been still for SETTLE_S, and one tab at a time across the server
+        (BACKGROUND), so that the cheap re-analysis of every tab always comes first."""
         while not self.closed.is_set():
             if not self._wake_settle.wait(0.5):
                 continue
             self._wake_settle.clear()
-            time.sleep(0.2)  # let a slider drag finish
+            time.sleep(SETTLE_S)  # let a slider drag finish
             if self._wake_settle.is_set():
                 continue
-            self.settle_once()
+            with BACKGROUND:
+                if not self._wake_settle.is_set() and not self.closed.is_set():
+                    self.settle_once()
 
     def settle_once(self) -> None:
         with self.lock:
             design, gen = self.design, self.gen
         av = analyze(design, verify=True)
+        with self.lock:
+            if gen != self.gen or self.closed.is_set():
+                return  # changed meanwhile: the comparison would be stale too
         results = compare.compute(design)
         with self.lock:
             if gen != self.gen or self.closed.is_set():
