@@ -12,14 +12,17 @@ import math
 import re
 import threading
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
 from camcore import export
 from camcore.analysis import analyze
 from camcore.model import (
+    MAX_SEGMENTS,
     Design,
     DesignError,
+    MotionLaw,
     design_from_json,
     design_to_json,
     load_preset,
@@ -62,6 +65,27 @@ def file_stem(design: Design) -> str:
 
     digest = hashlib.sha256(design_to_json(design).encode()).hexdigest()[:6]
     return f"{slug(design.name)}-{design.follower.kind.value}-{digest}"
+
+
+@dataclass(frozen=True)
+class MotionSegmentView:
+    """One row of the segment table, from a MotionSegment or a dict of the table."""
+
+    kind: str
+    angle_deg: float
+    lift_mm: float | None
+    law: str | None
+
+    @classmethod
+    def of(cls, g) -> MotionSegmentView:
+        if isinstance(g, dict):
+            kind = str(g.get("kind"))
+            law = g.get("law")
+            return cls(kind if kind in ("rise", "fall", "dwell") else "dwell",
+                       float(g.get("angle_deg", 0.0)), g.get("lift_mm"),
+                       law if law in MotionLaw.__members__ else None)
+        return cls(g.kind.value, float(g.angle_deg), g.lift_mm,
+                   g.law.value if g.law else None)
 
 
 class Session:
@@ -133,6 +157,10 @@ class Session:
                         self.controls[spec.path] = self._add_control(gui, spec)
                     if title == "Motion program":
                         self.low_dwell_md = gui.add_markdown("")
+                        self.seg_folder = gui.add_folder("Program segments (any program)",
+                                                         expand_by_default=False)
+                        self.seg_rows: list[dict] = []
+                        self.seg_extra: list = []
             with gui.add_folder("Key numbers", expand_by_default=True):
                 self.summary_md = gui.add_markdown("")
         with tabs.add_tab("Curves"):
@@ -327,6 +355,8 @@ class Session:
                 c.update(a, k)
             plots.relabel_limits(self.curves, a)
             self._enable_for_kind(design)
+            self._sync_segment_rows(design)
+            self._show_station_buttons(a)
             self.low_dwell_md.content = state.low_dwell_text(self.values(), design)
             self.summary_md.content = state.summary_markdown(summary(a))
             self._show_where(k)
@@ -355,6 +385,117 @@ class Session:
             self.error = None
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
+
+    # --- the segment table (issue 10) -----------------------------------------------
+    def _sync_segment_rows(self, design: Design) -> None:
+        """Show the design's segments in the table: values in place when the rows
+        match, rebuilt when segments were added, removed or changed kind. Lock held."""
+        segs = design.motion.segments
+        if [r["kind"].value for r in self.seg_rows] != [g.kind.value for g in segs]:
+            self._build_segment_rows(design)
+        self._syncing = True
+        try:
+            for row, g in zip(self.seg_rows, segs, strict=True):
+                row["angle"].value = float(g.angle_deg)
+                if g.lift_mm is not None:
+                    row["lift"].value = float(g.lift_mm)
+                    row["law"].value = g.law.value
+        finally:
+            self._syncing = False
+        self._show_segment_sums(design.motion.segments)
+
+    def _build_segment_rows(self, design: Design | list[dict]) -> None:
+        segs = [MotionSegmentView.of(g) for g in
+                (design.motion.segments if isinstance(design, Design) else design)]
+        for row in self.seg_rows:
+            for h in row.values():
+                h.remove()
+        for h in self.seg_extra:
+            h.remove()
+        self.seg_rows, self.seg_extra = [], []
+        gui = self.client.gui
+        laws = tuple(law.value for law in MotionLaw)
+        with self.seg_folder:
+            for i, g in enumerate(segs):
+                dwell = g.kind == "dwell"
+                row = {
+                    "kind": gui.add_dropdown(f"{i + 1}. kind", ("rise", "fall", "dwell"),
+                                             initial_value=g.kind),
+                    "angle": gui.add_number(f"{i + 1}. angle [°]", g.angle_deg,
+                                            min=0.0, max=360.0, step=0.5),
+                    "lift": gui.add_number(f"{i + 1}. lift [mm]", g.lift_mm or 5.0,
+                                           min=0.001, max=1000.0, step=0.5, disabled=dwell),
+                    "law": gui.add_dropdown(f"{i + 1}. law", laws, disabled=dwell,
+                                            initial_value=g.law or laws[0]),
+                    "move": gui.add_button_group(f"{i + 1}.", ("↑", "↓", "✕")),
+                }
+                for key in ("kind", "angle", "lift", "law"):
+                    row[key].on_update(lambda _e: self.on_segments())
+                row["move"].on_click(lambda e, j=i: self.on_segment_move(j, e.target.value))
+                self.seg_rows.append(row)
+            add = gui.add_button("Add a segment (a 0° dwell at the end)")
+            add.on_click(lambda _e: self.on_segment_move(len(self.seg_rows), "+"))
+            self.seg_sums = gui.add_markdown("")
+            self.seg_extra = [add, self.seg_sums]
+
+    def _show_segment_sums(self, segs) -> None:
+        total = sum(float(g["angle_deg"] if isinstance(g, dict) else g.angle_deg) for g in segs)
+        net = sum((1 if k == "rise" else -1 if k == "fall" else 0) * float(lift or 0) for k, lift in
+                  ((g["kind"], g.get("lift_mm")) if isinstance(g, dict)
+                   else (g.kind.value, g.lift_mm) for g in segs))
+        ok = abs(total - 360) <= 1e-6 and abs(net) <= 1e-9
+        self.seg_sums.content = (f"Σ angles = **{total:g}°** (must be 360) · rises − falls = "
+                                 f"**{net:g} mm** (must be 0){'' if ok else ' ⚠'}")
+
+    def _segment_rows_as_dicts(self) -> list[dict]:
+        out = []
+        for row in self.seg_rows:
+            kind = row["kind"].value
+            g = {"kind": kind, "angle_deg": float(row["angle"].value)}
+            if kind != "dwell":
+                g.update(lift_mm=float(row["lift"].value), law=row["law"].value)
+            out.append(g)
+        return out
+
+    def on_segments(self, segs: list[dict] | None = None) -> None:
+        """A table value changed (or a row moved): the program is the table's segments
+        with every other control as it is; invalid input keeps the last valid design."""
+        with self.lock:
+            if self._syncing or self.closed.is_set():
+                return
+            segs = self._segment_rows_as_dicts() if segs is None else segs
+            data = self.design.model_dump(mode="json")
+            data["motion"] = {"segments": segs}
+            self._show_segment_sums(segs)
+            design, err = state.try_design_dict(data)
+            if err is not None:
+                self.error = err
+                if len(segs) != len(self.seg_rows) or [r["kind"].value for r in self.seg_rows] \
+                        != [g["kind"] for g in segs]:
+                    self._build_segment_rows(segs)  # show the user's edit, even if invalid
+                    self._show_segment_sums(segs)
+                self._show_status()
+                return
+            self.error = None
+            self.base = design
+            self._sync_controls(design)
+            self._apply(design)
+
+    def on_segment_move(self, i: int, action: str) -> None:
+        """↑ / ↓ move segment i, ✕ removes it, + appends a 0° dwell."""
+        with self.lock:
+            segs = self._segment_rows_as_dicts()
+            if action == "+" and len(segs) < MAX_SEGMENTS:
+                segs.append({"kind": "dwell", "angle_deg": 0.0})
+            elif action == "✕" and len(segs) > 1 and 0 <= i < len(segs):
+                segs.pop(i)
+            elif action == "↑" and 0 < i < len(segs):
+                segs[i - 1], segs[i] = segs[i], segs[i - 1]
+            elif action == "↓" and 0 <= i < len(segs) - 1:
+                segs[i], segs[i + 1] = segs[i + 1], segs[i]
+            else:
+                return
+            self.on_segments(segs)
 
     def load_preset(self, name: str) -> None:
         # viser does not check a dropdown's value against its options: only a shipped
@@ -430,8 +571,9 @@ class Session:
         if at:
             where = "at station " + " and ".join(str(i) for i in at)
         else:
-            i = int(np.searchsorted(st, th))
-            where = f"between stations {i - 1} and {i}" if 0 < i < 6 else "between stations 5 and 0"
+            i, n = int(np.searchsorted(st, th)), len(st)
+            where = (f"between stations {i - 1} and {i}" if 0 < i < n
+                     else f"between stations {n - 1} and 0")
         faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
         touch = ", ".join(faces) if faces else "none"
         seg = SEGMENT[int(a.prog.segment[k])]
@@ -463,14 +605,19 @@ class Session:
                 return
             self._goto(float(value), slider=False)
 
+    def _show_station_buttons(self, a) -> None:
+        names = tuple(str(i) for i in range(len(a.stations)))
+        if tuple(self.stations_btn.options) != names:
+            self.stations_btn.options = names
+
     def goto_station(self, i: int | str) -> None:
-        """Jump to station i (0-5); anything else (a hostile client's value) is ignored."""
-        if str(i) not in {"0", "1", "2", "3", "4", "5"}:
-            return
-        i = int(i)
+        """Jump to station i; anything else (a hostile client's value) is ignored."""
         with self.lock:
+            n = len(self.analysis.stations)
+            if str(i) not in {str(k) for k in range(n)}:
+                return
             self._set_playing(False)
-            self._goto(math.degrees(float(self.analysis.stations[i])))
+            self._goto(math.degrees(float(self.analysis.stations[int(i)])))
 
     def _set_speed(self, v: float) -> None:
         self.speed = float(v)

@@ -113,6 +113,14 @@ def merged(base: Design, values: dict[str, object]) -> dict:
     return data
 
 
+def try_design_dict(data: dict) -> tuple[Design | None, str | None]:
+    """(design, None) if ``data`` is a valid design, else (None, message)."""
+    try:
+        return Design.model_validate(data), None
+    except ValidationError as exc:
+        return None, format_validation_error(exc)
+
+
 def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, str | None]:
     """(design, None) if the control values make a valid design, else (None, message)."""
     try:

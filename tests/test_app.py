@@ -385,3 +385,37 @@ def test_busy_port_is_an_error_that_says_so():
         proc = subprocess.run([sys.executable, "-m", "app.main", "--port", str(port)],
                               capture_output=True, text=True, timeout=60)
     assert proc.returncode == 2 and f"port {port}" in proc.stderr and "busy" in proc.stderr
+
+
+def test_segment_table_edits_the_program(tab):
+    """The segment table (issue 10): rows follow the design; moving, adding, removing
+    and editing rows re-analyses at once; a program that does not close says so and
+    keeps the last valid design; the station buttons follow the program."""
+    s = tab
+    assert [r["kind"].value for r in s.seg_rows] == ["rise", "dwell", "fall", "dwell"]
+    # split the high dwell: shorten it and add a 0 deg dwell, then turn that into a
+    # rise/fall pair by editing rows: first an invalid step (lifts do not close)
+    s.on_segment_move(4, "+")
+    assert len(s.design.motion.segments) == 5 and len(s.seg_rows) == 5
+    s.seg_rows[1]["angle"].value = 50.0  # the sum is 340: invalid, the design stays
+    assert s.error is not None and "360" in s.error and len(s.design.motion.segments) == 5
+    assert "340" in s.seg_sums.content
+    s.seg_rows[4]["angle"].value = 20.0  # 360 again
+    assert s.error is None and s.design.motion.segments[4].angle_deg == 20.0
+    s.seg_rows[1]["kind"].value = "spin"  # a hostile value: refused, naming the field
+    assert s.error is not None and "kind" in s.error
+    s.seg_rows[1]["kind"].value = "dwell"
+    assert s.error is None
+    s.on_segment_move(4, "↑")  # the new dwell before the low dwell... (4 -> 3)
+    kinds = [g.kind.value for g in s.design.motion.segments]
+    assert kinds == ["rise", "dwell", "fall", "dwell", "dwell"]
+    assert s.design.motion.segments[3].angle_deg == 20.0
+    s.on_segment_move(3, "✕")  # 340 deg again: the table shows the edit, the design stays
+    assert len(s.seg_rows) == 4 and s.error is not None
+    assert len(s.design.motion.segments) == 5
+    s.load_preset("double_index")
+    assert len(s.seg_rows) == 8 and s.stations_btn.options == tuple(str(i) for i in range(12))
+    s.goto_station("11")
+    assert abs(s.theta_deg - 350.0) < 0.6
+    s.goto_station("12")  # no such station: ignored
+    assert abs(s.theta_deg - 350.0) < 0.6

@@ -127,6 +127,10 @@ def test_trust_in_the_browser(tmp_path):
             # a named save, then a reload: the working design and the save come back
             page.get_by_role("button", name="Save in this browser").click()
             page.get_by_text("Saved ").first.wait_for()
+            # the storage write is its own message: wait until the browser applied it
+            page.wait_for_function(
+                "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.saved')"
+                " && localStorage.getItem(k).includes('my cam'))")
             page.reload()
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("tab", name="Files").click()
