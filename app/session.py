@@ -199,7 +199,7 @@ class Session:
             self.download_btns = {}
             for kind, label in (("json", "Design JSON"), ("stl", "Cam STL (mm)"),
                                 ("dxf", "Profile DXF (mm)"), ("csv", "Profile CSV"),
-                                ("angles", "Per-angle CSV"), ("html", "Printable report"),
+                                ("series", "Per-angle CSV"), ("html", "Printable report"),
                                 ("pdf", "Report PDF")):
                 b = gui.add_button(label)
                 b.on_click(lambda _, k=kind: self.download(k))

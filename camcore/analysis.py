@@ -42,6 +42,7 @@ class Local:
     guide: forces.GuideSolution  # F1, F2, F_N per contact, mode per angle
     FN: np.ndarray  # (F, N) contact force at each face [N], 0 where not touching
     stress: np.ndarray  # (F, N) Hertz stress [Pa] (Eq. 42)
+    torque: np.ndarray  # (F, N) shaft torque [N m] each face's contact asks for
 
 
 def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
@@ -66,6 +67,7 @@ def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, 
         point_body=point_body, normal=normal,
         pressure_angle=np.stack([c.pressure_angle for c in contacts]), kappa_pitch=kappa,
         rho=rho, Ft=Ft, guide=guide, FN=FN, stress=contact_stress(design, FN, rho),
+        torque=forces.cam_torque(point_world, normal, FN),
     )
 
 

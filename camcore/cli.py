@@ -185,7 +185,7 @@ def _export(args) -> int:
     return EXIT_VALID
 
 
-EXPORT_FLAGS = ("stl", "dxf", "csv", "angles", "json", "html", "pdf")
+EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "json", "html", "pdf")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -228,7 +228,8 @@ def _parser() -> argparse.ArgumentParser:
     e = sub.add_parser("export", help="write STL / DXF / CSV / design JSON")
     source(e)
     for kind in EXPORT_FLAGS:
-        e.add_argument(f"--{kind}", dest=f"out_{kind}", metavar="FILE", help=EXPORTS[kind].help)
+        names = (f"--{kind}", "--angles") if kind == "series" else (f"--{kind}",)  # old name
+        e.add_argument(*names, dest=f"out_{kind}", metavar="FILE", help=EXPORTS[kind].help)
     e.add_argument("--tolerance-mm", type=float, metavar="MM",
                    help="largest distance of the exported polyline from the exact cam "
                         "(default: the design's limits.export_tolerance_mm, 0.001 mm)")

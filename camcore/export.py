@@ -17,8 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .model import Design, design_to_json
+from .model import Design, design_to_json, omega_rad_s
 from .motion import FALL, HIGH, LOW, RISE
+from .units import to_deg, to_mm, to_mpa
 
 
 class ExportError(ValueError):
@@ -237,21 +238,44 @@ def csv_text(a) -> str:
     return "\n".join(lines) + "\n"
 
 
-def cam_angle_csv_text(a) -> str:
-    """Per cam angle: S, V, A, pressure angle, contact force, guide forces, stress."""
-    th = np.degrees(a.theta)
+def series_columns(a) -> dict[str, np.ndarray]:
+    """Per cam angle, every quantity a designer plots or checks (issue 11).
+
+    Motion per radian of cam angle and per second (x w, w^2, w^3); the pressure angle
+    and cam radius of curvature rho at the touching face (the rise face when both
+    touch); the load F_t (Eq. 29), the guide forces, and per face (``_1`` the rise face
+    S1 / left roller, ``_2`` the fall face of a double follower) F_N, rho and the Hertz
+    stress (Eq. 42; 0 where the face is idle); the shaft torque (camcore.machine)."""
+    w = omega_rad_s(a.design)
+    p = a.prog
     cols = {
-        "theta_deg": th,
-        "S_mm": a.prog.S * 1e3,
-        "V_mm_per_rad": a.prog.V * 1e3,
-        "A_mm_per_rad2": a.prog.A * 1e3,
-        "pressure_angle_deg": np.degrees(a.primary(a.pressure_angle)),
+        "theta_deg": to_deg(a.theta),
+        "segment": p.index,
+        "S_mm": to_mm(p.S),
+        "V_mm_per_rad": to_mm(p.V),
+        "A_mm_per_rad2": to_mm(p.A),
+        "J_mm_per_rad3": to_mm(p.J),
+        "V_m_per_s": p.V * w,
+        "A_m_per_s2": p.A * w**2,
+        "J_m_per_s3": p.J * w**3,
+        "pressure_angle_deg": to_deg(a.primary(a.pressure_angle)),
+        "rho_mm": to_mm(a.primary(a.rho)),
         "contacts": a.n_contacts,
-        "FN_N": a.guide.FN,
+        "Ft_N": a.Ft,
         "F1_N": a.guide.F1,
         "F2_N": a.guide.F2,
-        "stress_MPa": a.stress.max(axis=0) / 1e6,
     }
+    for f in range(a.FN.shape[0]):
+        cols[f"FN_N_{f + 1}"] = a.FN[f]
+        cols[f"rho_mm_{f + 1}"] = to_mm(a.rho[f])
+        cols[f"stress_MPa_{f + 1}"] = to_mpa(a.stress[f])
+    cols["cam_torque_Nm"] = a.torque.sum(axis=0)
+    return cols
+
+
+def series_csv_text(a) -> str:
+    """series_columns as CSV, one row per cam angle of the analysis grid."""
+    cols = series_columns(a)
     lines = [",".join(cols)]
     lines += [",".join(f"{v:.9g}" for v in row) for row in zip(*cols.values(), strict=True)]
     return "\n".join(lines) + "\n"
@@ -276,8 +300,9 @@ EXPORTS: dict[str, ExportKind] = {
     "dxf": ExportKind(".dxf", "DXF of the profile (mm)", dxf_bytes),
     "csv": ExportKind("_profile.csv", "CSV of the profile vertices",
                       lambda a: csv_text(a).encode()),
-    "angles": ExportKind("_angles.csv", "CSV of S, V, A, forces and stress per cam angle",
-                         lambda a: cam_angle_csv_text(a).encode()),
+    "series": ExportKind("_series.csv", "CSV per cam angle: S, V, A, J (per rad and per "
+                         "second), pressure angle, rho, forces, stress, torque",
+                         lambda a: series_csv_text(a).encode()),
     "json": ExportKind(".json", "the design as JSON", lambda a: json_text(a.design).encode()),
     "html": ExportKind("_report.html", "the printable design report (self-contained HTML)",
                        lambda a: _document().html_report(a).encode()),

@@ -31,6 +31,8 @@ QUANTITIES = {
     "kappa_pitch_min": (lambda loc: loc.kappa_pitch, -1.0),
     "FN_min": (lambda loc: loc.FN, -1.0),  # [N]
     "stress_max": (lambda loc: loc.stress, 1.0),  # [Pa]
+    "torque_max": (lambda loc: loc.torque, 1.0),  # [N m], driving
+    "torque_min": (lambda loc: loc.torque, -1.0),  # braking
 }
 
 
@@ -128,3 +130,24 @@ def worst_values(a) -> dict[str, Worst | None]:
         out[name] = Worst(float(s * best[b]), float(at[b]), int(face[b]), tuple(
             (float(s * best[i]), float(lo[i]), float(hi[i])) for i in m))
     return out
+
+
+def refine_max(f, theta: np.ndarray, values: np.ndarray) -> tuple[float, float]:
+    """The maximum of a closed-form quantity over the cycle, between the samples too.
+
+    f : cam angles [rad] -> values (vectorized); ``values`` = f(theta) on the grid. The
+    CANDIDATES largest local maxima of the samples are each searched between their grid
+    neighbours (the same zoom as worst_values). Returns (value, angle [rad]); -inf if
+    no sample is finite."""
+    with np.errstate(all="ignore"):
+        cand = [k for _, k in _candidates(values[None, :], np.isfinite(values)[None, :])]
+        if not cand:
+            return -np.inf, float("nan")
+        k = np.array(cand)
+        lo = theta[np.maximum(k - 1, 0)]
+        hi = theta[np.minimum(k + 1, theta.size - 1)]
+        best, at = _zoom(f, lo, hi)
+        best = np.fmax(best, values[k])  # the zoom never loses the sample itself
+        at = np.where(best > values[k], at, theta[k])
+    j = int(np.argmax(best))
+    return float(best[j]), float(at[j])

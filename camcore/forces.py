@@ -131,3 +131,20 @@ def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V)
 
     F1, F2, FN = (np.where(touching, pick(k), 0.0) for k in ("F1", "F2", "FN"))
     return GuideSolution(F1, F2, FN, pick("mode"), pick("side1"), pick("side2"))
+
+
+def cam_torque(point_world: np.ndarray, normal: np.ndarray, FN: np.ndarray) -> np.ndarray:
+    """Torque [N m] each contact asks of the cam shaft, positive when the shaft drives.
+
+    The cam pushes the follower with F = F_N n at the contact point p (world frame).
+    With the shaft at constant speed and the cam's own inertia aside, the shaft torque
+    balances the follower's reaction: T_z = (p x F)_z about the cam centre O. The cam
+    turns clockwise (-z, see profile.to_body), so the torque that *drives* it is
+    T = -(p x F)_z. Without friction at the contact this equals F_N n_y V (the power
+    F_N n_y V omega given to the follower; the normal passes through I23 at OI23 = V,
+    Eqs. 1-4), which the tests use as the independent check.
+
+    point_world, normal : (F, N, 2); FN : (F, N) -> (F, N), zero where a face is idle.
+    """
+    cross = point_world[..., 0] * normal[..., 1] - point_world[..., 1] * normal[..., 0]
+    return -FN * cross

@@ -418,6 +418,14 @@ class Dynamics(_Part):
     overhang_shrinks: bool = Field(
         True, description="l1 = l1_0 - S (the stem slides further into the guide as it rises)"
     )
+    spring_safety_factor: float = Field(
+        1.5, ge=1.0, le=100.0,
+        description="proposed spring: its force is this many times the force that just "
+                    "keeps contact, at every angle (1 = on the edge of jump)")
+    speed_fluctuation: float = Field(
+        0.02, gt=0, le=1.0,
+        description="allowed speed fluctuation C_s = (w_max - w_min)/w of the shaft, "
+                    "for the flywheel inertia")
 
 
 class MaterialGrade(StrEnum):

@@ -9,7 +9,8 @@ import math
 
 import numpy as np
 
-from . import checks
+from . import checks, machine
+from .contact import hertz_validity
 from .analysis import Analysis, analyze, compare
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa
 from .motion import FALL, HIGH, RISE
@@ -90,6 +91,41 @@ def _station_list(a: Analysis) -> list[dict]:
             for k, t in enumerate(a.stations)]
 
 
+def _finite(x: float, factor: float = 1.0) -> float | None:
+    """x * factor, or None where x is infinite (JSON has no infinity)."""
+    return float(x * factor) if math.isfinite(x) else None
+
+
+def _machine(a: Analysis) -> dict:
+    """Spring sizing, jump speed, shaft torque, power and flywheel (camcore.machine)."""
+    sp, sh = machine.spring(a.design, a.theta), machine.shaft(a)
+    return {
+        "spring_rate_min_N_per_m": _finite(sp.rate_min),
+        "preload_min_mm": _finite(sp.preload_min, 1e3),
+        "spring_proposal": {
+            "safety_factor": sp.safety_factor,
+            "spring_rate_N_per_m": _finite(sp.proposed_rate),
+            "preload_mm": a.design.dynamics.preload_mm,
+        },
+        "jump_speed_rpm": _finite(sp.jump_speed_rpm),
+        "cam_torque_max_Nm": {"drive": sh.drive_max, "brake": sh.brake_max},
+        "power_max_W": sh.power_max,
+        "power_mean_W": sh.power_mean,
+        "flywheel_energy_J": sh.flywheel_energy,
+        "flywheel_inertia_kg_m2": _finite(sh.flywheel_inertia),
+    }
+
+
+def _hertz(a: Analysis) -> dict:
+    """Contact half-width and where the line-contact formula is beyond its validity."""
+    b, beyond = hertz_validity(a.design, a.FN, a.rho)
+    return {
+        "contact_half_width_max_mm": _scaled(_max(b), 1e3),
+        "hertz_beyond_validity_deg": [list(r) for r in checks.runs_deg(a.theta,
+                                                                        beyond.any(axis=0))],
+    }
+
+
 def summary(a: Analysis) -> dict:
     """The report of one analysis as a JSON-ready dict (see README for the keys)."""
     seg = a.prog.segment
@@ -124,10 +160,12 @@ def summary(a: Analysis) -> dict:
             "cycle": _scaled(_max(a.stress), 1e-6),
             "high_dwell": _scaled(_max(a.stress[:, high]), 1e-6) if high.any() else None,
         },
+        **_hertz(a),
         "contact_stress_allowable_MPa": allowable_contact_stress_MPa(a.design),
         "contact_stress_safety_factor": a.design.limits.contact_stress_safety_factor,
         "total_load_high_dwell_N": _max(a.Ft, high),
         "flat_face_width_min_mm": _flat_face_width_mm(a),
+        **_machine(a),
         "profile": {
             "area_mm2": a.profile.area * 1e6,
             "perimeter_mm": a.profile.perimeter * 1e3,
@@ -177,9 +215,25 @@ def report_text(s: dict) -> str:
          f"{_fmt(s['guide_force_max_N']['F2'])} N"),
         ("max stress cycle / high dwell", f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
          f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa"),
+        ("contact half-width max", f"{_fmt(s['contact_half_width_max_mm'], 4)} mm"
+         + ("" if not s["hertz_beyond_validity_deg"] else "; Hertz beyond validity at "
+            + ", ".join(f"{lo:.1f}-{hi:.1f}" for lo, hi in s["hertz_beyond_validity_deg"])
+            + " deg (conservative stress used)")),
         ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),
         ("allowable stress / safety factor",
          f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}"),
+        ("spring rate min / proposed", f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
+         f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
+         f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
+         f"{s['spring_proposal']['safety_factor']:g})"),
+        ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
+        ("jump speed", "never (nothing pulls the follower off)" if s["jump_speed_rpm"] is None
+         else f"{_fmt(s['jump_speed_rpm'], 1)} rpm"),
+        ("shaft torque drive / brake", f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
+         f"{_fmt(s['cam_torque_max_Nm']['brake'])} N m"),
+        ("power max / mean", f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W"),
+        ("flywheel energy / inertia", f"{_fmt(s['flywheel_energy_J'], 4)} J / "
+         f"{_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2"),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
          f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
         ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "

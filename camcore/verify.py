@@ -90,8 +90,11 @@ def _face_max(P, Q, r, x_c) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         side = np.sign(dx) / length  # the chord's upward unit normal: side * (-dy, dx)
         t = (x_c - X + r * dy * side) / dx  # where that normal points at the centre
-        top = Y + t * dy + r * dx * side
-    ok = (dx != 0) & (t > 0) & (t < 1)
+    # closed, with round-off room: a knife edge (r = 0) exactly over a vertex between
+    # two chords must meet one of them (t = 1 - eps on one, -eps on the other)
+    ok = (dx != 0) & (t >= -1e-9) & (t <= 1 + 1e-9)
+    t = np.clip(t, 0.0, 1.0)
+    top = Y + t * dy + r * dx * side
     return np.maximum(best, np.max(np.where(ok, top, -np.inf), axis=1))
 
 

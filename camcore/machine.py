@@ -1,0 +1,155 @@
+"""The running machine (rigid follower): which spring, how fast, what the shaft delivers.
+
+All of it follows from the load of Eq. 29, F_t = M (g + A w^2) + k (S + s_p), and the
+guide solve of Eqs. 33-41. That solve is linear and homogeneous in F_t (forces.py), and
+in every guide mode that does not self-lock F_N has the sign of F_t. So the follower
+keeps contact (F_N >= 0) exactly where
+
+    k (S + s_p) >= -D,   D = M (g + A w^2)   (the load without the spring)
+
+whatever the guide friction. This gives, as closed forms over the cam angle (their
+extremes found between the grid samples, camcore.extremes.refine_max):
+
+* the smallest spring rate for the design's preload, and the smallest preload for its
+  rate;
+* the jump speed: w^2 <= (M g + k (S + s_p)) / (-M A) wherever A < 0;
+* a proposed spring (rule below).
+
+The shaft torque comes from the contact forces (forces.cam_torque); its peaks, the
+power, and the energy a flywheel must buffer follow from it.
+
+Spring rule (the usual one for force-closed cams, e.g. Norton, *Design of Machinery*,
+cam dynamics chapter): the spring force must exceed the force that just keeps contact
+by a safety factor n at every angle. Keeping the design's preload length s_p, the rate
+n k_min does this, since n k_min (S + s_p) >= n (-D) everywhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import extremes, motion
+from .model import Design, omega_rad_s
+from .units import GRAM, MM, RPM
+
+
+def spring_free_load(design: Design, prog: motion.Program) -> np.ndarray:
+    """D = M (g + A w^2) [N]: the load F_t of Eq. 29 without the spring."""
+    d = design.dynamics
+    return d.mass_g * GRAM * (d.gravity_m_s2 + prog.A * omega_rad_s(design) ** 2)
+
+
+def _over(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """num / den where num > 0 (inf where den <= 0 there), 0 where num <= 0."""
+    with np.errstate(all="ignore"):  # overflow to inf is the right answer too
+        return np.where(num > 0, np.where(den > 0, num / den, np.inf), 0.0)
+
+
+def _sup(design: Design, theta: np.ndarray, per_program) -> tuple[float, float]:
+    """Sup over the cycle of per_program(program) (>= 0), between samples too."""
+    def f(x):
+        return per_program(motion.program(design, x))
+
+    grid = f(theta)
+    if np.isinf(grid).any():  # unbounded: no finite value will do
+        return np.inf, float(theta[np.argmax(grid)])
+    value, at = extremes.refine_max(f, theta, grid)
+    return max(value, 0.0), at
+
+
+def spring_rate_min(design: Design, theta: np.ndarray) -> tuple[float, float]:
+    """The smallest spring rate k [N/m] that keeps contact with the design's preload,
+    and the cam angle [rad] that sets it; inf if no rate does (the follower must be
+    pulled back where the spring is not compressed, S + s_p = 0)."""
+    s_p = design.dynamics.preload_mm * MM
+    return _sup(design, theta, lambda p: _over(-spring_free_load(design, p), p.S + s_p))
+
+
+def preload_min(design: Design, theta: np.ndarray) -> tuple[float, float]:
+    """The smallest preload s_p [m] that keeps contact with the design's spring rate,
+    and the angle [rad] that sets it; inf if none does (k = 0 and D < 0 somewhere)."""
+    k = design.dynamics.spring_rate_N_per_m
+
+    def need(p):
+        D = spring_free_load(design, p)
+        if k == 0.0:
+            return np.where(D < 0, np.inf, 0.0)
+        return np.maximum(-D / k - p.S, 0.0)
+
+    return _sup(design, theta, need)
+
+
+def jump_speed_rpm(design: Design, theta: np.ndarray) -> tuple[float, float]:
+    """The cam speed [rpm] at which F_N first reaches zero with the design's spring, and
+    the angle [rad] where it does; inf if the follower never leaves the cam (no
+    deceleration anywhere).
+
+    F_t = M g + k (S + s_p) + M A w^2 >= 0 fails first where (-M A) / (M g + k (S + s_p))
+    is largest (only A < 0 can pull the follower off)."""
+    d = design.dynamics
+    M, k, s_p = d.mass_g * GRAM, d.spring_rate_N_per_m, d.preload_mm * MM
+    inv_w2, at = _sup(design, theta,
+                      lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p)))
+    if inv_w2 == 0.0:
+        return np.inf, at
+    return 1.0 / np.sqrt(inv_w2) / RPM, at
+
+
+@dataclass(frozen=True)
+class Shaft:
+    """What the cam shaft must deliver at the design speed."""
+
+    torque: np.ndarray  # (N,) driving torque [N m] on the analysis grid
+    drive_max: float  # largest driving torque [N m] (>= 0), between samples too
+    brake_max: float  # largest braking torque [N m] (>= 0): the follower drives the cam
+    power_max: float  # largest power the shaft delivers [W]
+    power_mean: float  # mean power [W]: the losses (guide friction); 0 without friction
+    flywheel_energy: float  # energy fluctuation Delta E [J] about the mean torque
+    flywheel_inertia: float  # inertia [kg m^2] for the design's speed fluctuation C_s
+
+
+def shaft(a) -> Shaft:
+    """Torque, power and flywheel figures of ``a`` (a camcore.analysis.Analysis).
+
+    Delta E = max - min of the integral of (T - T_mean) over the cam angle; a flywheel
+    of inertia I = Delta E / (C_s w^2) keeps the speed within C_s (the classic
+    flywheel sizing, e.g. Shigley, *Mechanical Engineering Design*, flywheels)."""
+    w = omega_rad_s(a.design)
+    T = a.torque.sum(axis=0)
+    # cumulative trapezoid over the closed cycle: the grid's 0 comes back at 2 pi
+    th = np.append(a.theta, a.theta[0] + 2 * np.pi)
+    Tc = np.append(T, T[0])
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (Tc[1:] + Tc[:-1]) * np.diff(th))])
+    T_mean = cum[-1] / (2 * np.pi)
+    energy = cum - T_mean * (th - th[0])
+    delta_E = float(energy.max() - energy.min())
+    hi, lo = a.worst.get("torque_max"), a.worst.get("torque_min")
+    drive = max(float(T.max()), hi.value if hi else 0.0, 0.0)
+    brake = max(-float(T.min()), -lo.value if lo else 0.0, 0.0)
+    c_w2 = a.design.dynamics.speed_fluctuation * w**2
+    inertia = delta_E / c_w2 if c_w2 > 0 else np.inf  # a crawling cam: no flywheel helps
+    return Shaft(T, drive, brake, drive * w, float(T_mean) * w, delta_E, inertia)
+
+
+@dataclass(frozen=True)
+class Spring:
+    """The spring figures of a design (see the module docstring for the rule)."""
+
+    rate_min: float  # [N/m] with the design's preload (inf: none suffices)
+    rate_min_at: float  # [rad]
+    preload_min: float  # [m] with the design's rate (inf: none suffices)
+    jump_speed_rpm: float  # inf: never jumps
+    jump_at: float  # [rad]
+    safety_factor: float
+    proposed_rate: float  # [N/m], n k_min at the design's preload (inf if none)
+
+
+def spring(design: Design, theta: np.ndarray) -> Spring:
+    """Spring sizing and jump speed of ``design`` over the grid ``theta`` [rad]."""
+    k_min, k_at = spring_rate_min(design, theta)
+    s_min, _ = preload_min(design, theta)
+    rpm, at = jump_speed_rpm(design, theta)
+    n = design.dynamics.spring_safety_factor
+    return Spring(k_min, k_at, s_min, rpm, at, n, n * k_min)

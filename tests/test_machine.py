@@ -1,0 +1,209 @@
+"""The running machine (issue 11): spring sizing, jump speed, shaft torque, power and
+flywheel. Each figure is checked by a route that does not share its formula: the full
+guide-force solve of Eqs. 33-41 (with friction) on both sides of the edge, closed forms,
+the power balance through the instant centre, and the energy balance over a cycle."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camcore import machine
+from camcore.analysis import analyze
+from camcore.model import Design, load_preset
+from camcore.units import GRAM, MM, RPM
+
+PAPER = load_preset("paper_example")
+
+
+def tweak(design: Design, **fields) -> Design:
+    """``design`` with dotted fields changed (part__field=value), validated again."""
+    data = design.model_dump(mode="json")
+    for key, value in fields.items():
+        part, name = key.split("__")
+        data[part][name] = value
+    return Design.model_validate(data)
+
+
+def jumps(design: Design) -> bool:
+    return any(v.code == "jump" for v in analyze(design, verify=False).violations)
+
+
+@pytest.mark.parametrize("kind", ["single_roller", "double_concave"])
+def test_spring_rate_min_is_the_edge_of_jump(kind):
+    """Just above k_min the full force solve (guide friction 0.1) keeps F_N > 0 at every
+    angle, between the samples too; 2 % below it the follower jumps."""
+    d = PAPER.with_kind(kind)
+    a = analyze(d, verify=False)
+    k_min, at = machine.spring_rate_min(d, a.theta)
+    assert 0 < k_min < d.dynamics.spring_rate_N_per_m  # the paper's spring is enough
+    assert not jumps(tweak(d, dynamics__spring_rate_N_per_m=k_min * 1.002))
+    assert jumps(tweak(d, dynamics__spring_rate_N_per_m=k_min * 0.98))
+    # the proposal keeps the design's preload and scales the rate by the safety factor
+    s = machine.spring(d, a.theta)
+    assert s.proposed_rate == pytest.approx(d.dynamics.spring_safety_factor * k_min)
+
+
+def test_preload_min_is_the_edge_of_jump():
+    d = tweak(PAPER, dynamics__spring_rate_N_per_m=1500.0)
+    a = analyze(d, verify=False)
+    s_min, _ = machine.preload_min(d, a.theta)
+    assert s_min > 0
+    assert not jumps(tweak(d, dynamics__preload_mm=s_min / MM * 1.002))
+    assert jumps(tweak(d, dynamics__preload_mm=s_min / MM * 0.98))
+
+
+def test_spring_rate_min_scales_with_speed_squared():
+    """Without gravity the load to hold is pure inertia, M A w^2: k_min grows as w^2."""
+    d = tweak(PAPER, dynamics__gravity_m_s2=0.0)
+    th = analyze(d, verify=False).theta
+    k1, at1 = machine.spring_rate_min(d, th)
+    k2, at2 = machine.spring_rate_min(tweak(d, cam__speed_rpm=2 * d.cam.speed_rpm), th)
+    assert k2 == pytest.approx(4 * k1, rel=1e-9) and at2 == pytest.approx(at1)
+
+
+def test_jump_speed_closed_form_and_full_solve():
+    """With a preload far larger than the lift the spring force is nearly constant, so
+    the jump speed is w^2 = k (S* + s_p) / (M 2 pi h / beta^2) at the cycloid's peak
+    deceleration (x = 3/4 of the rise, S* = h (3/4 + 1/(2 pi))); and the full solve
+    jumps just above the computed speed, not just below."""
+    h, beta = 10.0, 80.0
+    d = tweak(PAPER, dynamics__gravity_m_s2=0.0, dynamics__preload_mm=10000.0,
+              dynamics__spring_rate_N_per_m=50.0, motion__lift_mm=h, motion__rise_deg=beta,
+              motion__fall_deg=120.0)
+    a = analyze(d, verify=False)
+    rpm, at = machine.jump_speed_rpm(d, a.theta)
+    M, k, hm, b = d.dynamics.mass_g * GRAM, 50.0, h * MM, math.radians(beta)
+    S_star = hm * (0.75 + 1 / (2 * math.pi))
+    w = math.sqrt(k * (S_star + 10.0) / (M * 2 * math.pi * hm / b**2))
+    assert rpm == pytest.approx(w / RPM, rel=1e-5)
+    assert math.degrees(at) == pytest.approx(0.75 * beta, abs=0.5)
+    assert not jumps(tweak(d, cam__speed_rpm=rpm * 0.995))
+    assert jumps(tweak(d, cam__speed_rpm=rpm * 1.005))
+    # the paper's design at its own spring: above its 1200 rpm, and the edge of jump
+    a = analyze(PAPER, verify=False)
+    rpm, _ = machine.jump_speed_rpm(PAPER, a.theta)
+    assert rpm > PAPER.cam.speed_rpm
+    assert not jumps(tweak(PAPER, cam__speed_rpm=rpm * 0.995))
+    assert jumps(tweak(PAPER, cam__speed_rpm=rpm * 1.005))
+
+
+def test_jump_speed_without_anything_holding_the_follower_is_zero():
+    d = tweak(PAPER, cam__speed_rpm=1.0)
+    a = analyze(d, verify=False)
+    rpm, _ = machine.jump_speed_rpm(tweak(d, dynamics__spring_rate_N_per_m=0.0,
+                                          dynamics__gravity_m_s2=0.0), a.theta)
+    assert rpm == 0.0  # nothing holds the follower down: it leaves at any speed
+    assert machine.jump_speed_rpm(d, a.theta)[0] > 1.0
+
+
+@pytest.mark.parametrize("kind", ["single_roller", "single_concave", "double_concave",
+                                  "flat_face"])
+def test_torque_by_moments_equals_the_power_through_the_instant_centre(kind):
+    """T from moments of the contact force about the cam centre (contact point and
+    normal) equals F_N n_y V, the power given to the follower per unit cam speed (the
+    normal meets the x-axis at I23, OI23 = V, Eqs. 1-4): two independent routes."""
+    a = analyze(PAPER.with_kind(kind), verify=False)
+    power = (a.FN * a.normal[..., 1]).sum(axis=0) * a.prog.V
+    T = a.torque.sum(axis=0)
+    np.testing.assert_allclose(T, power, atol=1e-9 * np.abs(T).max())
+    assert np.abs(T[a.prog.V == 0]).max() == 0.0  # dwells ask nothing of the shaft
+
+
+def test_frictionless_torque_integrates_to_zero_and_matches_the_energy_balance():
+    """Without friction the follower stores and returns all the work: the torque
+    integrates to zero over the cycle, and the flywheel's energy swing equals that of
+    the follower's energy E = M g S + M w^2 V^2 / 2 + k (S + s_p)^2 / 2 (closed form
+    from the motion program alone)."""
+    d = tweak(PAPER, dynamics__guide_friction=0.0, limits__resolution_deg=0.05)
+    a = analyze(d, verify=False)
+    sh = machine.shaft(a)
+    assert abs(sh.power_mean) < 1e-6 * sh.power_max
+    dyn, w = d.dynamics, PAPER.cam.speed_rpm * RPM
+    M, k, s_p = dyn.mass_g * GRAM, dyn.spring_rate_N_per_m, dyn.preload_mm * MM
+    p = a.prog
+    E = M * dyn.gravity_m_s2 * p.S + M * w**2 * p.V**2 / 2 + k * (p.S + s_p) ** 2 / 2
+    assert sh.flywheel_energy == pytest.approx(E.max() - E.min(), rel=1e-3)
+    assert sh.flywheel_inertia == pytest.approx(
+        sh.flywheel_energy / (dyn.speed_fluctuation * w**2))
+    # guide friction only takes: the mean power is the loss, and positive
+    assert machine.shaft(analyze(PAPER, verify=False)).power_mean > 0
+
+
+def test_torque_peaks_are_found_between_the_samples():
+    fine = machine.shaft(analyze(tweak(PAPER, limits__resolution_deg=0.01), verify=False))
+    coarse = machine.shaft(analyze(tweak(PAPER, limits__resolution_deg=2.0), verify=False))
+    assert coarse.drive_max == pytest.approx(fine.drive_max, rel=1e-5)
+    assert coarse.brake_max == pytest.approx(fine.brake_max, rel=1e-5)
+    assert fine.power_max == pytest.approx(fine.drive_max * PAPER.cam.speed_rpm * RPM)
+
+
+def test_series_csv_has_every_quantity_per_angle(tmp_path):
+    """The per-angle series (CLI --series, the app's download): one row per grid angle;
+    per-second motion is the per-radian motion times w, w^2, w^3 (checked on the cycloid's
+    closed-form peak velocity 2 h / beta); the torque column is the shaft torque."""
+    import csv
+    import io
+
+    from camcore import export
+
+    a = analyze(PAPER, verify=False)
+    rows = list(csv.DictReader(io.StringIO(export.series_csv_text(a))))
+    assert len(rows) == a.theta.size
+    for key in ("J_mm_per_rad3", "V_m_per_s", "A_m_per_s2", "J_m_per_s3", "rho_mm", "Ft_N",
+                "FN_N_1", "FN_N_2", "stress_MPa_2", "cam_torque_Nm"):
+        assert key in rows[0]
+    w = PAPER.cam.speed_rpm * RPM
+    v = np.array([float(r["V_m_per_s"]) for r in rows])
+    h, beta = PAPER.motion.lift_mm * MM, math.radians(PAPER.motion.rise_deg)
+    assert v.max() == pytest.approx(2 * h / beta * w, rel=1e-6)  # cycloid: V_max = 2h/beta
+    T = np.array([float(r["cam_torque_Nm"]) for r in rows])
+    np.testing.assert_allclose(T, a.torque.sum(axis=0), rtol=1e-8, atol=1e-12)
+
+
+def test_hertz_half_width_matches_the_textbook_formula():
+    """b = sqrt(4 F C / (pi w (1/r + 1/rho))) (Shigley, Sec. 3-19), against ours,
+    2 F / (pi w sigma), for a roller; and the paper's example is well inside validity."""
+    from camcore.contact import compliance, hertz_validity
+    from camcore.report import summary
+
+    d = PAPER.with_kind("single_roller")
+    a = analyze(d, verify=False)
+    b, beyond = hertz_validity(d, a.FN, a.rho)
+    r, w = d.follower.radius_mm * MM, d.cam.width_mm * MM
+    on = a.FN > 0
+    ref = np.sqrt(4 * a.FN[on] * compliance(d) / (np.pi * w * (1 / r + 1 / a.rho[on])))
+    np.testing.assert_allclose(b[on], ref, rtol=1e-12)
+    assert not beyond.any()
+    s = summary(analyze(PAPER, verify=False))
+    assert s["hertz_beyond_validity_deg"] == []
+    assert 0 < s["contact_half_width_max_mm"] < 0.2
+
+
+def test_conforming_concave_face_gets_the_conservative_stress():
+    """A concave face 1 um larger than the high-dwell arc: the curvature sum nearly
+    vanishes, Hertz's strip would be 30 mm wide and its stress tiny. There the report
+    names the angles and the stress is that of the widest valid strip, higher than the
+    plain formula's."""
+    from camcore.contact import (HERTZ_VALID_RATIO, compliance, hertz_line_stress,
+                                 hertz_validity)
+    from camcore.report import summary
+
+    d = PAPER.with_kind("single_concave")
+    R = analyze(d, verify=False).geo.dwell_radius
+    d = tweak(d, follower__face_radius_mm=-(R / MM + 0.001))
+    a = analyze(d, verify=False)
+    high = a.prog.segment == 1
+    b, beyond = hertz_validity(d, a.FN, a.rho)
+    assert beyond[0, high].all()
+    w = d.cam.width_mm * MM
+    plain = hertz_line_stress(a.FN, d.follower.radius_mm * MM, a.rho, w, compliance(d))
+    k = np.flatnonzero(high)[0]
+    expected = 2 * a.FN[0, k] / (np.pi * w * HERTZ_VALID_RATIO * R)
+    assert a.stress[0, k] == pytest.approx(expected, rel=1e-9)
+    assert a.stress[0, k] > 2 * plain[0, k]
+    s = summary(a)
+    at = math.degrees(a.theta[k])
+    assert any(lo <= at <= hi for lo, hi in s["hertz_beyond_validity_deg"])
