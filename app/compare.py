@@ -32,13 +32,14 @@ def table_markdown(results: dict) -> str:
 
     lines = [
         "| Follower | F_N high dwell [N] | Table 1 [N] | F_N max cycle [N] | σ_H max [MPa] "
-        "| limits |",
-        "|---|---|---|---|---|---|",
+        "| wear max [µm/10⁶ cycles] | limits |",
+        "|---|---|---|---|---|---|---|",
     ]
     notes = []
     for k, a in results.items():
         if isinstance(a, str):
-            lines.append(f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | not computable |")
+            lines.append(f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | – "
+                         "| not computable |")
             notes.append(f"- *{k.label}*: {esc(a)}")
             continue
         s = summary(a)
@@ -48,11 +49,13 @@ def table_markdown(results: dict) -> str:
         lines.append(
             f"| {k.label} | {f(dwell, 3)} | "
             f"{PAPER_TABLE1_N[k]:.3f} | {f(s['contact_force_max_N']['cycle'], 2)} | "
-            f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | {ok} |")
+            f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | "
+            f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |")
     text = "\n".join(lines)
     text += ("\n\nTable 1 is the paper's value for its own example (the `paper_example` "
              "preset). F_N high dwell: the maximum contact force in the high dwell, for double "
-             "followers while both faces touch (the load is shared).")
+             "followers while both faces touch (the load is shared). Wear: Archard's law along "
+             "the profile (rollers roll and do not slide; see the README for the model).")
     if notes:
         text += "\n\n" + "\n".join(notes)
     return text

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from camcore import machine, wear
 from camcore.checks import rho_reference_mm
 
 MAX_POINTS = 720
@@ -147,6 +148,24 @@ def build_curves(gui, a) -> list[Curve]:
             {"label": "σ_H [MPa]", "scale": "MPa", "stroke": COLORS[4],
              "fn": lambda a: a.stress.max(axis=0) / 1e6},
         ], codes={"jump"}),
+        Curve(gui, "Spring force and the force that keeps contact (jump where it wins)",
+              [("N", "force [N]")], [
+            {"label": "spring k(S+s_p) [N]", "scale": "N", "stroke": COLORS[2],
+             "fn": lambda a: machine.spring_force(a.design, a.prog)},
+            {"label": "needed −M(g+Aω²) [N]", "scale": "N", "stroke": "#d62728",
+             "dash": [6, 4], "fn": lambda a: -machine.spring_free_load(a.design, a.prog)},
+        ], codes={"jump"}),
+        Curve(gui, "Shaft torque T (positive: the shaft drives)", [("Nm", "T [N·m]")], [
+            {"label": "T [N·m]", "scale": "Nm", "stroke": COLORS[0],
+             "fn": lambda a: a.torque.sum(axis=0)},
+        ], codes=set()),
+        Curve(gui, "Cam wear per 10⁶ cycles (Archard), at the point each face touches",
+              [("um", "wear [µm]")], [
+            {"label": "face 1 [µm]", "scale": "um", "stroke": COLORS[3],
+             "fn": lambda a: wear.depth_per_pass(a)[0] * 1e12},
+            {"label": "face 2 [µm]", "scale": "um", "stroke": COLORS[4],
+             "fn": lambda a: wear.depth_per_pass(a)[-1] * 1e12},
+        ], codes=set()),
     ]
     return curves
 

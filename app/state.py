@@ -73,6 +73,16 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         Spec("dynamics.overhang_mm", "Overhang l1 [mm]", "number", step=1),
         Spec("dynamics.gravity_m_s2", "Gravity g [m/s²]", "number", step=0.01),
         Spec("dynamics.overhang_shrinks", "Overhang shrinks with lift", "checkbox"),
+        Spec("dynamics.spring_safety_factor", "Spring safety factor n", "number", step=0.1,
+             hint="proposed spring: its force is n times what just keeps contact"),
+        Spec("dynamics.speed_fluctuation", "Speed fluctuation C_s", "number", step=0.005,
+             hint="for the flywheel inertia ΔE / (C_s ω²)"),
+    )),
+    ("Wear & life", False, (
+        Spec("wear.coefficient_mm3_per_N_m", "Archard k [mm³/(N·m)]", "number", step=1e-9,
+             hint="lubricated hardened steel ~1e-9…1e-7; dry steel ~1e-5"),
+        Spec("wear.pitting_reference_cycles", "Pitting N_ref [cycles]", "number", step=1e7),
+        Spec("wear.pitting_exponent", "Pitting exponent m", "number", step=0.1),
     )),
     ("Material & limits", False, (
         Spec("material.cam_E_GPa", "Cam E1 [GPa]", "number", step=1),
@@ -232,6 +242,24 @@ def summary_markdown(s: dict) -> str:
         ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
                         f"{f(s['guide_force_max_N']['F2'])} N"),
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
+        ("Spring rate min / proposed",
+         f"{f(s['spring_rate_min_N_per_m'], 0)} / "
+         f"{f(s['spring_proposal']['spring_rate_N_per_m'], 0)} N/m "
+         f"(×{s['spring_proposal']['safety_factor']:g}, preload "
+         f"{s['spring_proposal']['preload_mm']:g} mm)"),
+        ("Jump speed", "never" if s["jump_speed_rpm"] is None
+         else f"{f(s['jump_speed_rpm'], 0)} rpm"),
+        ("Shaft torque drive / brake", f"{f(s['cam_torque_max_Nm']['drive'], 3)} / "
+                                       f"{f(s['cam_torque_max_Nm']['brake'], 3)} N·m"),
+        ("Power max / mean (losses)", f"{f(s['power_max_W'], 1)} / {f(s['power_mean_W'], 2)} W"),
+        ("Flywheel ΔE / inertia", f"{f(s['flywheel_energy_J'], 3)} J / "
+                                  f"{f(s['flywheel_inertia_kg_m2'], 5)} kg·m²"),
+        ("Wear max (Archard)", f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} µm per 10⁶ cycles"),
+        ("Pitting life", "endurance" if s["pitting_life_cycles"] is None
+         else f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
+        ("Contact half-width max", f"{f(s['contact_half_width_max_mm'], 4)} mm"
+         + (" (Hertz beyond validity: conservative stress)"
+            if s["hertz_beyond_validity_deg"] else "")),
         ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
     ]
     return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)

@@ -20,6 +20,7 @@ import numpy as np
 from .model import Design, design_to_json, omega_rad_s
 from .motion import FALL, HIGH, LOW, RISE
 from .units import to_deg, to_mm, to_mpa
+from .wear import depth_per_pass, sliding_speed
 
 
 class ExportError(ValueError):
@@ -245,7 +246,9 @@ def series_columns(a) -> dict[str, np.ndarray]:
     and cam radius of curvature rho at the touching face (the rise face when both
     touch); the load F_t (Eq. 29), the guide forces, and per face (``_1`` the rise face
     S1 / left roller, ``_2`` the fall face of a double follower) F_N, rho and the Hertz
-    stress (Eq. 42; 0 where the face is idle); the shaft torque (camcore.machine)."""
+    stress (Eq. 42; 0 where the face is idle), the sliding speed and the Archard wear of
+    the cam point it touches per million passes (camcore.wear); the shaft torque
+    (camcore.machine)."""
     w = omega_rad_s(a.design)
     p = a.prog
     cols = {
@@ -265,10 +268,13 @@ def series_columns(a) -> dict[str, np.ndarray]:
         "F1_N": a.guide.F1,
         "F2_N": a.guide.F2,
     }
+    wear, slide = depth_per_pass(a), sliding_speed(a)
     for f in range(a.FN.shape[0]):
         cols[f"FN_N_{f + 1}"] = a.FN[f]
         cols[f"rho_mm_{f + 1}"] = to_mm(a.rho[f])
         cols[f"stress_MPa_{f + 1}"] = to_mpa(a.stress[f])
+        cols[f"sliding_m_per_s_{f + 1}"] = slide[f]
+        cols[f"wear_um_per_Mcycle_{f + 1}"] = wear[f] * 1e12  # m per pass -> um per 1e6
     cols["cam_torque_Nm"] = a.torque.sum(axis=0)
     return cols
 

@@ -41,6 +41,12 @@ def spring_free_load(design: Design, prog: motion.Program) -> np.ndarray:
     return d.mass_g * GRAM * (d.gravity_m_s2 + prog.A * omega_rad_s(design) ** 2)
 
 
+def spring_force(design: Design, prog: motion.Program) -> np.ndarray:
+    """k (S + s_p) [N]: the spring's share of Eq. 29."""
+    d = design.dynamics
+    return d.spring_rate_N_per_m * (prog.S + d.preload_mm * MM)
+
+
 def _over(num: np.ndarray, den: np.ndarray) -> np.ndarray:
     """num / den where num > 0 (inf where den <= 0 there), 0 where num <= 0."""
     with np.errstate(all="ignore"):  # overflow to inf is the right answer too

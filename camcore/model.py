@@ -471,6 +471,25 @@ class Material(_Part):
     follower_nu: float = Field(0.29, ge=0, lt=0.5, description="nu2 of the follower")
 
 
+class Wear(_Part):
+    """Constants of the wear and surface-fatigue estimates (camcore.wear; not from the
+    paper). Order-of-magnitude defaults for lubricated hardened steel: replace them with
+    measured values for a real pair."""
+
+    coefficient_mm3_per_N_m: float = Field(
+        1e-8, ge=0, le=1.0,
+        description="Archard specific wear rate k of the cam surface [mm^3/(N m)] "
+                    "(lubricated hardened steel ~1e-9 to 1e-7, dry steel ~1e-5)")
+    pitting_reference_cycles: float = Field(
+        1e8, gt=0, le=1e15,
+        description="cycles at which the allowable contact stress is the surface-fatigue "
+                    "strength")
+    pitting_exponent: float = Field(
+        13.2, gt=1, le=100,
+        description="slope m of the contact-stress life curve N = N_ref (sigma_allow / "
+                    "sigma)^m (13.2: ISO 6336-2 for case-hardened steel)")
+
+
 class Limits(_Part):
     """User-set design limits (not from the paper)."""
 
@@ -507,6 +526,7 @@ class Design(_Part):
     cam: Cam = Cam()
     dynamics: Dynamics = Dynamics()
     material: Material = Material()
+    wear: Wear = Wear()
     limits: Limits = Limits()
 
     @model_validator(mode="after")

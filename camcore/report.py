@@ -9,9 +9,9 @@ import math
 
 import numpy as np
 
-from . import checks, machine
-from .contact import hertz_validity
+from . import checks, machine, wear
 from .analysis import Analysis, analyze, compare
+from .contact import hertz_validity
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa
 from .motion import FALL, HIGH, RISE
 
@@ -126,6 +126,19 @@ def _hertz(a: Analysis) -> dict:
     }
 
 
+def _wear(a: Analysis) -> dict:
+    """Archard wear along the profile and the pitting-life estimate (camcore.wear)."""
+    _, depth = wear.along_profile(a)
+    life = wear.pitting_life_cycles(a)
+    revs_per_hour = a.design.cam.speed_rpm * 60.0
+    return {
+        "wear_depth_max_um_per_Mcycle": float(depth.max()) * 1e6 * 1e6,
+        "sliding_speed_max_m_per_s": float(wear.sliding_speed(a).max()),
+        "pitting_life_cycles": _finite(life),
+        "pitting_life_hours": _finite(life / revs_per_hour),
+    }
+
+
 def summary(a: Analysis) -> dict:
     """The report of one analysis as a JSON-ready dict (see README for the keys)."""
     seg = a.prog.segment
@@ -166,6 +179,7 @@ def summary(a: Analysis) -> dict:
         "total_load_high_dwell_N": _max(a.Ft, high),
         "flat_face_width_min_mm": _flat_face_width_mm(a),
         **_machine(a),
+        **_wear(a),
         "profile": {
             "area_mm2": a.profile.area * 1e6,
             "perimeter_mm": a.profile.perimeter * 1e3,
@@ -234,6 +248,11 @@ def report_text(s: dict) -> str:
         ("power max / mean", f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W"),
         ("flywheel energy / inertia", f"{_fmt(s['flywheel_energy_J'], 4)} J / "
          f"{_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2"),
+        ("wear depth max (Archard)", f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
+         f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)"),
+        ("pitting life", "endurance (stress within the allowable)"
+         if s["pitting_life_cycles"] is None else
+         f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
          f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
         ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "
@@ -269,6 +288,11 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
             "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
             "stress_high_dwell_MPa": s["contact_stress_max_MPa"]["high_dwell"],
             "max_lift_error_mm": s["verification"]["max_lift_error_mm"],
+            "wear_depth_max_um_per_Mcycle": s["wear_depth_max_um_per_Mcycle"],
+            "pitting_life_cycles": s["pitting_life_cycles"],
+            "spring_rate_min_N_per_m": s["spring_rate_min_N_per_m"],
+            "jump_speed_rpm": s["jump_speed_rpm"],
+            "cam_torque_drive_max_Nm": s["cam_torque_max_Nm"]["drive"],
         })
     return rows
 
@@ -282,6 +306,17 @@ def compare_text(rows: list[dict]) -> str:
              "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa"))]
     for r in rows:
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 3):>14}" for k in keys))
+    # the running machine: wear (the paper's claim, made measurable), life, spring, shaft
+    head = ("follower", "wear max", "pitting life", "k min", "jump speed", "T drive")
+    lines += ["", "  ".join(f"{h:>14}" for h in head),
+              "  ".join(f"{u:>14}" for u in ("", "um/Mcycle", "cycles", "N/m", "rpm", "N m"))]
+    for r in rows:
+        life = r["pitting_life_cycles"]
+        cells = (_fmt(r["wear_depth_max_um_per_Mcycle"], 4),
+                 "endurance" if life is None else f"{life:.3g}",
+                 _fmt(r["spring_rate_min_N_per_m"], 1), _fmt(r["jump_speed_rpm"], 1),
+                 _fmt(r["cam_torque_drive_max_Nm"], 3))
+        lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in cells))
     return "\n".join(lines)
 
 

@@ -41,18 +41,32 @@ class Sampled:
     chord_error: float
 
 
+def contact_travel(a, geo: profile.Geometry) -> np.ndarray:
+    """ds/dtheta [m/rad]: how fast each face's contact point moves along the cam surface
+    per radian of cam angle, (F, N), for a camcore.analysis.Local ``a``.
+
+    The face centre C runs along the pitch curve at |C'| = sqrt(Y^2 + (x_c + V)^2); the
+    contact is on the parallel curve at signed distance r, so ds = |C'| |sigma - r
+    kappa_p| dtheta. A flat face's contact turns with the cam's tangent: ds = rho dtheta."""
+    Y = geo.y0 + a.prog.S
+    rows = []
+    for i, f in enumerate(geo.faces):
+        if geo.flat:
+            rows.append(np.abs(a.rho[i]))
+        else:
+            rows.append(np.hypot(Y, f.x_c + a.prog.V) * np.abs(geo.sigma - f.r
+                                                                * a.kappa_pitch[i]))
+    return np.stack(rows)
+
+
 def density(a, geo: profile.Geometry, tol: float) -> np.ndarray:
     """Samples per radian of cam angle needed on the grid of ``a`` (a
     camcore.analysis.Local) for chords within ``tol`` [m]: max over touching faces."""
-    Y = geo.y0 + a.prog.S
     g = np.zeros(a.prog.theta.size)
-    for i, f in enumerate(geo.faces):
-        k = a.kappa_pitch[i]
+    travel = contact_travel(a, geo)
+    for i in range(len(geo.faces)):
         rho = np.abs(a.rho[i])
-        if geo.flat:  # the contact's tangent turns with the cam: ds/dtheta = rho
-            speed = rho
-        else:
-            speed = np.hypot(Y, f.x_c + a.prog.V) * np.abs(geo.sigma - f.r * k)
+        speed = travel[i]
         with np.errstate(divide="ignore", invalid="ignore"):
             need = np.where(np.isfinite(rho) & (rho > 0), speed / np.sqrt(8 * rho * tol), 0.0)
         need = np.where(np.isfinite(need), need, 1e12)

@@ -187,8 +187,7 @@ def test_conforming_concave_face_gets_the_conservative_stress():
     vanishes, Hertz's strip would be 30 mm wide and its stress tiny. There the report
     names the angles and the stress is that of the widest valid strip, higher than the
     plain formula's."""
-    from camcore.contact import (HERTZ_VALID_RATIO, compliance, hertz_line_stress,
-                                 hertz_validity)
+    from camcore.contact import HERTZ_VALID_RATIO, compliance, hertz_line_stress, hertz_validity
     from camcore.report import summary
 
     d = PAPER.with_kind("single_concave")
@@ -207,3 +206,62 @@ def test_conforming_concave_face_gets_the_conservative_stress():
     s = summary(a)
     at = math.degrees(a.theta[k])
     assert any(lo <= at <= hi for lo, hi in s["hertz_beyond_validity_deg"])
+
+
+def test_flat_face_sliding_speed_is_the_classic_closed_form():
+    """A translating flat face: the contact runs along the cam at (r_b + S + A) w and
+    along the face at A w, so it slides at w (r_b + S) (e.g. Norton, flat-faced
+    follower kinematics); wear per pass k F_N / w_cam times (r_b + S) / (r_b + S + A)."""
+    from camcore import wear
+
+    d = PAPER.with_kind("flat_face")
+    a = analyze(d, verify=False)
+    w, rb = d.cam.speed_rpm * RPM, d.cam.base_radius_mm * MM
+    S, A = a.prog.S, a.prog.A
+    np.testing.assert_allclose(wear.sliding_speed(a)[0], w * (rb + S), rtol=1e-9)
+    k = d.wear.coefficient_mm3_per_N_m * 1e-9
+    expected = k * a.FN[0] / (d.cam.width_mm * MM) * (rb + S) / (rb + S + A)
+    np.testing.assert_allclose(wear.depth_per_pass(a)[0], expected, rtol=1e-9)
+
+
+@pytest.mark.parametrize("kind", ["single_concave", "double_concave", "knife_edge"])
+def test_on_a_dwell_the_cam_slides_under_the_face(kind):
+    """On a dwell arc the follower rests: all the cam's surface speed is sliding,
+    v_s = u = w R, and each pass wears k F_N / w_cam (Archard: volume k F s over the
+    strip's area w s)."""
+    from camcore import wear
+
+    d = PAPER.with_kind(kind)
+    a = analyze(d, verify=False)
+    dwell = a.in_contact & (a.prog.V == 0)[None, :]
+    np.testing.assert_allclose(wear.sliding_ratio(a)[dwell], 1.0, rtol=1e-9)
+    k = d.wear.coefficient_mm3_per_N_m * 1e-9
+    np.testing.assert_allclose(wear.depth_per_pass(a)[dwell],
+                               k * a.FN[dwell] / (d.cam.width_mm * MM), rtol=1e-9)
+
+
+def test_rollers_roll_and_passes_add_up_along_the_profile():
+    from camcore import wear
+
+    a = analyze(PAPER.with_kind("double_roller"), verify=False)
+    assert not wear.depth_per_pass(a).any()
+    # a double concave follower: both faces slide over the high-dwell arc, and a point
+    # of it collects one pass of each (the bins hold the sum)
+    a = analyze(PAPER, verify=False)
+    h = wear.depth_per_pass(a)
+    phi, depth = wear.along_profile(a, bins=360)
+    assert depth.max() > h.max()  # two passes on the arc beat any single pass
+    assert depth.max() <= h[0].max() + h[1].max() + 1e-30
+
+
+def test_pitting_life_follows_the_stress_life_curve():
+    """N = N_ref (sigma_allow / sigma_max)^m: with the allowable set to half the
+    design's peak stress the life is N_ref / 2^m; within the allowable, endurance."""
+    from camcore import wear
+
+    a = analyze(PAPER, verify=False)
+    s_max = a.stress.max() / 1e6
+    assert wear.pitting_life_cycles(a) == math.inf
+    d = tweak(PAPER, limits__allowable_contact_stress_MPa=s_max / 2)
+    life = wear.pitting_life_cycles(analyze(d, verify=False))
+    assert life == pytest.approx(d.wear.pitting_reference_cycles / 2**d.wear.pitting_exponent)

@@ -605,5 +605,5 @@ def test_slow_finest_resolution(data):
 
 def test_field_table_is_complete():
     """The introspection found every part and numeric field (guards the fuzzing)."""
-    assert set(PARTS) == {"motion", "follower", "cam", "dynamics", "material", "limits"}
+    assert set(PARTS) == {"motion", "follower", "cam", "dynamics", "material", "wear", "limits"}
     assert len(NUMERIC) >= 24
