@@ -199,8 +199,9 @@ class Session:
             self.download_btns = {}
             for kind, label in (("json", "Design JSON"), ("stl", "Cam STL (mm)"),
                                 ("dxf", "Profile DXF (mm)"), ("csv", "Profile CSV"),
-                                ("series", "Per-angle CSV"), ("html", "Printable report"),
-                                ("pdf", "Report PDF")):
+                                ("series", "Per-angle CSV"),
+                                ("toolpath", "G-code (cutter path)"),
+                                ("html", "Printable report"), ("pdf", "Report PDF")):
                 b = gui.add_button(label)
                 b.on_click(lambda _, k=kind: self.download(k))
                 self.download_btns[kind] = b

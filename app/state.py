@@ -62,6 +62,8 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         Spec("cam.speed_rpm", "Speed [rpm]", "number", step=10),
         Spec("cam.bore_diameter_mm", "Bore diameter [mm]", "number", step=1,
              hint="shaft bore of the exported solid; 0 = solid blank"),
+        Spec("cam.cutter_diameter_mm", "Cutter diameter [mm]", "number", step=1,
+             hint="end mill for the G-code download; refused where it would gouge"),
     )),
     ("Dynamics", False, (
         Spec("dynamics.mass_g", "Mass M [g]", "number", step=1),

@@ -92,6 +92,8 @@ def _design(args) -> Design:
     sets = list(getattr(args, "set", None) or [])
     if getattr(args, "tolerance_mm", None) is not None:
         sets.append(f"limits.export_tolerance_mm={args.tolerance_mm!r}")
+    if getattr(args, "cutter_diameter_mm", None) is not None:
+        sets.append(f"cam.cutter_diameter_mm={args.cutter_diameter_mm!r}")
     if sets:
         from .model import design_from_json
 
@@ -185,7 +187,7 @@ def _export(args) -> int:
     return EXIT_VALID
 
 
-EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "json", "html", "pdf")
+EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "toolpath", "json", "html", "pdf")
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -233,6 +235,8 @@ def _parser() -> argparse.ArgumentParser:
     e.add_argument("--tolerance-mm", type=float, metavar="MM",
                    help="largest distance of the exported polyline from the exact cam "
                         "(default: the design's limits.export_tolerance_mm, 0.001 mm)")
+    e.add_argument("--cutter-diameter-mm", type=float, metavar="D",
+                   help="end mill for --toolpath (default: cam.cutter_diameter_mm, 10 mm)")
     e.set_defaults(run=_export)
     return p
 

@@ -309,12 +309,21 @@ EXPORTS: dict[str, ExportKind] = {
     "series": ExportKind("_series.csv", "CSV per cam angle: S, V, A, J (per rad and per "
                          "second), pressure angle, rho, forces, stress, torque",
                          lambda a: series_csv_text(a).encode()),
+    "toolpath": ExportKind(".nc", "G-code of the cutter-centre path (mm; cutter "
+                           "cam.cutter_diameter_mm, refused where it would gouge)",
+                           lambda a: _toolpath().gcode(a).encode()),
     "json": ExportKind(".json", "the design as JSON", lambda a: json_text(a.design).encode()),
     "html": ExportKind("_report.html", "the printable design report (self-contained HTML)",
                        lambda a: _document().html_report(a).encode()),
     "pdf": ExportKind("_report.pdf", "the printable design report as PDF",
                       lambda a: _document().pdf_report(a)),
 }
+
+
+def _toolpath():
+    from . import toolpath  # it imports ExportError from here
+
+    return toolpath
 
 
 def _document():

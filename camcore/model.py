@@ -370,6 +370,10 @@ class Cam(_Part):
         0.0, ge=0, le=5000,
         description="depth t2 of the keyway into the hub, beyond the bore radius [mm]",
     )
+    cutter_diameter_mm: float = Field(
+        10.0, gt=0, le=500,
+        description="diameter D of the end mill for the toolpath export [mm]",
+    )
 
     @model_validator(mode="after")
     def _bore_inside_base_circle(self) -> Cam:

@@ -188,7 +188,8 @@ def test_preset_and_downloads(tab):
     assert abs(mesh.volume - expect) / expect < 1e-6
     s.download_btns["json"].value = True
     assert s.last_download[1].decode().startswith("{")
-    for kind, ext in (("dxf", ".dxf"), ("csv", "_profile.csv"), ("series", "_series.csv")):
+    for kind, ext in (("dxf", ".dxf"), ("csv", "_profile.csv"), ("series", "_series.csv"),
+                      ("toolpath", ".nc")):
         s.download_btns[kind].value = True
         assert s.last_download[0].endswith(ext) and len(s.last_download[1]) > 1000
 

@@ -1,0 +1,166 @@
+"""Cutting the cam: the cutter-centre path of a 2-axis contour, and G-code for it.
+
+An end mill of diameter D cutting the outside of the cam runs with its centre on the
+profile offset outward by d = D / 2. Each offset vertex is the profile vertex moved by
+d along its outward normal (the bisector of its two edges' normals, the curve's normal
+to second order). Where the cam is concave tighter than the cutter (a concave radius
+below d), the offset folds back and the cutter would cut into the cam (gouge): the
+path is then refused, with the cam-angle ranges where it happens.
+
+The gouge check is geometric, not taken from the curvature formulas: no point of the
+cutter-centre path may come nearer to the profile polyline than d, less twice the
+chord error (every path vertex is tested against every profile edge within reach,
+found with a k-d tree).
+
+Chordal accuracy. The profile's chords lie within its measured chord error e of the
+exact cam; offsetting by d scales a chord's sagitta on a convex stretch of radius rho
+by (rho + d) / rho, so the path lies within e (1 + d kappa_max) of the exact offset
+(kappa_max the largest convex curvature of the polyline); this bound is written into
+the G-code header.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .export import ExportError
+from .units import MM, to_deg, to_mm
+
+SAFE_Z_MM = 5.0  # rapid height above the blank's top face
+FEED_MM_PER_MIN = 200.0
+PLUNGE_MM_PER_MIN = 50.0
+
+
+class GougeError(ExportError):
+    """The cutter does not fit: it would cut into the cam at the listed ranges."""
+
+
+def vertex_normals(points: np.ndarray) -> np.ndarray:
+    """Outward unit normals (M, 2) of a closed counter-clockwise polyline: the bisector
+    of the two adjacent edges' outward normals (dy, -dx)."""
+    edge = np.roll(points, -1, axis=0) - points
+    n = np.stack([edge[:, 1], -edge[:, 0]], axis=1)
+    n /= np.hypot(n[:, 0], n[:, 1])[:, None]
+    v = n + np.roll(n, 1, axis=0)
+    return v / np.hypot(v[:, 0], v[:, 1])[:, None]
+
+
+def discrete_curvature(points: np.ndarray) -> np.ndarray:
+    """Signed curvature [1/m] at each vertex of a closed CCW polyline (the circle through
+    it and its neighbours; > 0 convex)."""
+    a, b, c = np.roll(points, 1, axis=0), points, np.roll(points, -1, axis=0)
+    ab, bc, ca = b - a, c - b, a - c
+    cross = ab[:, 0] * bc[:, 1] - ab[:, 1] * bc[:, 0]
+    la, lb, lc = (np.hypot(v[:, 0], v[:, 1]) for v in (ab, bc, ca))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.nan_to_num(2.0 * cross / (la * lb * lc))
+
+
+def _distance_to_polyline(q: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
+    """Distance [m] of each point q to the closed polyline, for points within ``reach``
+    of it (larger distances come back as reach)."""
+    a = points
+    b = np.roll(points, -1, axis=0)
+    seg = b - a
+    half = 0.5 * float(np.hypot(seg[:, 0], seg[:, 1]).max())
+    tree = cKDTree(0.5 * (a + b))  # edge midpoints: an edge within reach has its
+    out = np.full(q.shape[0], reach)  # midpoint within reach + half its longest length
+    for i, near in enumerate(tree.query_ball_point(q, reach + half)):
+        if not near:
+            continue
+        j = np.asarray(near)
+        ap = q[i] - a[j]
+        L2 = (seg[j] ** 2).sum(axis=1)
+        t = np.clip((ap * seg[j]).sum(axis=1) / np.where(L2 > 0, L2, 1.0), 0.0, 1.0)
+        d = np.hypot(*(ap - t[:, None] * seg[j]).T)
+        out[i] = min(out[i], float(d.min()))
+    return out
+
+
+def _runs_deg(theta: np.ndarray, bad: np.ndarray) -> list[tuple[float, float]]:
+    """Contiguous runs of ``bad`` as (first, last) cam angles [deg]."""
+    out, start = [], None
+    for i, b in enumerate(bad):
+        if b and start is None:
+            start = i
+        if start is not None and (not b or i == bad.size - 1):
+            end = i if b else i - 1
+            out.append((float(to_deg(theta[start])), float(to_deg(theta[end]))))
+            start = None
+    return out
+
+
+def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, float]:
+    """The cutter-centre path [m] (M, 2, cam frame, counter-clockwise) of ``a`` (an
+    Analysis) and its chordal bound [m]; GougeError where the cutter does not fit.
+
+    cutter_diameter [m]: default the design's cam.cutter_diameter_mm."""
+    D = a.design.cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
+    d = 0.5 * D
+    pts = a.profile.points
+    path = pts + d * vertex_normals(pts)
+    gap = _distance_to_polyline(path, pts, d)
+    # the exact cam is within the chord error e of the polyline, and on a concave
+    # stretch looser than the cutter the offset vertices come within d e / |rho| < e of
+    # the chords: only a shortfall beyond 2 e is the cutter reaching into the cam
+    e = max(a.chord_error, a.design.limits.export_tolerance_mm * MM)
+    bad = gap < d - 2 * e - 1e-12
+    if bad.any():
+        ranges = _runs_deg(a.profile.theta, bad)
+        where = ", ".join(f"{lo:.2f}-{hi:.2f}" for lo, hi in ranges[:8])
+        raise GougeError(
+            f"a {to_mm(D):g} mm cutter would gouge the cam (a concave stretch tighter than "
+            f"its radius) at cam angles {where} deg; the tightest concave radius is "
+            f"{to_mm(_tightest_concave(pts)):.3g} mm: use a cutter of at most twice that")
+    kappa = max(float(discrete_curvature(pts).max()), 0.0)
+    return path, a.chord_error * (1.0 + d * kappa)
+
+
+def _tightest_concave(points: np.ndarray) -> float:
+    k = discrete_curvature(points)
+    return 1.0 / -k.min() if k.min() < 0 else math.inf
+
+
+def _comment(text: str) -> str:
+    """A G-code comment: parentheses and anything unusual stripped (a design name is
+    user input; in G-code a ')' would end the comment and run the rest)."""
+    return "(" + re.sub(r"[^A-Za-z0-9 _.,:=+\-/]", "_", text)[:80] + ")"
+
+
+def gcode(a, cutter_diameter: float | None = None) -> str:
+    """G-code (RS-274, millimetres, absolute) that cuts the cam's outside contour.
+
+    The blank's top face is Z = 0; the cut goes through the cam width. Cam frame: the
+    axis at X = Y = 0, theta = 0 on +Y (the DXF datum). Climb milling with a
+    clockwise spindle: the path runs clockwise around the cam. Lead-in: a rapid to a
+    point 1 D outside the path along its outward normal, plunge there (off the part),
+    a straight feed onto the path; the same way out."""
+    D = a.design.cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
+    path, bound = cutter_path(a, D)
+    path = to_mm(path[::-1])  # clockwise
+    n = vertex_normals(to_mm(a.profile.points))[::-1]
+    start, lead = path[0], path[0] + to_mm(D) * n[0]
+    depth = a.design.cam.width_mm
+    lines = [
+        "%",
+        _comment(f"cam contour: {a.design.name}"),
+        _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
+        _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, "
+                 "theta = 0 on +Y"),
+        _comment(f"path within {to_mm(bound):.3g} mm of the exact offset, climb, clockwise"),
+        "G21 G90 G17 G40 G49 G80",
+        f"G0 Z{SAFE_Z_MM:.3f}",
+        f"G0 X{lead[0]:.4f} Y{lead[1]:.4f}",
+        "M3",
+        f"G1 Z{-depth:.4f} F{PLUNGE_MM_PER_MIN:g}",
+        f"G1 X{start[0]:.4f} Y{start[1]:.4f} F{FEED_MM_PER_MIN:g}",
+    ]
+    lines += [f"X{x:.4f} Y{y:.4f}" for x, y in path[1:]]
+    lines += [f"X{start[0]:.4f} Y{start[1]:.4f}",
+              f"X{lead[0]:.4f} Y{lead[1]:.4f}",
+              f"G0 Z{SAFE_Z_MM:.3f}", "M5", "M30", "%"]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,98 @@
+"""Cutting the cam (issue 11): the cutter-centre path, its gouge check against the
+cam's analytic curvature, and the G-code, read back."""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+import pytest
+
+from camcore import toolpath
+from camcore.analysis import analyze
+from camcore.model import Design, load_preset
+from camcore.units import MM
+
+PAPER = load_preset("paper_example")
+
+
+def concave_roller_cam() -> Design:
+    """A single-roller cam with a concave flank (rho < 0 on the rise)."""
+    data = PAPER.with_kind("single_roller").model_dump(mode="json")
+    data["cam"]["base_radius_mm"] = 20.0
+    data["motion"]["rise_deg"] = 40.0
+    return Design.model_validate(data)
+
+
+def brute_distance(q: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Distance of each q to the closed polyline, every edge (the O(N M) reference)."""
+    a, b = pts, np.roll(pts, -1, axis=0)
+    ab = b - a
+    out = np.empty(q.shape[0])
+    for i, p in enumerate(q):
+        t = np.clip(((p - a) * ab).sum(1) / (ab * ab).sum(1), 0, 1)
+        out[i] = np.hypot(*(p - a - t[:, None] * ab).T).min()
+    return out
+
+
+def test_cutter_path_keeps_the_cutter_radius_from_the_cam():
+    a = analyze(PAPER)
+    D = 12 * MM
+    path, bound = toolpath.cutter_path(a, D)
+    dist = brute_distance(path, a.profile.points)
+    np.testing.assert_allclose(dist, D / 2, atol=2 * a.chord_error + 1e-12)
+    assert bound < 2 * a.chord_error  # the convex cam barely stretches its chords
+    # the path runs round the cam at r_b + D/2 on the base circle
+    rb = PAPER.cam.base_radius_mm * MM
+    assert np.hypot(*path.T).min() == pytest.approx(rb + D / 2, abs=1e-6)
+
+
+def test_the_cutter_may_not_be_wider_than_the_tightest_concave_stretch():
+    """The geometric gouge check agrees with the analytic curvature (Eq. 21): a cutter
+    3 % under twice the smallest concave radius passes, 3 % over is refused, with the
+    cam angle of that radius inside a reported range."""
+    d = concave_roller_cam()
+    a = analyze(d)
+    concave = np.where(a.in_contact & (a.rho < 0), -a.rho, np.inf)
+    f, k = np.unravel_index(np.argmin(concave), concave.shape)
+    rho_min = concave[f, k]
+    toolpath.cutter_path(a, 2 * rho_min * 0.97)
+    with pytest.raises(toolpath.GougeError) as err:
+        toolpath.cutter_path(a, 2 * rho_min * 1.03)
+    at = math.degrees(a.theta[k])
+    ranges = [tuple(map(float, r.split("-"))) for r in
+              re.search(r"cam angles (.*) deg", str(err.value)).group(1).split(", ")]
+    assert any(lo - 1 <= at <= hi + 1 for lo, hi in ranges)
+
+
+def test_gcode_reads_back_to_the_path():
+    a = analyze(PAPER)
+    D = 10 * MM
+    text = toolpath.gcode(a, D)
+    assert text.startswith("%\n") and "G21" in text and "M30" in text
+    xy = np.array([(float(m[1]), float(m[2])) for m in
+                   re.finditer(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", text)])
+    path = toolpath.cutter_path(a, D)[0] / MM
+    lead, cut = xy[0], xy[1:-1]
+    # every path vertex is cut, clockwise (climb), and the contour closes
+    assert cut.shape[0] == path.shape[0] + 1
+    np.testing.assert_allclose(cut[:-1], path[::-1], atol=1e-4)
+    np.testing.assert_allclose(cut[-1], cut[0])
+    area = 0.5 * np.sum(cut[:-1, 0] * np.roll(cut[:-1, 1], -1)
+                        - np.roll(cut[:-1, 0], -1) * cut[:-1, 1])
+    assert area < 0  # clockwise
+    # the plunge happens off the part: a cutter there clears the cam by D/2 at least
+    assert brute_distance(lead[None] * MM, a.profile.points)[0] >= 1.5 * D - 1e-6
+    z = [float(m) for m in re.findall(r"Z(-?\d+\.\d+)", text)]
+    assert z[0] > 0 and min(z) == pytest.approx(-PAPER.cam.width_mm) and z[-1] > 0
+
+
+def test_design_name_cannot_break_out_of_a_gcode_comment():
+    d = PAPER.model_copy(update={"name": "x) G0 Z-50 (\nM3"})
+    text = toolpath.gcode(analyze(d, verify=False))
+    for line in text.splitlines():
+        if line.startswith("("):
+            assert line.count("(") == 1 and line.count(")") == 1 and line.endswith(")")
+    code = [line for line in text.splitlines() if not line.startswith("(")]
+    assert not any("Z-50" in line for line in code)  # the name stays inside its comment
