@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from camcore import machine, wear
+from camcore import machine, train, wear
 from camcore.checks import rho_reference_mm
 
 MAX_POINTS = 720
@@ -101,6 +101,13 @@ def _primary_deg(a):
     return np.degrees(a.primary(a.pressure_angle))
 
 
+def _train_force(a) -> np.ndarray:
+    """The elastic train's contact force on the analysis grid (the rigid load if none)."""
+    if a.train is None:
+        return a.Ft
+    return train.on_grid(a.train, a.theta, a.train.contact_force)
+
+
 def build_curves(gui, a) -> list[Curve]:
     """The plots of the Curves tab."""
     lim = a.design.limits.max_pressure_angle_deg
@@ -155,6 +162,13 @@ def build_curves(gui, a) -> list[Curve]:
             {"label": "needed −M(g+Aω²) [N]", "scale": "N", "stroke": "#d62728",
              "dash": [6, 4], "fn": lambda a: -machine.spring_free_load(a.design, a.prog)},
         ], codes={"jump"}),
+        Curve(gui, "Axial load: rigid F_t (Eq. 29) and elastic train F_c (set its "
+              "stiffness in Dynamics)", [("N", "force [N]")], [
+            {"label": "rigid F_t [N]", "scale": "N", "stroke": COLORS[0],
+             "fn": lambda a: a.Ft},
+            {"label": "elastic F_c [N]", "scale": "N", "stroke": COLORS[1],
+             "fn": _train_force},
+        ], codes={"dynamic_jump"}),
         Curve(gui, "Shaft torque T (positive: the shaft drives)", [("Nm", "T [N·m]")], [
             {"label": "T [N·m]", "scale": "Nm", "stroke": COLORS[0],
              "fn": lambda a: a.torque.sum(axis=0)},

@@ -30,6 +30,7 @@ class Spec:
     options: tuple[str, ...] = ()
     hint: str | None = None
     extra: dict = field(default_factory=dict)
+    zero_is_none: bool = False  # an optional field: the control shows 0 for "not set"
 
 
 LAWS = tuple(m.value for m in MotionLaw)
@@ -75,6 +76,12 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         Spec("dynamics.overhang_mm", "Overhang l1 [mm]", "number", step=1),
         Spec("dynamics.gravity_m_s2", "Gravity g [m/s²]", "number", step=0.01),
         Spec("dynamics.overhang_shrinks", "Overhang shrinks with lift", "checkbox"),
+        Spec("dynamics.train_stiffness_N_per_m", "Train stiffness k₁ [N/m]", "number",
+             step=1e4, hint="0 = rigid follower (the paper); else the elastic train model",
+             zero_is_none=True),
+        Spec("dynamics.damping_ratio", "Train damping ratio ζ", "number", step=0.01),
+        Spec("dynamics.spring_mass_g", "Spring mass [g]", "number", step=1,
+             hint="a third moves with the follower (elastic train)"),
         Spec("dynamics.spring_safety_factor", "Spring safety factor n", "number", step=0.1,
              hint="proposed spring: its force is n times what just keeps contact"),
         Spec("dynamics.speed_fluctuation", "Speed fluctuation C_s", "number", step=0.005,
@@ -97,6 +104,7 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
 )
 
 SPECS: tuple[Spec, ...] = tuple(s for _, _, specs in FOLDERS for s in specs)
+NONE_AS_ZERO = frozenset(s.path for s in SPECS if s.zero_is_none)
 
 
 def get_path(design: Design, path: str):
@@ -108,6 +116,8 @@ def get_path(design: Design, path: str):
             obj = getattr(obj, part)
     except ValueError:
         return None
+    if obj is None and path in NONE_AS_ZERO:
+        return 0.0
     return obj.value if hasattr(obj, "value") else obj
 
 
@@ -121,7 +131,7 @@ def merged(base: Design, values: dict[str, object]) -> dict:
         group, key = path.split(".")
         if group == "motion" and not classic:
             continue
-        data[group][key] = v
+        data[group][key] = None if path in NONE_AS_ZERO and v == 0 else v
     return data
 
 

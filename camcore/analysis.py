@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from . import checks, extremes, forces, motion, profile, sampling
+from . import checks, extremes, forces, motion, profile, sampling, train
 from .contact import contact_stress
 from .model import PAPER_FOLLOWERS, Design, FollowerKind
 from .units import MM
@@ -84,6 +84,7 @@ class Analysis(Local):
     worst: dict = field(default_factory=dict)  # camcore.extremes.worst_values
     violations: list[checks.Violation] = field(default_factory=list)
     lift_error: float | None = None  # max |lift - S| [m] of the geometric check
+    train: train.Response | None = None  # elastic follower train (None: rigid)
 
     @property
     def theta(self) -> np.ndarray:
@@ -175,7 +176,7 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
         design.limits.export_tolerance_mm * MM)
     result = Analysis(**vars(loc), design=design, geo=geo, segments=segs,
                       profile=made.polyline, chord_error=made.chord_error, stations=st)
-    result = replace(result, worst=extremes.worst_values(result))
+    result = replace(result, worst=extremes.worst_values(result), train=train.respond(design))
     lift_error = None
     if verify:
         from .verify import max_lift_error

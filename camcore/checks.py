@@ -318,10 +318,28 @@ def _forces(a) -> list[Violation]:
     return out
 
 
+def _train(a) -> list[Violation]:
+    """The elastic follower train (camcore.train) leaves the cam where its contact force
+    F_c <= 0: the dynamic jump, which a rigid analysis cannot see."""
+    r = a.train
+    if r is None:
+        return []
+    bad = r.contact_force <= 0
+    if not bad.any():
+        return []
+    ranges = runs_deg(r.theta, bad)
+    low = float(r.contact_force.min())
+    return [Violation(
+        "dynamic_jump", "Eqs. 29-41, elastic train",
+        f"the elastic follower train leaves the cam: F_c = {low:.3g} N <= 0 at "
+        f"{_where(ranges)} (natural frequency {r.natural_frequency / (2 * math.pi):.4g} Hz; "
+        "stiffen the train, raise the spring, or slow down)", ranges, -low)]
+
+
 def run_all(a, lift_error: float | None) -> list[Violation]:
     """Every violation of ``a`` (a camcore.analysis.Analysis)."""
     out = (_curvature_rules(a) + _pressure_angle(a) + _contact_stress(a) + _dwell_arcs(a)
-           + _continuity(a) + _forces(a))
+           + _continuity(a) + _forces(a) + _train(a))
     if not a.profile.is_star_shaped():
         out.append(Violation(
             "profile_crossing", "star-shaped profile",

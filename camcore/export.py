@@ -19,6 +19,7 @@ import numpy as np
 
 from .model import Design, design_to_json, omega_rad_s
 from .motion import FALL, HIGH, LOW, RISE
+from .train import on_grid
 from .units import to_deg, to_mm, to_mpa
 from .wear import depth_per_pass, sliding_speed
 
@@ -276,6 +277,9 @@ def series_columns(a) -> dict[str, np.ndarray]:
         cols[f"sliding_m_per_s_{f + 1}"] = slide[f]
         cols[f"wear_um_per_Mcycle_{f + 1}"] = wear[f] * 1e12  # m per pass -> um per 1e6
     cols["cam_torque_Nm"] = a.torque.sum(axis=0)
+    if a.train is not None:  # the elastic follower train (camcore.train)
+        cols["Fc_train_N"] = on_grid(a.train, a.theta, a.train.contact_force)
+        cols["x_train_mm"] = to_mm(on_grid(a.train, a.theta, a.train.x))
     return cols
 
 

@@ -422,6 +422,15 @@ class Dynamics(_Part):
     overhang_shrinks: bool = Field(
         True, description="l1 = l1_0 - S (the stem slides further into the guide as it rises)"
     )
+    train_stiffness_N_per_m: float | None = Field(
+        None, gt=0, le=1e12,
+        description="stiffness k_1 of the follower train between the cam contact and the "
+                    "follower mass [N/m]; empty = rigid follower (the paper's model)")
+    damping_ratio: float = Field(
+        0.05, ge=0, le=2.0, description="damping ratio zeta of the follower train")
+    spring_mass_g: float = Field(
+        0.0, ge=0, le=1e7,
+        description="return spring's own mass [g]; a third of it moves with the follower")
     spring_safety_factor: float = Field(
         1.5, ge=1.0, le=100.0,
         description="proposed spring: its force is this many times the force that just "

@@ -9,10 +9,10 @@ import math
 
 import numpy as np
 
-from . import checks, machine, wear
+from . import checks, machine, train, wear
 from .analysis import Analysis, analyze, compare
 from .contact import hertz_validity
-from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa
+from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
 from .motion import FALL, HIGH, RISE
 
 R2D = 180.0 / math.pi
@@ -139,6 +139,23 @@ def _wear(a: Analysis) -> dict:
     }
 
 
+def _train(a: Analysis) -> dict | None:
+    """The elastic follower train's steady state (camcore.train); None when rigid."""
+    r = a.train
+    if r is None:
+        return None
+    w = omega_rad_s(a.design)
+    return {
+        "natural_frequency_Hz": r.natural_frequency / (2 * math.pi),
+        "frequency_ratio": r.natural_frequency / w,
+        "contact_force_min_N": float(r.contact_force.min()),
+        "contact_force_max_N": float(r.contact_force.max()),
+        "error_max_mm": float(np.abs(r.x - r.s).max()) * 1e3,
+        "residual_vibration": train.residual_vibration(a.design, r),
+        "dynamic_jump_deg": [list(x) for x in checks.runs_deg(r.theta, r.contact_force <= 0)],
+    }
+
+
 def summary(a: Analysis) -> dict:
     """The report of one analysis as a JSON-ready dict (see README for the keys)."""
     seg = a.prog.segment
@@ -180,6 +197,7 @@ def summary(a: Analysis) -> dict:
         "flat_face_width_min_mm": _flat_face_width_mm(a),
         **_machine(a),
         **_wear(a),
+        "train": _train(a),
         "profile": {
             "area_mm2": a.profile.area * 1e6,
             "perimeter_mm": a.profile.perimeter * 1e3,
@@ -253,6 +271,14 @@ def report_text(s: dict) -> str:
         ("pitting life", "endurance (stress within the allowable)"
          if s["pitting_life_cycles"] is None else
          f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
+        ("elastic train", "rigid (dynamics.train_stiffness_N_per_m not set)"
+         if s["train"] is None else
+         f"f_n = {s['train']['natural_frequency_Hz']:.4g} Hz ({s['train']['frequency_ratio']:.3g}"
+         f" x cam speed), F_c {s['train']['contact_force_min_N']:.4g} .. "
+         f"{s['train']['contact_force_max_N']:.4g} N, error max "
+         f"{s['train']['error_max_mm']:.3g} mm, residual "
+         + ", ".join(f"{v['amplitude_mm']:.3g}" for v in s["train"]["residual_vibration"])
+         + " mm"),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
          f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
         ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "

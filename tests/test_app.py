@@ -420,3 +420,24 @@ def test_segment_table_edits_the_program(tab):
     assert abs(s.theta_deg - 350.0) < 0.6
     s.goto_station("12")  # no such station: ignored
     assert abs(s.theta_deg - 350.0) < 0.6
+
+
+def test_running_machine_controls_and_curves(tab):
+    """Issue 11 in the app: the elastic train switches on from 0 (rigid) to a stiffness,
+    its dynamic jump is reported and shaded, the key numbers name the spring, jump speed,
+    torque and wear, and back to 0 restores the rigid follower."""
+    s = tab
+    assert s.design.dynamics.train_stiffness_N_per_m is None
+    assert s.controls["dynamics.train_stiffness_N_per_m"].value == 0.0
+    for text in ("Spring rate min", "Jump speed", "Shaft torque", "Wear max", "Pitting life"):
+        assert text in s.summary_md.content
+    s.controls["dynamics.damping_ratio"].value = 0.02
+    s.controls["dynamics.train_stiffness_N_per_m"].value = 2e4
+    assert s.design.dynamics.train_stiffness_N_per_m == 2e4
+    assert "dynamic_jump" in {v.code for v in s.analysis.violations}
+    train_plot = next(c for c in s.curves if "elastic train" in c.handle.title)
+    assert np.max(train_plot.shade) > 0  # the jump is shaded on its curve
+    elastic, rigid = np.array(train_plot.handle.data[2]), np.array(train_plot.handle.data[1])
+    assert np.nanmin(elastic) < 0 < np.nanmin(rigid)
+    s.controls["dynamics.train_stiffness_N_per_m"].value = 0.0
+    assert s.design.dynamics.train_stiffness_N_per_m is None and s.analysis.train is None

@@ -1,0 +1,112 @@
+"""The follower train as a spring-mass-damper (one degree of freedom), beyond the paper's
+rigid follower (issue 11).
+
+The cam imposes the displacement s(t) at the contact; the follower mass m (the
+follower's M plus a third of the return spring's mass, the usual lumping) is joined to
+it through the train's stiffness k_1 and damping c, and held down by the return spring
+k_2 = k with preload s_p and by its weight:
+
+    m x'' = k_1 (s - x) + c (s' - x') - k_2 (x + s_p) - m g
+
+(the single-DOF model of force-closed cam dynamics, e.g. Norton, *Design of Machinery*,
+cam dynamics chapter). The contact force along the axis is F_c = k_1 (s - x) + c (s' -
+x'); it takes the place of the rigid load F_t of Eq. 29, and with the guide solve
+(Eqs. 33-41, linear in F_t) F_N = F_N,rigid F_c / F_t. The follower leaves the cam
+where F_c <= 0 (dynamic jump). As k_1 grows, x -> s and F_c -> F_t: the rigid model
+comes back (tested).
+
+At constant cam speed the steady state is periodic with the cam's period, so it is
+solved exactly per harmonic: on a uniform grid of the cycle, X_n = [(k_1 + i n w c)
+S_n - F_0 delta_n0] / (K - m (n w)^2 + i n w c), K = k_1 + k_2, F_0 = k_2 s_p + m g
+(numpy FFT, vectorized; no time stepping, no start-up transient). The grid resolves
+the natural frequency with margin (at least 16 samples per natural period).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import motion
+from .model import Design, omega_rad_s
+from .units import GRAM, MM
+
+MIN_SAMPLES = 4096
+MAX_SAMPLES = 1 << 20
+
+
+@dataclass(frozen=True)
+class Response:
+    """Steady-state response of the elastic follower train over one cam turn."""
+
+    theta: np.ndarray  # uniform cam angles [rad], 0 .. 2 pi (exclusive)
+    s: np.ndarray  # cam-imposed displacement S(theta) [m]
+    x: np.ndarray  # follower mass displacement [m]
+    contact_force: np.ndarray  # F_c [N] along the follower axis
+    natural_frequency: float  # omega_n [rad/s]
+    mass: float  # m [kg]
+
+
+def natural_frequency(design: Design) -> float:
+    """omega_n = sqrt((k_1 + k_2) / m) [rad/s] of the train (nan when rigid)."""
+    d = design.dynamics
+    if d.train_stiffness_N_per_m is None:
+        return math.nan
+    return math.sqrt((d.train_stiffness_N_per_m + d.spring_rate_N_per_m) / _mass(design))
+
+
+def _mass(design: Design) -> float:
+    d = design.dynamics
+    return (d.mass_g + d.spring_mass_g / 3.0) * GRAM
+
+
+def respond(design: Design) -> Response | None:
+    """The steady-state response at the design speed; None for a rigid follower."""
+    d = design.dynamics
+    if d.train_stiffness_N_per_m is None:
+        return None
+    w = omega_rad_s(design)
+    m, k1, k2 = _mass(design), d.train_stiffness_N_per_m, d.spring_rate_N_per_m
+    K = k1 + k2
+    c = 2.0 * d.damping_ratio * math.sqrt(K * m)
+    wn = math.sqrt(K / m)
+    n = MIN_SAMPLES
+    while n < MAX_SAMPLES and n < 16 * wn / w:
+        n *= 2
+    theta = np.arange(n) * (2 * math.pi / n)
+    s = motion.program(design, theta).S
+    S = np.fft.rfft(s)
+    h = np.arange(S.size) * w  # harmonic frequencies [rad/s]
+    denom = K - m * h**2 + 1j * h * c
+    F0 = k2 * d.preload_mm * MM + m * d.gravity_m_s2
+    X = (k1 + 1j * h * c) * S / denom
+    X[0] -= F0 * n / denom[0]  # rfft scaling: the mean is S_0 / n
+    x = np.fft.irfft(X, n)
+    # F_c = k_1 (s - x) + c (s' - x'), the derivative per harmonic (i h)
+    Fc = k1 * (s - x) + c * np.fft.irfft(1j * h * (S - X), n)
+    return Response(theta, s, x, Fc, wn, m)
+
+
+def on_grid(resp: Response, theta: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """Periodic linear interpolation of a response quantity to other cam angles."""
+    return np.interp(np.mod(theta, 2 * math.pi), resp.theta, values, period=2 * math.pi)
+
+
+def residual_vibration(design: Design, resp: Response) -> list[dict]:
+    """The ringing each rise or fall leaves in the dwell after it: half the peak-to-peak
+    of x - s over that dwell (the train's static compression, constant there, drops
+    out). A well-chosen law leaves little."""
+    segs = motion.segments(design)
+    out = []
+    th = resp.theta
+    for j, g in enumerate(segs):
+        if g.is_motion or not segs[j - 1].is_motion:
+            continue
+        m = (th >= g.start) & (th < g.end)
+        if m.any():
+            e = resp.x[m] - resp.s[m]
+            out.append({"start_deg": math.degrees(g.start),
+                        "amplitude_mm": 0.5 * float(e.max() - e.min()) / MM})
+    return out

@@ -1,0 +1,106 @@
+"""The elastic follower train (issue 11): single-DOF steady state checked against the
+closed-form response to one harmonic, the rigid limit, and resonance."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from camcore import machine, motion, train
+from camcore.analysis import analyze
+from camcore.model import Design, load_preset
+from camcore.units import GRAM, MM, RPM
+
+PAPER = load_preset("paper_example")
+
+
+def harmonic_cam(speed_rpm: float = 1200.0, **dynamics) -> Design:
+    """S = h/2 (1 - cos theta): a simple-harmonic rise over 180 deg and fall over 180
+    deg is exactly one harmonic of the cam speed."""
+    data = PAPER.model_dump(mode="json")
+    data["motion"] = {"segments": [
+        {"kind": "rise", "angle_deg": 180, "lift_mm": 10, "law": "simple_harmonic"},
+        {"kind": "fall", "angle_deg": 180, "lift_mm": 10, "law": "simple_harmonic"}]}
+    data["limits"]["require_continuous_acceleration"] = False
+    data["cam"]["speed_rpm"] = speed_rpm
+    data["dynamics"].update(dynamics)
+    return Design.model_validate(data)
+
+
+def test_one_harmonic_matches_the_closed_form():
+    """m x'' + c x' + K x = k1 s + c s' - F0 with s = h/2 - h/2 cos(w t): the steady
+    state is x = (k1 h/2 - F0)/K - (h/2) Re[G e^{i w t}], G = (k1 + i w c)/(K - m w^2 +
+    i w c)."""
+    d = harmonic_cam(train_stiffness_N_per_m=2e5, damping_ratio=0.1, spring_mass_g=30.0)
+    r = train.respond(d)
+    dyn, w = d.dynamics, d.cam.speed_rpm * RPM
+    m = (dyn.mass_g + 10.0) * GRAM
+    k1, k2 = 2e5, dyn.spring_rate_N_per_m
+    K = k1 + k2
+    c = 2 * 0.1 * math.sqrt(K * m)
+    h = 10 * MM
+    F0 = k2 * dyn.preload_mm * MM + m * dyn.gravity_m_s2
+    G = (k1 + 1j * w * c) / (K - m * w**2 + 1j * w * c)
+    x = (k1 * h / 2 - F0) / K - (h / 2) * np.real(G * np.exp(1j * r.theta))
+    np.testing.assert_allclose(r.x, x, atol=1e-9 * h)
+    assert r.natural_frequency == pytest.approx(math.sqrt(K / m))
+    s = h / 2 * (1 - np.cos(r.theta))
+    np.testing.assert_allclose(r.s, s, atol=1e-12)
+    Fc = k1 * (s - x) + c * w * (h / 2 * np.sin(r.theta)
+                                 + (h / 2) * np.real(1j * G * np.exp(1j * r.theta)))
+    np.testing.assert_allclose(r.contact_force, Fc, atol=1e-6 * np.abs(Fc).max())
+
+
+def test_a_stiff_train_gives_back_the_rigid_model():
+    """k1 -> inf: x -> S and F_c -> F_t of Eq. 29 (with the spring's third in the mass)."""
+    d = PAPER.model_copy(update={"dynamics": PAPER.dynamics.model_copy(
+        update={"train_stiffness_N_per_m": 1e12})})
+    r = train.respond(d)
+    prog = motion.program(d, r.theta)
+    Ft = machine.spring_free_load(d, prog) + machine.spring_force(d, prog)
+    np.testing.assert_allclose(r.x, r.s, atol=1e-9)
+    np.testing.assert_allclose(r.contact_force, Ft, atol=1e-3 * np.abs(Ft).max())
+
+
+def test_resonance_shows_when_a_harmonic_meets_the_natural_frequency():
+    """With light damping the harmonic cam's tracking error peaks when omega_n equals
+    the cam speed (its only harmonic), and is far smaller a little off it."""
+    rpm = 6000.0  # fast enough that m w^2 exceeds the return spring's rate
+    w = rpm * RPM
+    m, k2 = PAPER.dynamics.mass_g * GRAM, PAPER.dynamics.spring_rate_N_per_m
+
+    def error(ratio):
+        k1 = m * (ratio * w) ** 2 - k2
+        r = train.respond(harmonic_cam(rpm, train_stiffness_N_per_m=k1, damping_ratio=0.02))
+        return np.abs(r.x - r.s).max()
+
+    assert error(1.0) > 10 * error(1.5)
+    assert error(1.0) > 10 * error(3.0)
+
+
+def test_dynamic_jump_and_report():
+    """A soft train at the paper's speed: the summary gives the natural frequency, the
+    error, the residual vibration after each rise and fall, and the dynamic jump."""
+    from camcore.report import summary
+
+    soft = PAPER.model_copy(update={"dynamics": PAPER.dynamics.model_copy(
+        update={"train_stiffness_N_per_m": 2e4, "damping_ratio": 0.02})})
+    s = summary(analyze(soft, verify=False))["train"]
+    assert s["natural_frequency_Hz"] == pytest.approx(
+        math.sqrt((2e4 + PAPER.dynamics.spring_rate_N_per_m) / (0.108)) / (2 * math.pi))
+    assert len(s["residual_vibration"]) == 2  # after the rise and after the fall
+    assert s["error_max_mm"] > 0
+    # it jumps, and says where: the violation and the summary agree
+    a = analyze(soft, verify=False)
+    assert s["contact_force_min_N"] < 0 and s["dynamic_jump_deg"]
+    assert "dynamic_jump" in {v.code for v in a.violations}
+    # a stiffer train rings less after the rise, and does not jump
+    stiff = soft.model_copy(update={"dynamics": soft.dynamics.model_copy(
+        update={"train_stiffness_N_per_m": 1e6})})
+    t = summary(analyze(stiff, verify=False))["train"]
+    assert t["residual_vibration"][0]["amplitude_mm"] < s["residual_vibration"][0][
+        "amplitude_mm"] / 10
+    assert not t["dynamic_jump_deg"]
+    assert summary(analyze(PAPER, verify=False))["train"] is None
