@@ -45,6 +45,15 @@ class Local:
     torque: np.ndarray  # (F, N) shaft torque [N m] each face's contact asks for
 
 
+def _contact_slide(design: Design, geo: profile.Geometry, point_world, normal, prog):
+    """mu_c sigma per face (F, N) for sliding faces with contact friction, else None
+    (rollers roll; mu_c = 0 is the paper)."""
+    mu = design.dynamics.contact_friction
+    if mu == 0.0 or (geo.r > 0 and not geo.flat):
+        return None
+    return mu * forces.sliding_sign(point_world, normal, prog.V)
+
+
 def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
              theta: np.ndarray) -> Local:
     """The per-angle results (Eqs. 1-19, 21, 29-42) at the cam angles ``theta`` [rad]."""
@@ -60,14 +69,17 @@ def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, 
     Ft = forces.total_load(design, prog.S, prog.A)
     lever = np.stack([profile.lever_x(geo, f, prog) for f in geo.faces])
     r_arm = 0.0 if geo.flat else geo.r  # the guide arms are measured to the face centre
-    guide = forces.follower_forces(design, Ft, windows, normal, lever, r_arm, prog.S, prog.V)
+    slide = _contact_slide(design, geo, point_world, normal, prog)
+    guide = forces.follower_forces(design, Ft, windows, normal, lever, r_arm, prog.S, prog.V,
+                                   slide)
     FN = np.where(windows, guide.FN[None, :], 0.0)
+    direction = normal if slide is None else forces.contact_direction(normal, slide)
     return Local(
         prog=prog, in_contact=windows, part=part, point_world=point_world,
         point_body=point_body, normal=normal,
         pressure_angle=np.stack([c.pressure_angle for c in contacts]), kappa_pitch=kappa,
         rho=rho, Ft=Ft, guide=guide, FN=FN, stress=contact_stress(design, FN, rho),
-        torque=forces.cam_torque(point_world, normal, FN),
+        torque=forces.cam_torque(point_world, direction, FN),
     )
 
 

@@ -56,27 +56,34 @@ class GuideSolution:
     side2: np.ndarray
 
 
-def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d):
+def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d, slide=0.0, moment=0.0):
     """(F1, F2, FN) of the equilibrium for guide sides (s1, s2), batched over angles.
 
-    n_y > 0 always (the normal points into the follower), so sum F_y gives
-    F_N = (F_t + mu_sv (F1 + F2)) / n_y; substituting into sum F_x leaves two linear
-    equations in F1, F2 with the moment balance, solved by Cramer's rule.
+    The cam pushes with F_N along D = n + slide t (t = (n_y, -n_x) the tangent; slide =
+    mu_c sigma, the contact friction, 0 in the paper), and ``moment`` F_N is its moment
+    about the reference point C beyond that of a force through C (a friction force at
+    the contact point A = C - r n adds r slide). D_y > 0 (the force points into the
+    follower), so sum F_y gives F_N = (F_t + mu_sv (F1 + F2)) / D_y; substituting into
+    sum F_x and sum M_C leaves two linear equations in F1, F2, solved by Cramer's rule.
     """
-    t = normal[:, 0] / normal[:, 1]
+    tx, ty = normal[:, 1], -normal[:, 0]
+    Dx, Dy = normal[:, 0] + slide * tx, normal[:, 1] + slide * ty
+    t = Dx / Dy
+    q = moment / Dy
     a, b = t * mu_sv - s1, t * mu_sv - s2
-    m1 = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c)
-    m2 = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c)
+    m1 = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c) + q * mu_sv
+    m2 = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c) + q * mu_sv
+    xq = x_c + q
     det = a * m2 - b * m1
     with np.errstate(divide="ignore", invalid="ignore"):
-        F1 = Ft * (b * x_c - t * m2) / det
-        F2 = Ft * (t * m1 - a * x_c) / det
-    FN = (Ft + mu_sv * (F1 + F2)) / normal[:, 1]
+        F1 = Ft * (b * xq - t * m2) / det
+        F2 = Ft * (t * m1 - a * xq) / det
+    FN = (Ft + mu_sv * (F1 + F2)) / Dy
     return np.stack([F1, F2, FN])
 
 
-def one_contact(design: Design, Ft, normal, x_c, r: float, S, V) -> GuideSolution:
-    """Solve Eqs. 33-35 / 39-41 in the modes of Fig. 6 and keep the first with F1, F2 >= 0."""
+def _first_mode(design: Design, Ft, normal, x_c, r: float, S, V, slide, moment) -> GuideSolution:
+    """Solve in the modes of Fig. 6 and keep the first with F1, F2 >= 0."""
     dyn = design.dynamics
     d = dyn.guide_width_mm * MM
     l1 = dyn.overhang_mm * MM - (S if dyn.overhang_shrinks else 0.0)
@@ -86,7 +93,7 @@ def one_contact(design: Design, Ft, normal, x_c, r: float, S, V) -> GuideSolutio
     out = np.full((3, Ft.shape[0]), np.nan)
     mode = np.full(Ft.shape[0], -1, dtype=np.int8)
     for k, (s1, s2) in enumerate(MODES):
-        F1, F2, FN = _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d)
+        F1, F2, FN = _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d, slide, moment)
         ok = (mode < 0) & np.isfinite(FN) & (F1 >= -tol) & (F2 >= -tol)
         out[:, ok] = np.stack([F1, F2, FN])[:, ok]
         mode[ok] = k
@@ -103,6 +110,12 @@ def one_contact(design: Design, Ft, normal, x_c, r: float, S, V) -> GuideSolutio
     )
 
 
+def one_contact(design: Design, Ft, normal, x_c, r: float, S, V, slide=0.0) -> GuideSolution:
+    """Eqs. 33-35 / 39-41 in the modes of Fig. 6, moments about the face centre C;
+    ``slide`` = mu_c sigma tilts the contact force (contact friction, see _solve_mode)."""
+    return _first_mode(design, Ft, normal, x_c, r, S, V, slide, r * slide)
+
+
 def two_contacts(Ft, normal) -> GuideSolution:
     """Eqs. 36-38: symmetric dwell contact, F1 = F2 = 0 and F_N = F_t / (2 cos psi)."""
     zero = np.zeros_like(Ft)
@@ -111,18 +124,52 @@ def two_contacts(Ft, normal) -> GuideSolution:
     return GuideSolution(zero, zero.copy(), FN, mode, zero, zero)
 
 
-def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V) -> GuideSolution:
+def two_contacts_with_friction(design: Design, Ft, normal, x_c, r: float, S, V,
+                               slide) -> GuideSolution:
+    """Both faces on a dwell arc with contact friction: the cam drags both faces the same
+    way, so the guide must hold the follower (F1, F2 > 0). The paper's equal sharing of
+    the load (Eqs. 36-38) is kept; moments about the axis point between the face
+    centres: each face's force F_N D_k acts through C_k at lever x_c,k, plus its
+    friction moment r slide_k."""
+    D = normal + slide[..., None] * np.stack([normal[..., 1], -normal[..., 0]], axis=-1)
+    total = D.sum(axis=0)  # per unit F_N: both faces
+    moment = (x_c * D[..., 1] + r * slide).sum(axis=0)
+    # the one-contact solver with a virtual contact of unit direction u = total / |total|
+    # through the axis point: its force F' u is the faces' F_N total, so F_N = F' / |total|
+    scale = np.hypot(total[:, 0], total[:, 1])
+    g = _first_mode(design, Ft, total / scale[:, None], np.zeros_like(Ft), r, S, V, 0.0,
+                    moment / scale)
+    mode = np.where(g.mode >= 0, TWO_CONTACTS, -1).astype(np.int8)
+    return GuideSolution(g.F1, g.F2, g.FN / scale, mode, g.side1, g.side2)
+
+
+def sliding_sign(point_world, normal, V) -> np.ndarray:
+    """sigma (F, N): the sign of the cam surface's sliding past the follower along the
+    tangent t = (n_y, -n_x) at each contact; the friction the cam exerts on the face
+    points along sigma t. v_cam = w (p_y, -p_x) (clockwise cam), v_follower = (0, V w)."""
+    rel_x, rel_y = point_world[..., 1], -point_world[..., 0] - V
+    return np.sign(normal[..., 1] * rel_x - normal[..., 0] * rel_y)
+
+
+def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V,
+                    slide=None) -> GuideSolution:
     """Guide and contact forces at each cam angle for the faces in contact.
 
     in_contact, normal : (n_faces, N) and (n_faces, N, 2); x_c : (n_faces, N) [m], the
     lever of each face's contact force from the follower's axis (profile.lever_x).
+    slide : (n_faces, N) mu_c sigma per face (contact friction), or None (the paper).
     Both faces touching: Eqs. 36-38. One face: Eqs. 33-35 / 39-41 with that face's
     normal and centre. No face (a broken high dwell, Eq. 28): all forces zero.
     """
     lead = np.where(in_contact[0], 0, in_contact.shape[0] - 1)
     idx = np.arange(Ft.size)
-    one = one_contact(design, Ft, normal[lead, idx], x_c[lead, idx], r, S, V)
-    two = two_contacts(Ft, normal[0])
+    friction = slide is not None and np.any(slide)
+    sl = slide[lead, idx] if friction else 0.0
+    one = one_contact(design, Ft, normal[lead, idx], x_c[lead, idx], r, S, V, sl)
+    if friction and in_contact.shape[0] == 2:
+        two = two_contacts_with_friction(design, Ft, normal, x_c, r, S, V, slide)
+    else:
+        two = two_contacts(Ft, normal[0])
     both = in_contact.all(axis=0) & (in_contact.shape[0] == 2)
     touching = in_contact.any(axis=0)
 
@@ -131,6 +178,12 @@ def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V)
 
     F1, F2, FN = (np.where(touching, pick(k), 0.0) for k in ("F1", "F2", "FN"))
     return GuideSolution(F1, F2, FN, pick("mode"), pick("side1"), pick("side2"))
+
+
+def contact_direction(normal: np.ndarray, slide) -> np.ndarray:
+    """D = n + slide t (F, N, 2): the cam's force on a face per unit F_N."""
+    t = np.stack([normal[..., 1], -normal[..., 0]], axis=-1)
+    return normal + np.asarray(slide)[..., None] * t
 
 
 def cam_torque(point_world: np.ndarray, normal: np.ndarray, FN: np.ndarray) -> np.ndarray:
@@ -145,6 +198,7 @@ def cam_torque(point_world: np.ndarray, normal: np.ndarray, FN: np.ndarray) -> n
     Eqs. 1-4), which the tests use as the independent check.
 
     point_world, normal : (F, N, 2); FN : (F, N) -> (F, N), zero where a face is idle.
+    With contact friction pass the force direction D (contact_direction) as ``normal``.
     """
     cross = point_world[..., 0] * normal[..., 1] - point_world[..., 1] * normal[..., 0]
     return -FN * cross

@@ -422,6 +422,10 @@ class Dynamics(_Part):
     overhang_shrinks: bool = Field(
         True, description="l1 = l1_0 - S (the stem slides further into the guide as it rises)"
     )
+    contact_friction: float = Field(
+        0.0, ge=0, le=1.0,
+        description="sliding friction mu_c at the cam-face contact (0 as in the paper; "
+                    "rollers roll and ignore it)")
     train_stiffness_N_per_m: float | None = Field(
         None, gt=0, le=1e12,
         description="stiffness k_1 of the follower train between the cam contact and the "

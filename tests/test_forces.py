@@ -230,3 +230,40 @@ def test_material_grade_sets_the_default_allowable():
     a = analyze(Design.model_validate(data), verify=False)
     assert ALLOWABLE_CONTACT_STRESS_MPa[MaterialGrade.bronze] == 350.0
     assert "contact_stress" in {v.code for v in a.violations}
+
+
+@pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.single_concave,
+                                  FollowerKind.flat_face, FollowerKind.knife_edge])
+def test_equilibrium_with_contact_friction(kind):
+    """With sliding friction mu_c at the contact, every touching face receives F_N n plus
+    mu_c F_N along the cam surface's sliding past it (derived here from the velocities),
+    at the contact point; with the guide forces and the load this balances in force and
+    in moment about the cam axis O2, also in the two-contact dwell, where the paper's
+    equal sharing is kept and the guide now holds the follower against the drag."""
+    data = PAPER.with_kind(kind).model_dump()
+    data["dynamics"]["contact_friction"] = 0.15
+    design = type(PAPER).model_validate(data)
+    a = analyze(design, verify=False)
+    g = a.guide
+    ok = np.flatnonzero((g.mode >= 0) & a.in_contact.any(axis=0))
+    two = a.n_contacts == 2
+    if kind.is_double:
+        assert (g.F1[two] + g.F2[two]).min() > 0  # the drag must be held by the guide
+    for k in ok[::20]:
+        Y = a.geo.y0 + a.prog.S[k]
+        l1 = L10 - a.prog.S[k]
+        y1 = Y + l1 - (0.0 if kind is FollowerKind.flat_face else a.geo.r)
+        fric = -np.sign(a.prog.V[k]) * MU
+        forces = [(np.array([0.0, Y]), np.array([0.0, -a.Ft[k]])),
+                  (np.array([g.side1[k] * D / 2, y1]), np.array([-g.side1[k], fric]) * g.F1[k]),
+                  (np.array([g.side2[k] * D / 2, y1 + L2]),
+                   np.array([-g.side2[k], fric]) * g.F2[k])]
+        for f in np.flatnonzero(a.in_contact[:, k]):
+            p, n = a.point_world[f, k], a.normal[f, k]
+            rel = np.array([p[1], -p[0] - a.prog.V[k]])  # (v_cam - v_follower) / omega
+            t = rel - (rel @ n) * n
+            forces.append((p, g.FN[k] * (n + 0.15 * t / np.linalg.norm(t))))
+        Fsum = sum(F for _, F in forces)
+        Msum = sum(p[0] * F[1] - p[1] * F[0] for p, F in forces)
+        assert np.abs(Fsum).max() < 1e-9 * a.Ft[k]
+        assert abs(Msum) < 1e-9 * a.Ft[k]

@@ -265,3 +265,33 @@ def test_pitting_life_follows_the_stress_life_curve():
     d = tweak(PAPER, limits__allowable_contact_stress_MPa=s_max / 2)
     life = wear.pitting_life_cycles(analyze(d, verify=False))
     assert life == pytest.approx(d.wear.pitting_reference_cycles / 2**d.wear.pitting_exponent)
+
+
+@pytest.mark.parametrize("kind", ["single_concave", "double_concave", "flat_face",
+                                  "knife_edge", "double_roller"])
+def test_contact_friction_power_balance(kind):
+    """With sliding friction at the contact (mu_c) and in the guide (mu), the shaft's
+    power at every angle is the follower's power plus what both frictions dissipate:
+    T = F_t V + mu_c sum F_N |v_s| / w + mu (F1 + F2) |V|. T comes from moments about
+    the cam centre, the rest from the kinematics and the solved forces: this checks the
+    friction's direction, its moment in the guide solve, and the two-contact dwell.
+    Rollers roll: mu_c changes nothing for them."""
+    from camcore import wear
+
+    d = tweak(PAPER.with_kind(kind), dynamics__contact_friction=0.1)
+    a = analyze(d, verify=False)
+    w = d.cam.speed_rpm * RPM
+    slip = wear.sliding_speed(a) / w  # |v_s| / w per face [m/rad]
+    mu, mu_c = d.dynamics.guide_friction, 0.1
+    rolls = kind == "double_roller"
+    expected = (a.Ft * a.prog.V + (0.0 if rolls else mu_c) * (a.FN * slip).sum(axis=0)
+                + mu * (a.guide.F1 + a.guide.F2) * np.abs(a.prog.V))
+    ok = a.guide.mode >= 0  # where the guide does not self-lock
+    T = a.torque.sum(axis=0)
+    np.testing.assert_allclose(T[ok], expected[ok], atol=1e-9 * np.abs(T).max())
+    base = analyze(PAPER.with_kind(kind), verify=False)
+    if rolls:
+        np.testing.assert_allclose(a.guide.FN, base.guide.FN)
+    else:  # friction changes the forces and costs power
+        assert np.abs(a.guide.FN - base.guide.FN).max() > 0.1
+        assert machine.shaft(a).power_mean > machine.shaft(base).power_mean
