@@ -13,6 +13,7 @@ import math
 import numpy as np
 import trimesh
 
+from camcore import wear
 from camcore.export import ExportError, cam_mesh
 
 CAM_RGB = (150, 165, 185)
@@ -30,7 +31,10 @@ PAD_T = 0.006  # concave pad thickness [m]
 YOKE_T = 0.006
 
 DISPLAY_POINTS = 1200  # profile vertices drawn on screen (exports use all of them)
-OVERLAYS = ("contacts", "forces", "instant_centre", "pressure_angle", "arcs")
+OVERLAYS = ("contacts", "forces", "instant_centre", "pressure_angle", "arcs", "wear")
+OFF_BY_DEFAULT = frozenset({"wear"})
+WEAR_LOW_RGB = np.array([255, 230, 120])  # no wear ...
+WEAR_HIGH_RGB = np.array([150, 0, 40])  # ... the profile's largest wear
 
 
 def quat_z(angle: float) -> tuple[float, float, float, float]:
@@ -184,7 +188,8 @@ class SceneView:
         self.scene = scene
         self.a = None
         self.k = 0
-        self.show = {name: True for name in OVERLAYS} if overlays is None else overlays
+        self.show = ({name: name not in OFF_BY_DEFAULT for name in OVERLAYS}
+                     if overlays is None else overlays)
         self.mesh_error: str | None = None
         self.cam_frame = scene.add_frame("/cam", show_axes=False)
         self.follower_frame = scene.add_frame("/follower", show_axes=False)
@@ -207,6 +212,7 @@ class SceneView:
             self._build_geometry(a, w, zt, thick)
         self.fn_scale = 0.5 * a.geo.r_b / max(1e-9, float(np.max(np.abs(a.guide.FN))))
         self._build_bad(a, zt + 1e-4, thick * 2.5)
+        self._build_wear(a, zt + 3e-4, thick * 6.0)
         self.pose(self.k if self.k < a.theta.size else 0)
 
     def _build_geometry(self, a, w, zt, thick) -> None:
@@ -258,6 +264,20 @@ class SceneView:
                 self.nodes.pop("bad").remove()
             return
         self.nodes["bad"] = self.scene.add_line_segments("/cam/bad", bad, BAD_RGB, thickness=thick)
+
+    def _build_wear(self, a, z, thick) -> None:
+        """The cam's Archard wear along its profile as a heat band on the top face (pale:
+        none, dark red: the profile's largest), from camcore.wear.along_profile."""
+        pts = a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
+        phi, depth = wear.along_profile(a)
+        polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
+        top = float(depth.max())
+        level = np.interp(polar, phi, depth, period=2 * np.pi) / top if top > 0 else 0 * polar
+        rgb = WEAR_LOW_RGB + np.clip(level, 0, 1)[:, None] * (WEAR_HIGH_RGB - WEAR_LOW_RGB)
+        colors = np.stack([rgb, np.roll(rgb, -1, axis=0)], axis=1).astype(np.uint8)
+        self.nodes["wear"] = self.scene.add_line_segments(
+            "/cam/wear", _polyline_segments(_flat(pts, z), closed=True), colors,
+            thickness=thick, visible=self.show["wear"])
 
     def _build_arcs(self, a, z, thick) -> None:
         """Base circle (thin, dashed) and the dwell arcs of the profile (coloured)."""
@@ -387,7 +407,7 @@ class SceneView:
 
     def set_overlay(self, name: str, on: bool) -> None:
         self.show[name] = on
-        if name == "arcs" and "arcs" in self.nodes:
-            self.nodes["arcs"].visible = on
+        if name in ("arcs", "wear") and name in self.nodes:
+            self.nodes[name].visible = on
         elif self.a is not None:
             self.pose(self.k)

@@ -32,7 +32,7 @@ from camcore.motion import FALL, HIGH, LOW, RISE
 from camcore.report import summary
 
 from . import compare, plots, state, storage, uploads
-from .scene import OVERLAYS, SceneView
+from .scene import OFF_BY_DEFAULT, OVERLAYS, SceneView
 
 DEFAULT_PRESET = "paper_example"
 FPS = 30.0
@@ -43,6 +43,7 @@ OVERLAY_LABELS = {
     "instant_centre": "Instant centre I23 = Q and normals",
     "pressure_angle": "Pressure angle φ",
     "arcs": "Base circle and dwell arcs",
+    "wear": "Wear along the profile (Archard; pale none → dark red most)",
 }
 
 
@@ -170,7 +171,7 @@ class Session:
         with tabs.add_tab("View"):
             self.overlay_boxes = {}
             for name in OVERLAYS:
-                cb = gui.add_checkbox(OVERLAY_LABELS[name], True)
+                cb = gui.add_checkbox(OVERLAY_LABELS[name], name not in OFF_BY_DEFAULT)
                 cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
                 self.overlay_boxes[name] = cb
             self.camera_btn = gui.add_button("Reset camera")

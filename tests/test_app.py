@@ -228,6 +228,12 @@ def test_overlays_switch(tab):
     assert not s.view.nodes["arcs"].visible
     s.overlay_boxes["instant_centre"].value = False
     assert not s.view.nodes["q"].visible
+    # the wear heat band along the profile: off by default, darker where wear is larger
+    assert not s.view.nodes["wear"].visible
+    s.overlay_boxes["wear"].value = True
+    assert s.view.nodes["wear"].visible
+    colors = np.asarray(s.view.nodes["wear"].colors, float)
+    assert colors.shape[1:] == (2, 3) and np.ptp(colors[:, 0, 0]) > 50
 
 
 def test_compare_tab(tab):
