@@ -26,6 +26,7 @@ from .model import (
     load_design,
     load_preset,
     preset_names,
+    set_field,
 )
 
 EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT = 0, 1, 2
@@ -41,41 +42,14 @@ def _version() -> str:
 def _apply_set(data: dict, assignment: str) -> None:
     """Apply one ``--set a.b.c=VALUE`` to the design dict (VALUE parsed as JSON if it can be)."""
     path, sep, raw = assignment.partition("=")
-    keys = path.strip().split(".")
-    if not sep or not all(keys):
+    if not sep:
         raise DesignError(f"--set {assignment!r}: expected FIELD.PATH=VALUE, "
                           "e.g. cam.base_radius_mm=90")
     try:
         value = json.loads(raw)
     except ValueError:
         value = raw  # a bare word, e.g. follower.kind=double_roller
-    node = data
-    for i, key in enumerate(keys[:-1]):
-        node = _child(node, key)
-        if not isinstance(node, dict | list):
-            raise DesignError(f"--set {path}: {'.'.join(keys[: i + 1])} is not a group of fields")
-    last = keys[-1]
-    if isinstance(node, list):
-        _child(node, last)  # the index must exist
-        node[int(last)] = value
-        return
-    from .model import CLASSIC_KEYS
-
-    classic = keys[:-1] == ["motion"] and last in CLASSIC_KEYS  # edits a classic program
-    if last not in node and not classic:
-        raise DesignError(f"--set {path}: no such field; fields here: {', '.join(node)}")
-    node[last] = value
-
-
-def _child(node, key: str):
-    """node[key] for a dict, node[int(key)] for a list; None if there is none."""
-    if isinstance(node, dict):
-        return node.get(key)
-    if isinstance(node, list) and key.isdigit() and int(key) < len(node):
-        return node[int(key)]
-    if isinstance(node, list):
-        raise DesignError(f"--set: {key!r} is not an index of a list of {len(node)}")
-    return None
+    set_field(data, path.strip(), value, "--set ")
 
 
 def _design(args) -> Design:
@@ -190,6 +164,26 @@ def _export(args) -> int:
 EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "toolpath", "json", "html", "pdf")
 
 
+def _sweep(args) -> int:
+    try:
+        import pyarrow  # noqa: F401
+    except ImportError:
+        raise DesignError("camcore sweep writes Parquet: pip install 'camdesigner[sweep]'") \
+            from None
+    from . import sweep
+
+    spec = sweep.load_spec(args.spec)
+    if args.workers is not None and args.workers < 1:
+        raise DesignError("--workers: at least 1")
+    if args.chunk < 1:
+        raise DesignError("--chunk: at least 1")
+    _refuse_collisions({"out": args.out}, args.spec)
+    n = sweep.run(spec, args.out, chunk=args.chunk, verify=not args.no_verify,
+                  workers=args.workers, scheduler=args.scheduler)
+    print(f"wrote {args.out} ({n} designs)")
+    return EXIT_VALID
+
+
 def _parser() -> argparse.ArgumentParser:
     from .export import EXPORTS
 
@@ -238,6 +232,20 @@ def _parser() -> argparse.ArgumentParser:
     e.add_argument("--cutter-diameter-mm", type=float, metavar="D",
                    help="end mill for --toolpath (default: cam.cutter_diameter_mm, 10 mm)")
     e.set_defaults(run=_export)
+
+    w = sub.add_parser("sweep", help="analyse a grid of designs into one Parquet table")
+    w.add_argument("spec", help='sweep JSON: {"base": {...} | {"preset": NAME}, "grid": '
+                                '{"cam.base_radius_mm": [60, 70] | {"from", "to", "num"}}}')
+    w.add_argument("--out", required=True, metavar="FILE", help="Parquet file to write")
+    w.add_argument("--workers", type=int, metavar="N",
+                   help="run on a local Dask cluster of N worker processes")
+    w.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on an existing Dask cluster, e.g. tcp://host:8786")
+    w.add_argument("--chunk", type=int, default=32, metavar="N",
+                   help="designs per unit of work (default 32)")
+    w.add_argument("--no-verify", action="store_true",
+                   help="skip the geometric check (faster; its columns are empty)")
+    w.set_defaults(run=_sweep)
     return p
 
 

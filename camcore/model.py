@@ -755,3 +755,37 @@ def allowable_contact_stress_MPa(design: Design) -> float:
 def omega_rad_s(design: Design) -> float:
     """Cam angular speed omega_2 [rad/s] (the magnitude; the cam turns clockwise)."""
     return design.cam.speed_rpm * RPM
+
+
+def set_field(data: dict, path: str, value, what: str = "") -> None:
+    """Write ``value`` at the dotted ``path`` of a design dict (``motion.segments.0.lift_mm``
+    reaches into lists), refusing a path the design has no field at. ``what`` prefixes
+    the messages (e.g. "--set ")."""
+    keys = path.split(".")
+    if not all(keys):
+        raise DesignError(f"{what}{path!r}: expected FIELD.PATH, e.g. cam.base_radius_mm")
+    node = data
+    for i, key in enumerate(keys[:-1]):
+        node = _child(node, key, what)
+        if not isinstance(node, dict | list):
+            raise DesignError(f"{what}{path}: {'.'.join(keys[: i + 1])} is not a group of fields")
+    last = keys[-1]
+    if isinstance(node, list):
+        _child(node, last, what)  # the index must exist
+        node[int(last)] = value
+        return
+    classic = keys[:-1] == ["motion"] and last in CLASSIC_KEYS  # edits a classic program
+    if last not in node and not classic:
+        raise DesignError(f"{what}{path}: no such field; fields here: {', '.join(node)}")
+    node[last] = value
+
+
+def _child(node, key: str, what: str = ""):
+    """node[key] for a dict, node[int(key)] for a list; None if there is none."""
+    if isinstance(node, dict):
+        return node.get(key)
+    if isinstance(node, list) and key.isdigit() and int(key) < len(node):
+        return node[int(key)]
+    if isinstance(node, list):
+        raise DesignError(f"{what}{key!r} is not an index of a list of {len(node)}")
+    return None

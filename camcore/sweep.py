@@ -1,0 +1,260 @@
+"""Design-space sweeps: many designs, one Parquet table (issue 12).
+
+A SPEC names a base design and a grid of field values; the sweep analyses every
+combination and writes one row per design: the grid values (columns ``grid.`` + the
+field path, e.g. ``grid.cam.base_radius_mm``), ``valid``, ``error`` (why a combination is
+not a design at all, else null) and the summary of ``camcore report --json``, flattened
+with its keys joined by dots (``contact_force_max_N.cycle``; lists become JSON text).
+A row equals the single report of that design.
+
+    {"base": {...a design...} | {"preset": "paper_example"},
+     "grid": {"cam.base_radius_mm": [60, 70, 80] | {"from": 60, "to": 110, "num": 51},
+              "follower.kind": ["single_roller", "double_concave"]}}
+
+Work is cut into chunks of designs (batches, not single designs). Each finished chunk is
+kept as a Parquet part beside the output (``OUT.parts/``) with the SPEC's fingerprint,
+so an interrupted run resumes where it stopped; the parts are joined into OUT at the
+end. Chunks run in this process by default, on a Dask ``LocalCluster`` with
+``workers``, or on an existing Dask cluster at ``scheduler``: the same work either way.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import shutil
+import sys
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .files import read_capped, write_atomic
+from .model import (
+    Design,
+    DesignError,
+    design_from_json,
+    load_preset,
+    set_field,
+)
+
+MAX_SPEC_BYTES = 1_000_000
+MAX_DESIGNS = 1_000_000  # designs per sweep
+MAX_VALUES = 100_000  # values per grid axis
+DEFAULT_CHUNK = 32
+
+
+@dataclass(frozen=True)
+class Spec:
+    """A parsed sweep: the base design as a dict and the grid axes (path, values)."""
+
+    base: dict
+    axes: tuple[tuple[str, tuple], ...]
+
+    @property
+    def size(self) -> int:
+        return math.prod(len(v) for _, v in self.axes)
+
+    def fingerprint(self) -> str:
+        text = json.dumps({"base": self.base, "axes": self.axes}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+    def points(self) -> Iterable[dict]:
+        """Each combination as {path: value}, the last axis varying fastest."""
+        names = [p for p, _ in self.axes]
+        for combo in itertools.product(*(v for _, v in self.axes)):
+            yield dict(zip(names, combo, strict=True))
+
+
+def _axis(path: str, raw) -> tuple:
+    """A grid axis from a list of values or {"from", "to", "num"} (inclusive, linear)."""
+    if isinstance(raw, dict):
+        if set(raw) != {"from", "to", "num"}:
+            raise DesignError(f"grid.{path}: a range is {{\"from\", \"to\", \"num\"}}")
+        lo, hi, num = raw["from"], raw["to"], raw["num"]
+        if not all(isinstance(x, int | float) and not isinstance(x, bool) for x in (lo, hi)):
+            raise DesignError(f"grid.{path}: from and to must be numbers")
+        if not isinstance(num, int) or isinstance(num, bool) or not 1 <= num <= MAX_VALUES:
+            raise DesignError(f"grid.{path}.num: an integer from 1 to {MAX_VALUES}")
+        return tuple(float(x) for x in np.linspace(lo, hi, num))
+    if not isinstance(raw, list) or not raw or len(raw) > MAX_VALUES:
+        raise DesignError(f"grid.{path}: a list of 1 to {MAX_VALUES} values, or a range")
+    return tuple(raw)
+
+
+def parse_spec(text: str | bytes) -> Spec:
+    """A SPEC document, strictly: unknown keys, a key twice, bad ranges and grids of more
+    than MAX_DESIGNS designs are refused with the offending key named."""
+    from .model import _check_tree, _non_finite, _object_pairs
+
+    try:
+        data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
+    except (ValueError, RecursionError) as exc:
+        raise DesignError(f"sweep spec: not a JSON document: {str(exc)[:200]}") from None
+    if not isinstance(data, dict) or set(data) - {"base", "grid"} or "grid" not in data:
+        raise DesignError('sweep spec: an object with "grid" and optionally "base"')
+    _check_tree(data)
+    base = data.get("base", {"preset": "paper_example"})
+    if isinstance(base, dict) and set(base) == {"preset"}:
+        design = load_preset(str(base["preset"]))
+    elif isinstance(base, dict):
+        design = design_from_json(json.dumps(base))
+    else:
+        raise DesignError("base: a design object or {\"preset\": NAME}")
+    grid = data["grid"]
+    if not isinstance(grid, dict) or not grid:
+        raise DesignError("grid: an object of field paths to values")
+    axes = tuple((str(path), _axis(path, raw)) for path, raw in grid.items())
+    base_dict = json.loads(design.model_dump_json())
+    for path, values in axes:  # every path must be a field of the design
+        set_field(json.loads(json.dumps(base_dict)), path, values[0], "grid.")
+    spec = Spec(base_dict, axes)
+    if spec.size > MAX_DESIGNS:
+        raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")
+    return spec
+
+
+def flatten(node, prefix: str = "", out: dict | None = None) -> dict:
+    """Nested dicts to one level with dotted keys; lists become JSON text."""
+    out = {} if out is None else out
+    if isinstance(node, dict):
+        for k, v in node.items():
+            flatten(v, f"{prefix}.{k}" if prefix else str(k), out)
+    elif isinstance(node, list):
+        out[prefix] = json.dumps(node)
+    else:
+        out[prefix] = node
+    return out
+
+
+def design_at(base: dict, point: dict) -> Design:
+    """The base design with the point's field values, validated strictly."""
+    data = json.loads(json.dumps(base))
+    for path, value in point.items():
+        set_field(data, path, value, "grid.")
+    return design_from_json(json.dumps(data))
+
+
+def row(base: dict, point: dict, verify: bool = True) -> dict:
+    """One design's row: the grid values, valid, error and the flattened summary."""
+    from .report import analyze_summary, summary
+
+    out = {f"grid.{k}": v for k, v in point.items()}
+    try:
+        design = design_at(base, point)
+    except DesignError as exc:
+        return {**out, "valid": False, "error": str(exc)}
+    if verify:
+        s = analyze_summary(design)
+    else:
+        from .analysis import analyze
+
+        s = summary(analyze(design, verify=False))
+    return {**out, **flatten(s), "valid": s["valid"], "error": None}
+
+
+def run_chunk(base: dict, points: list[dict], verify: bool = True) -> list[dict]:
+    """Rows of a batch of designs (the unit of work sent to a worker)."""
+    return [row(base, p, verify) for p in points]
+
+
+def _table(rows: list[dict]):
+    import pyarrow as pa
+
+    cols: dict[str, list] = {}
+    for i, r in enumerate(rows):
+        for k in r:
+            cols.setdefault(k, [None] * i)
+        for k in cols:
+            cols[k].append(r.get(k))
+    return pa.table(cols)
+
+
+def _progress(done: int, total: int, t0: float, stream=sys.stderr) -> None:
+    width = 30
+    fill = int(width * done / max(total, 1))
+    rate = done / max(time.perf_counter() - t0, 1e-9)
+    stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} designs, "
+                 f"{rate:.1f}/s")
+    stream.flush()
+
+
+def run(spec: Spec, out: str | Path, *, chunk: int = DEFAULT_CHUNK, verify: bool = True,
+        workers: int | None = None, scheduler: str | None = None,
+        progress: Callable[[int, int, float], None] | None = _progress) -> int:
+    """Run the sweep into the Parquet file ``out``; returns the number of rows.
+
+    Finished chunks are kept in ``out.parts/`` (with the spec's fingerprint) until the
+    whole table is written, so a run interrupted and started again with the same spec
+    computes only the missing chunks."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    out = Path(out)
+    parts = out.with_name(out.name + ".parts")
+    stamp = parts / "spec.fingerprint"
+    if parts.exists() and (not stamp.is_file() or stamp.read_text() != spec.fingerprint()):
+        raise DesignError(f"{parts} holds the parts of another sweep; remove it first")
+    parts.mkdir(parents=True, exist_ok=True)
+    stamp.write_text(spec.fingerprint())
+    points = list(spec.points())
+    chunks = [points[i:i + chunk] for i in range(0, len(points), chunk)]
+    todo = [i for i in range(len(chunks)) if not (parts / f"chunk-{i:06d}.parquet").exists()]
+    done = sum(len(chunks[i]) for i in range(len(chunks)) if i not in set(todo))
+    t0 = time.perf_counter()
+
+    def keep(i: int, rows: list[dict]) -> None:
+        nonlocal done
+        buf = pa.BufferOutputStream()
+        pq.write_table(_table(rows), buf)
+        write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
+        done += len(rows)
+        if progress:
+            progress(done, len(points), t0)
+
+    if workers is None and scheduler is None:
+        for i in todo:
+            keep(i, run_chunk(spec.base, chunks[i], verify))
+    else:
+        _run_dask(spec, chunks, todo, verify, workers, scheduler, keep)
+    if progress:
+        sys.stderr.write("\n")
+    tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(len(chunks))]
+    table = pa.concat_tables(tables, promote_options="default")
+    buf = pa.BufferOutputStream()
+    pq.write_table(table, buf)
+    write_atomic(out, buf.getvalue().to_pybytes())
+    shutil.rmtree(parts)
+    return table.num_rows
+
+
+def _run_dask(spec, chunks, todo, verify, workers, scheduler, keep) -> None:
+    """The chunks on a Dask cluster: a LocalCluster of ``workers`` processes, or the
+    scheduler at ``scheduler``. Each finished chunk is kept as it arrives."""
+    from dask.distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        client = Client(cluster)
+    else:
+        client = Client(scheduler)
+    try:
+        base = client.scatter(spec.base, broadcast=True)
+        futures = {client.submit(run_chunk, base, chunks[i], verify, pure=False): i
+                   for i in todo}
+        for fut in as_completed(futures):
+            keep(futures[fut], fut.result())
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def load_spec(path: str | Path) -> Spec:
+    return parse_spec(read_capped(path, MAX_SPEC_BYTES))

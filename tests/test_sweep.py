@@ -1,0 +1,121 @@
+"""Design-space sweeps (issue 12): rows equal the single reports, invalid combinations
+become rows that say why, an interrupted run resumes without recomputing, and the same
+work runs on a Dask LocalCluster."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pyarrow.parquet as pq
+import pytest
+
+from camcore import sweep
+from camcore.model import DesignError
+
+SPEC = {"base": {"preset": "paper_example"},
+        "grid": {"cam.base_radius_mm": {"from": 70, "to": 90, "num": 3},
+                 "follower.kind": ["single_roller", "double_concave"]}}
+
+
+def rows_of(path) -> list[dict]:
+    return pq.read_table(path).to_pylist()
+
+
+def test_rows_equal_single_reports(tmp_path):
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    assert spec.size == 6
+    n = sweep.run(spec, tmp_path / "r.parquet", chunk=4, progress=None)
+    rows = rows_of(tmp_path / "r.parquet")
+    assert n == len(rows) == 6
+    assert [(r["grid.cam.base_radius_mm"], r["grid.follower.kind"]) for r in rows] == [
+        (70.0, "single_roller"), (70.0, "double_concave"), (80.0, "single_roller"),
+        (80.0, "double_concave"), (90.0, "single_roller"), (90.0, "double_concave")]
+    for r in (rows[1], rows[4]):  # through the real command line
+        out = subprocess.run(
+            [sys.executable, "-m", "camcore.cli", "report", "--preset", "paper_example",
+             "--json", "--set", f"cam.base_radius_mm={r['grid.cam.base_radius_mm']}",
+             "--set", f"follower.kind={r['grid.follower.kind']}"],
+            capture_output=True, text=True)
+        single = sweep.flatten(json.loads(out.stdout))
+        for key, value in single.items():
+            assert r[key] == value, key
+        assert r["error"] is None
+
+
+def test_an_invalid_combination_is_a_row_that_says_why(tmp_path):
+    spec = sweep.parse_spec(json.dumps({"base": {"preset": "paper_example"},
+                                        "grid": {"cam.bore_diameter_mm": [20, 500]}}))
+    sweep.run(spec, tmp_path / "r.parquet", progress=None)
+    ok, bad = rows_of(tmp_path / "r.parquet")
+    assert ok["valid"] is True and ok["error"] is None
+    assert bad["valid"] is False and "bore_diameter_mm" in bad["error"]
+
+
+def test_an_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch):
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    out = tmp_path / "r.parquet"
+
+    def stop_after_two(done, total, t0):
+        if done >= 4:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run(spec, out, chunk=2, progress=stop_after_two)
+    assert not out.exists() and len(list((tmp_path / "r.parquet.parts").glob("*.parquet"))) == 2
+    calls = []
+    real = sweep.run_chunk
+    monkeypatch.setattr(sweep, "run_chunk", lambda *a: calls.append(a[1]) or real(*a))
+    sweep.run(spec, out, chunk=2, progress=None)
+    assert sum(len(c) for c in calls) == 2  # only the missing chunk
+    fresh = tmp_path / "fresh.parquet"
+    monkeypatch.setattr(sweep, "run_chunk", real)
+    sweep.run(spec, fresh, chunk=3, progress=None)
+    assert rows_of(out) == rows_of(fresh)
+    assert not (tmp_path / "r.parquet.parts").exists()
+
+
+def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    parts = tmp_path / "r.parquet.parts"
+    parts.mkdir()
+    (parts / "spec.fingerprint").write_text("something else")
+    with pytest.raises(DesignError, match="another sweep"):
+        sweep.run(spec, tmp_path / "r.parquet", progress=None)
+
+
+@pytest.mark.parametrize("spec, message", [
+    ({"grid": {"cam.nope": [1]}}, "cam.nope: no such field"),
+    ({"grid": {"cam.base_radius_mm": {"from": 1, "to": 2}}}, "a range is"),
+    ({"grid": {"cam.base_radius_mm": {"from": 1, "to": 2, "num": 0}}}, "num"),
+    ({"grid": {"cam.base_radius_mm": []}}, "a list of 1"),
+    ({"grid": {"cam.base_radius_mm": [1]}, "extra": 1}, "an object with"),
+    ({"base": {"preset": "../../etc/passwd"}, "grid": {"cam.width_mm": [1]}}, "no preset"),
+    ({"grid": {"cam.base_radius_mm": {"from": 60, "to": 90, "num": 1001},
+               "cam.width_mm": {"from": 5, "to": 20, "num": 1000}}}, "at most"),
+])
+def test_bad_specs_are_refused_with_the_key_named(spec, message):
+    with pytest.raises(DesignError, match=message):
+        sweep.parse_spec(json.dumps(spec))
+
+
+def test_cli_sweep_and_its_exit_codes(tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": [80, 85]}}))
+    out = tmp_path / "r.parquet"
+    run = subprocess.run([sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out",
+                          str(out), "--no-verify"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    assert "2/2 designs" in run.stderr and len(rows_of(out)) == 2
+    bad = subprocess.run([sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out",
+                          str(spec)], capture_output=True, text=True)
+    assert bad.returncode == 2 and "input" in bad.stderr
+
+
+def test_dask_local_cluster_gives_the_same_rows(tmp_path):
+    pytest.importorskip("dask.distributed")
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    sweep.run(spec, tmp_path / "local.parquet", chunk=2, progress=None)
+    sweep.run(spec, tmp_path / "dask.parquet", chunk=2, workers=2, progress=None)
+    assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
