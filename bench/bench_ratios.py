@@ -1,0 +1,92 @@
+"""Issue 12's goals as ratios to a floor measured in the same run (bench/floor.py), so
+a shared, noisy machine still gives comparable numbers.
+
+Rows (median ms, and the ratio with its goal in the note):
+* floor: the closed forms of the paper example on its grid;
+* analyze(verify=False) / floor (goal <= 3);
+* geometric check / analysis (goal <= 3) and its growth exponent from 0.1 to 0.02 deg
+  (goal: 1, i.e. O(N));
+* a sweep's designs per CPU-second against the floor's rate (goal >= 0.5).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+
+import numpy as np
+from floor import constants, floor
+
+from camcore.analysis import analyze
+from camcore.model import Design, load_preset
+from camcore.verify import max_lift_error
+
+
+def _median_ms(fn, n: int) -> float:
+    fn()
+    out = []
+    for _ in range(n):
+        t0 = time.perf_counter()
+        fn()
+        out.append(time.perf_counter() - t0)
+    return float(np.median(out)) * 1e3
+
+
+def _cpu_ms(fn) -> float:
+    t0 = time.process_time()
+    fn()
+    return (time.process_time() - t0) * 1e3
+
+
+def _row(name, ms, note):
+    return {"name": name, "median_ms": ms, "p10_ms": ms, "p90_ms": ms, "n": 1, "note": note}
+
+
+def _res(design: Design, res: float) -> Design:
+    data = design.model_dump()
+    data["limits"]["resolution_deg"] = res
+    return Design.model_validate(data)
+
+
+def run(quick: bool = False) -> list[dict]:
+    n = 5 if quick else 20
+    d = load_preset("paper_example")
+    a = analyze(d, verify=False)
+    c = constants(d)
+    t_floor = _median_ms(lambda: floor(a.theta, c), 4 * n)
+    t_an = _median_ms(lambda: analyze(d, verify=False), n)
+    t_check = _median_ms(lambda: max_lift_error(a), n)
+    rows = [
+        _row("floor (closed forms, numpy)", t_floor, f"N = {a.theta.size} angles, 2 faces"),
+        _row("analyze(verify=False)", t_an,
+             f"ratio to floor {t_an / t_floor:.1f}x (goal <= 3x)"),
+        _row("geometric check", t_check,
+             f"ratio to the analysis {t_check / t_an:.2f}x (goal <= 3x)"),
+    ]
+    times = {}
+    for res in (0.1, 0.02):
+        ar = analyze(_res(d, res), verify=False)
+        times[res] = (ar.theta.size, _median_ms(lambda ar=ar: max_lift_error(ar),
+                                                max(2, n // 4)))
+    (n1, t1), (n2, t2) = times[0.1], times[0.02]
+    slope = math.log(t2 / t1) / math.log(n2 / n1)
+    rows.append(_row("geometric check at 0.02 deg", t2,
+                     f"N {n1} -> {n2}: grows as N^{slope:.2f} (goal: N^1)"))
+    from camcore import sweep
+
+    num = 8 if quick else 32
+    spec = sweep.parse_spec(json.dumps(
+        {"grid": {"cam.base_radius_mm": {"from": 70, "to": 90, "num": num}}}))
+    points = list(spec.points())
+    cpu = _cpu_ms(lambda: sweep.run_chunk(spec.base, points, verify=False))
+    rate, floor_rate = len(points) / (cpu / 1e3), 1e3 / t_floor
+    rows.append(_row("sweep (verify off), per design", cpu / len(points),
+                     f"{rate:.0f} designs per CPU-second; floor {floor_rate:.0f}/s: "
+                     f"{rate / floor_rate:.3f} of it (goal >= 0.5)"))
+    return rows
+
+
+if __name__ == "__main__":
+    for r in run(quick=True):
+        print(r["name"], f"{r['median_ms']:.3f} ms", r["note"])
