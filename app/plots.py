@@ -177,8 +177,9 @@ def build_curves(gui, a) -> list[Curve]:
               [("um", "wear [µm]")], [
             {"label": "face 1 [µm]", "scale": "um", "stroke": COLORS[3],
              "fn": lambda a: wear.depth_per_pass(a)[0] * 1e12},
-            {"label": "face 2 [µm]", "scale": "um", "stroke": COLORS[4],
-             "fn": lambda a: wear.depth_per_pass(a)[-1] * 1e12},
+            {"label": "face 2 (double followers) [µm]", "scale": "um", "stroke": COLORS[4],
+             "fn": lambda a: (wear.depth_per_pass(a)[1] * 1e12 if a.FN.shape[0] == 2
+                              else np.zeros(a.theta.size))},
         ], codes=set()),
     ]
     return curves

@@ -69,6 +69,18 @@ class Spec:
         for combo in itertools.product(*(v for _, v in self.axes)):
             yield dict(zip(names, combo, strict=True))
 
+    def point(self, index: int) -> dict:
+        """The combination number ``index`` of points(), without listing the others."""
+        out = {}
+        for path, values in reversed(self.axes):
+            index, j = divmod(index, len(values))
+            out[path] = values[j]
+        return dict(reversed(out.items()))
+
+    def chunk(self, i: int, size: int) -> list[dict]:
+        """Chunk ``i`` of ``size`` designs (the last one may be shorter)."""
+        return [self.point(k) for k in range(i * size, min((i + 1) * size, self.size))]
+
 
 def _axis(path: str, raw) -> tuple:
     """A grid axis from a list of values or {"from", "to", "num"} (inclusive, linear)."""
@@ -201,10 +213,10 @@ def run(spec: Spec, out: str | Path, *, chunk: int = DEFAULT_CHUNK, verify: bool
         raise DesignError(f"{parts} holds the parts of another sweep; remove it first")
     parts.mkdir(parents=True, exist_ok=True)
     stamp.write_text(spec.fingerprint())
-    points = list(spec.points())
-    chunks = [points[i:i + chunk] for i in range(0, len(points), chunk)]
-    todo = [i for i in range(len(chunks)) if not (parts / f"chunk-{i:06d}.parquet").exists()]
-    done = sum(len(chunks[i]) for i in range(len(chunks)) if i not in set(todo))
+    total = spec.size
+    n_chunks = -(-total // chunk)
+    todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
+    done = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
     t0 = time.perf_counter()
 
     def keep(i: int, rows: list[dict]) -> None:
@@ -214,16 +226,16 @@ def run(spec: Spec, out: str | Path, *, chunk: int = DEFAULT_CHUNK, verify: bool
         write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
         done += len(rows)
         if progress:
-            progress(done, len(points), t0)
+            progress(done, total, t0)
 
     if workers is None and scheduler is None:
         for i in todo:
-            keep(i, run_chunk(spec.base, chunks[i], verify))
+            keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify))
     else:
-        _run_dask(spec, chunks, todo, verify, workers, scheduler, keep)
+        _run_dask(spec, chunk, todo, verify, workers, scheduler, keep)
     if progress:
         sys.stderr.write("\n")
-    tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(len(chunks))]
+    tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
     table = pa.concat_tables(tables, promote_options="default")
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
@@ -232,7 +244,7 @@ def run(spec: Spec, out: str | Path, *, chunk: int = DEFAULT_CHUNK, verify: bool
     return table.num_rows
 
 
-def _run_dask(spec, chunks, todo, verify, workers, scheduler, keep) -> None:
+def _run_dask(spec, chunk, todo, verify, workers, scheduler, keep) -> None:
     """The chunks on a Dask cluster: a LocalCluster of ``workers`` processes, or the
     scheduler at ``scheduler``. Each finished chunk is kept as it arrives."""
     from dask.distributed import Client, LocalCluster, as_completed
@@ -246,7 +258,7 @@ def _run_dask(spec, chunks, todo, verify, workers, scheduler, keep) -> None:
         client = Client(scheduler)
     try:
         base = client.scatter(spec.base, broadcast=True)
-        futures = {client.submit(run_chunk, base, chunks[i], verify, pure=False): i
+        futures = {client.submit(run_chunk, base, spec.chunk(i, chunk), verify, pure=False): i
                    for i in todo}
         for fut in as_completed(futures):
             keep(futures[fut], fut.result())

@@ -26,6 +26,8 @@ def rows_of(path) -> list[dict]:
 def test_rows_equal_single_reports(tmp_path):
     spec = sweep.parse_spec(json.dumps(SPEC))
     assert spec.size == 6
+    assert [spec.point(i) for i in range(6)] == list(spec.points())
+    assert spec.chunk(1, 4) == list(spec.points())[4:]
     n = sweep.run(spec, tmp_path / "r.parquet", chunk=4, progress=None)
     rows = rows_of(tmp_path / "r.parquet")
     assert n == len(rows) == 6
