@@ -54,18 +54,38 @@ def _contact_slide(design: Design, geo: profile.Geometry, point_world, normal, p
     return mu * forces.sliding_sign(point_world, normal, prog.V)
 
 
+@dataclass(frozen=True)
+class Contacts:
+    """Where each face touches the cam at angles theta (the geometry alone, Eqs. 1-19):
+    what the profile sampling needs, without the forces."""
+
+    prog: motion.Program
+    faces: list[profile.FaceContact]  # per face: normal, world point, pressure angle
+    in_contact: np.ndarray  # (F, N) bool
+    part: np.ndarray  # (F, N) segment index of the profile piece under each face
+    point_body: np.ndarray  # (F, N, 2) contact points in the cam frame (Eq. 11)
+
+
+def contacts(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
+             theta: np.ndarray) -> Contacts:
+    """The contact geometry (Eqs. 1-19) at the cam angles ``theta`` [rad]."""
+    prog = motion.program(design, theta)
+    faces = [profile.face_contact(geo, f, prog) for f in geo.faces]
+    windows, part = profile.contact_windows(geo, prog, segs)
+    body = np.stack([profile.to_body(prog.theta, c.point) for c in faces])
+    return Contacts(prog, faces, windows, part, body)
+
+
 def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
              theta: np.ndarray) -> Local:
     """The per-angle results (Eqs. 1-19, 21, 29-42) at the cam angles ``theta`` [rad]."""
-    prog = motion.program(design, theta)
-    contacts = [profile.face_contact(geo, f, prog) for f in geo.faces]
-    normal = np.stack([c.normal for c in contacts])
-    point_world = np.stack([c.point for c in contacts])
-    point_body = np.stack([profile.to_body(prog.theta, p) for p in point_world])
+    c = contacts(design, geo, segs, theta)
+    prog, windows, part, point_body = c.prog, c.in_contact, c.part, c.point_body
+    normal = np.stack([f.normal for f in c.faces])
+    point_world = np.stack([f.point for f in c.faces])
     kappa = np.stack([profile.pitch_curvature(geo, f, prog) for f in geo.faces])
     rho = np.stack([profile.curvature_radius(geo, f, k) for f, k in zip(geo.faces, kappa,
                                                                            strict=True)])
-    windows, part = profile.contact_windows(geo, prog, segs)
     Ft = forces.total_load(design, prog.S, prog.A)
     lever = np.stack([profile.lever_x(geo, f, prog) for f in geo.faces])
     r_arm = 0.0 if geo.flat else geo.r  # the guide arms are measured to the face centre
@@ -77,7 +97,7 @@ def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, 
     return Local(
         prog=prog, in_contact=windows, part=part, point_world=point_world,
         point_body=point_body, normal=normal,
-        pressure_angle=np.stack([c.pressure_angle for c in contacts]), kappa_pitch=kappa,
+        pressure_angle=np.stack([f.pressure_angle for f in c.faces]), kappa_pitch=kappa,
         rho=rho, Ft=Ft, guide=guide, FN=FN, stress=contact_stress(design, FN, rho),
         torque=forces.cam_torque(point_world, direction, FN),
     )
@@ -184,7 +204,7 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     breaks = np.mod([*(g.start for g in segs), *st], 2 * np.pi)
     cuts = np.unique(np.clip(np.searchsorted(th, breaks), 0, th.size - 1))
     made = sampling.sample_profile(
-        loc, geo, segs, lambda x: evaluate(design, geo, segs, x), np.union1d(cuts, [0]),
+        loc, geo, segs, lambda x: contacts(design, geo, segs, x), np.union1d(cuts, [0]),
         design.limits.export_tolerance_mm * MM)
     result = Analysis(**vars(loc), design=design, geo=geo, segments=segs,
                       profile=made.polyline, chord_error=made.chord_error, stations=st)

@@ -104,7 +104,7 @@ def chord_errors(poly: profile.Polyline, local) -> np.ndarray:
     Arc chords (either end on a dwell arc): the sagitta R (1 - cos(delta/2)), exact.
     Curve chords (both ends on one rise or fall, consecutive cam angles): the largest
     distance from the chord of the exact contact point at three angles inside it, found
-    with ``local`` (angles -> camcore.analysis.Local).
+    with ``local`` (angles -> camcore.analysis.contacts).
     """
     P, th, part = poly.points, poly.theta, poly.part
     Q = np.roll(P, -1, axis=0)
@@ -167,7 +167,7 @@ def sample_profile(a, geo: profile.Geometry, segs, local, cuts: np.ndarray,
     """The profile sampled to the chordal tolerance ``tol`` [m].
 
     a : camcore.analysis.Local on the analysis grid; geo, segs : its geometry and
-    segments; local : cam angles -> Local (camcore.analysis.evaluate for the design);
+    segments; local : cam angles -> contact geometry (camcore.analysis.contacts);
     cuts : grid indices that start a piece (0, segment boundaries, stations: where the
     faces in contact change); they stay exact vertex angles.
     """
