@@ -31,7 +31,8 @@ def table_markdown(results: dict) -> str:
         return "–" if x is None else f"{x:.{nd}f}"
 
     lines = [
-        "| Follower | F_N high dwell [N] | Table 1 [N] | F_N max cycle [N] | σ_H max [MPa] "
+        "| Follower | F_N high dwell, both faces touching [N] | paper's Table 1 [N] "
+        "| F_N max cycle [N] | σ_H max [MPa] "
         "| wear max [µm/10⁶ cycles] | limits |",
         "|---|---|---|---|---|---|---|",
     ]
@@ -52,10 +53,16 @@ def table_markdown(results: dict) -> str:
             f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | "
             f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |")
     text = "\n".join(lines)
-    text += ("\n\nTable 1 is the paper's value for its own example (the `paper_example` "
-             "preset). F_N high dwell: the maximum contact force in the high dwell, for double "
-             "followers while both faces touch (the load is shared). Wear: Archard's law along "
-             "the profile (rollers roll and do not slide; see the README for the model).")
+    text += ("\n\n**F_N high dwell**: the largest contact force per face in the high dwell; "
+             "for double followers while both faces touch (the load is shared; in the first "
+             "and last 2ψ_h one face carries it all, see Key numbers). **Table 1** is the "
+             "paper's value for its own example (the `paper_example` preset), and ours "
+             "differs from it: in the dwell Eqs. 29-38 give F_N = F_t = Mg + k(h + s_p) = "
+             "136.509 N for a single follower and F_t / (2 cos ψ_h) for a double one "
+             "(68.397 N concave, 68.579 N rollers); the paper's 133.5 / 129.2 N lie below "
+             "F_t and its 67.297 N for both doubles ignores cos ψ_h (README, *Reproducing "
+             "the paper*). Wear: Archard's law along the profile (rollers roll and do not "
+             "slide; README for the model).")
     if notes:
         text += "\n\n" + "\n".join(notes)
     return text

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from camcore import machine, train, wear
+from camcore import machine, motion, train, wear
 from camcore.checks import rho_reference_mm
+from camcore.model import omega_rad_s
 
 MAX_POINTS = 720
 X_AXIS = {"label": "cam angle θ [°]", "size": 36}
@@ -101,6 +102,10 @@ def _primary_deg(a):
     return np.degrees(a.primary(a.pressure_angle))
 
 
+def _per_second(a):
+    return motion.per_second(a.prog, omega_rad_s(a.design))
+
+
 def _train_force(a) -> np.ndarray:
     """The elastic train's contact force on the analysis grid (the rigid load if none)."""
     if a.train is None:
@@ -133,6 +138,15 @@ def build_curves(gui, a) -> list[Curve]:
             {"label": "A [mm/rad²]", "scale": "A", "stroke": COLORS[2],
              "fn": lambda a: a.prog.A * 1e3},
         ], codes=set()),
+        Curve(gui, "Velocity, acceleration and jerk per second at the design speed",
+              [("ms", "V [m/s]"), ("ms2", "A [m/s²]"), ("ms3", "J [m/s³]")], [
+            {"label": "V [m/s]", "scale": "ms", "stroke": COLORS[1],
+             "fn": lambda a: _per_second(a)[0]},
+            {"label": "A [m/s²]", "scale": "ms2", "stroke": COLORS[2],
+             "fn": lambda a: _per_second(a)[1]},
+            {"label": "J [m/s³]", "scale": "ms3", "stroke": COLORS[3],
+             "fn": lambda a: _per_second(a)[2]},
+        ], codes={"velocity_jump", "acceleration_jump"}),
         Curve(gui, "Pressure angle φ", [("deg", "φ [°]")], [
             {"label": "φ [°]", "scale": "deg", "stroke": COLORS[0], "fn": _primary_deg},
             {"label": f"+limit {lim:g}°", "scale": "deg", "stroke": "#d62728", "dash": [6, 4],
@@ -189,9 +203,10 @@ def relabel_limits(curves: list[Curve], a) -> None:
     """Legend labels that carry the current limit values."""
     ref_label, ref = rho_reference_mm(a.design)
     lim = a.design.limits.max_pressure_angle_deg
-    labels = {2: (2, f"+limit {lim:g}°"), 3: (2, f"{ref_label} = {ref:g} mm (limit)")}
-    for ci, (si, text) in labels.items():
-        h = curves[ci].handle
+    labels = {"Pressure angle": (2, f"+limit {lim:g}°"),
+              "Radius of curvature": (2, f"{ref_label} = {ref:g} mm (limit)")}
+    for title, (si, text) in labels.items():
+        h = next(c for c in curves if c.title.startswith(title)).handle
         ser = list(h.series)
         if ser[si].get("label") != text:
             ser[si] = {**ser[si], "label": text}

@@ -252,7 +252,11 @@ def summary_markdown(s: dict) -> str:
         ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
         ("ρ rise", f"{f(rho['rise'], 1)} mm"),
         ("ρ fall", f"{f(rho['fall'], 1)} mm"),
-        ("Max F_N cycle / high dwell", f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N"),
+        ("Max F_N per contact: whole cycle / high dwell (one-face windows included)",
+         f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N"),
+        ("Max F_N per face while both faces touch the high dwell (Table 1's figure)",
+         f"{f(fn['high_dwell_two_contact'])} N" if fn["high_dwell_two_contact"] is not None
+         else "– (one face only)"),
         ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
                         f"{f(s['guide_force_max_N']['F2'])} N"),
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),

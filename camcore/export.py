@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import Design, design_to_json, omega_rad_s
-from .motion import FALL, HIGH, LOW, RISE
+from .motion import FALL, HIGH, LOW, RISE, per_second
 from .train import on_grid
 from .units import to_deg, to_mm, to_mpa
 from .wear import depth_per_pass, sliding_speed
@@ -250,8 +250,8 @@ def series_columns(a) -> dict[str, np.ndarray]:
     stress (Eq. 42; 0 where the face is idle), the sliding speed and the Archard wear of
     the cam point it touches per million passes (camcore.wear); the shaft torque
     (camcore.machine)."""
-    w = omega_rad_s(a.design)
     p = a.prog
+    v, acc, jerk = per_second(p, omega_rad_s(a.design))
     cols = {
         "theta_deg": to_deg(a.theta),
         "segment": p.index,
@@ -259,9 +259,9 @@ def series_columns(a) -> dict[str, np.ndarray]:
         "V_mm_per_rad": to_mm(p.V),
         "A_mm_per_rad2": to_mm(p.A),
         "J_mm_per_rad3": to_mm(p.J),
-        "V_m_per_s": p.V * w,
-        "A_m_per_s2": p.A * w**2,
-        "J_m_per_s3": p.J * w**3,
+        "V_m_per_s": v,
+        "A_m_per_s2": acc,
+        "J_m_per_s3": jerk,
         "pressure_angle_deg": to_deg(a.primary(a.pressure_angle)),
         "rho_mm": to_mm(a.primary(a.rho)),
         "contacts": a.n_contacts,

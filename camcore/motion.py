@@ -275,6 +275,12 @@ class Program:
     index: np.ndarray  # index into segments(design) of each angle
 
 
+def per_second(prog: Program, omega: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Follower velocity [m/s], acceleration [m/s^2] and jerk [m/s^3] at a constant cam
+    speed omega [rad/s]: d/dt = omega d/dtheta, so V w, A w^2, J w^3."""
+    return prog.V * omega, prog.A * omega**2, prog.J * omega**3
+
+
 def boundaries_rad(design: Design) -> tuple[float, float, float, float]:
     """Cam angles [rad] where rise ends, high dwell ends, fall ends, and 2 pi (the
     paper's program; see Motion.classic)."""

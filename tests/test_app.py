@@ -122,7 +122,7 @@ def test_limit_violations_are_highlighted(tab):
     assert "design-limit violation" in s.status.content
     assert "Eqs. 5, 13" in s.status.content
     assert s.view.nodes["bad"].points.shape[0] > 0  # red segments on the cam profile
-    phi_plot = s.curves[2]
+    phi_plot = next(c for c in s.curves if c.title.startswith("Pressure angle"))
     assert np.max(phi_plot.shade) > 0  # shaded angles on the pressure-angle curve
     on = phi_plot.x[phi_plot.shade > 0]
     assert on.min() >= 0 and on.max() <= 31  # only over the (short) rise
@@ -426,6 +426,18 @@ def test_segment_table_edits_the_program(tab):
     assert abs(s.theta_deg - 350.0) < 0.6
     s.goto_station("12")  # no such station: ignored
     assert abs(s.theta_deg - 350.0) < 0.6
+
+
+def test_motion_per_second_curve(tab):
+    """V, A and J also per second at the design speed (the issue 9 designer's view):
+    the cycloid's peak velocity 2 h w / beta_r, and it follows the speed."""
+    s = tab
+    plot = next(c for c in s.curves if c.title.startswith("Velocity, acceleration and jerk"))
+    w = s.design.cam.speed_rpm * 2 * np.pi / 60
+    h, beta = s.design.motion.lift_mm * 1e-3, np.radians(s.design.motion.rise_deg)
+    assert np.nanmax(plot.handle.data[1]) == pytest.approx(2 * h * w / beta, rel=1e-3)
+    s.controls["cam.speed_rpm"].value = 600.0
+    assert np.nanmax(plot.handle.data[1]) == pytest.approx(h * w / beta, rel=1e-3)
 
 
 def test_running_machine_controls_and_curves(tab):
