@@ -398,12 +398,14 @@ class SceneView:
                         for u in t])
         pts += [(tuple(arc[j]), tuple(arc[j + 1])) for j in range(len(arc) - 1)]
         self.nodes["phi"].points = np.array(pts, np.float32)
-        self.nodes["phi"].visible = self.show["pressure_angle"]
+        # no construction where nothing touches (a broken dwell): it would show a lie
+        touching = bool(on.any())
+        self.nodes["phi"].visible = self.show["pressure_angle"] and touching
         lab = self.nodes["phi_label"]
         side = -1.0 if p[0] <= 0 else 1.0  # outside the driving face, clear of the yoke
         lab.position = (p[0] + side * 0.35 * L, p[1] - 0.05 * L, z)
         lab.text = f"φ = {math.degrees(phi):.1f}°"
-        lab.visible = self.show["pressure_angle"]
+        lab.visible = self.show["pressure_angle"] and touching
 
     def set_overlay(self, name: str, on: bool) -> None:
         self.show[name] = on

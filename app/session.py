@@ -140,7 +140,7 @@ class Session:
         with gui.add_folder("Animation", expand_by_default=True):
             self.play_btn = gui.add_button("▶ Play", color="green")
             self.speed_slider = gui.add_slider("Speed [°/s]", 5, 360, 5, self.speed)
-            self.angle_slider = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.5, 0.0)
+            self.angle_slider = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
             self.stations_btn = gui.add_button_group("Go to station", ["0", "1", "2", "3",
                                                                        "4", "5"])
             self.where_md = gui.add_markdown("")
@@ -579,6 +579,8 @@ class Session:
         faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
         touch = ", ".join(faces) if faces else "none"
         seg = SEGMENT[int(a.prog.segment[k])]
+        if a.prog.index[k] != a.prog.index[k - 1]:  # a boundary: say both (k - 1 wraps)
+            seg = f"{SEGMENT[int(a.prog.segment[k - 1])]} ends, {seg} begins"
         self.where_md.content = (
             f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
             f"In contact: **{touch}** · S = {a.prog.S[k] * 1e3:.3f} mm · "
@@ -593,7 +595,7 @@ class Session:
             if slider:
                 self._syncing = True
                 try:
-                    self.angle_slider.value = round(self.theta_deg * 2) / 2
+                    self.angle_slider.value = round(self.theta_deg, 1)  # as the text
                 finally:
                     self._syncing = False
             if markers:

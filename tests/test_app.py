@@ -14,7 +14,7 @@ from viser._gui_handles import GuiEvent, UploadedFile
 
 from app.fake_tab import FakeTab
 from app.main import App
-from camcore.model import design_to_json, load_preset
+from camcore.model import Design, design_to_json, load_preset
 
 
 def wait_for(pred, timeout=10.0):
@@ -202,10 +202,15 @@ def test_stations_angle_and_animation(tab):
     assert "S1 (left face), S2 (right face)" in s.where_md.content  # both on the dwell arc
     wxyz = np.array(s.view.cam_frame.wxyz)
     assert abs(2 * np.arctan2(-wxyz[3], wxyz[0]) - s.analysis.stations[2]) < 1e-2
+    assert s.angle_slider.value == pytest.approx(107.4)  # as the text says, not 107.5
+    assert "θ = 107.4°" in s.where_md.content
     s.angle_slider.value = 50.0
     assert s.theta_deg == 50.0 and "rise" in s.where_md.content
     y = s.view.follower_frame.position[1]
     assert abs(y - float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))) < 1e-4
+    s.angle_slider.value = 0.0  # a boundary: both segments are named
+    assert "low dwell ends, rise begins" in s.where_md.content
+    s.angle_slider.value = 50.0
     builds = s.view.builds
     s.play_btn.value = True
     assert s.playing and "Pause" in s.play_btn.label
@@ -459,3 +464,18 @@ def test_running_machine_controls_and_curves(tab):
     assert np.nanmin(elastic) < 0 < np.nanmin(rigid)
     s.controls["dynamics.train_stiffness_N_per_m"].value = 0.0
     assert s.design.dynamics.train_stiffness_N_per_m is None and s.analysis.train is None
+
+
+def test_no_pressure_angle_construction_where_nothing_touches(tab):
+    """A high dwell too short for both faces (Eq. 28 broken): where no face touches, the
+    text says so and no pressure-angle construction pretends otherwise."""
+    s = tab
+    data = s.design.model_dump(mode="json")
+    data["motion"]["high_dwell_deg"] = 3.0
+    s.set_design(Design.model_validate(data))
+    assert "contact_lost" in {v.code for v in s.analysis.violations}
+    s.angle_slider.value = 101.0
+    assert "In contact: **none**" in s.where_md.content
+    assert not s.view.nodes["phi"].visible and not s.view.nodes["phi_label"].visible
+    s.angle_slider.value = 50.0
+    assert s.view.nodes["phi"].visible
