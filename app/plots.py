@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from camcore import machine, motion, train, wear
-from camcore.checks import rho_reference_mm
+from camcore.checks import rho_reference_mm, violation_mask
 from camcore.model import omega_rad_s
 
 MAX_POINTS = 720
@@ -25,16 +25,6 @@ def stride_index(n: int, max_points: int = MAX_POINTS) -> np.ndarray:
     step = max(1, int(np.ceil(n / max_points)))
     idx = np.arange(0, n, step)
     return idx if idx[-1] == n - 1 else np.append(idx, n - 1)
-
-
-def violation_mask(a, codes: set[str] | None, theta_deg: np.ndarray) -> np.ndarray:
-    m = np.zeros(theta_deg.shape, bool)
-    for v in a.violations:
-        if codes is not None and v.code not in codes:
-            continue
-        for lo, hi in v.ranges_deg:
-            m |= (theta_deg >= lo - 1e-9) & (theta_deg <= hi + 1e-9)
-    return m
 
 
 class Curve:
@@ -78,7 +68,7 @@ class Curve:
         idx = stride_index(a.theta.size)
         self.x = np.degrees(a.theta[idx])
         self.ys = [np.asarray(s["fn"](a), float)[idx] for s in self.series_cfg]
-        self.shade = violation_mask(a, self.codes, self.x).astype(float)
+        self.shade = violation_mask(a.violations, self.x, self.codes).astype(float)
         self.marker(float(np.degrees(a.theta[k])))
 
     def marker(self, theta_deg: float) -> None:

@@ -13,7 +13,8 @@ import math
 import numpy as np
 import trimesh
 
-from camcore import wear
+from camcore import profile, wear
+from camcore.checks import violation_mask
 from camcore.export import ExportError, cam_mesh
 
 CAM_RGB = (150, 165, 185)
@@ -252,11 +253,7 @@ class SceneView:
 
     def _build_bad(self, a, z, thick) -> None:
         """Red profile segments over the cam angles where a limit is violated."""
-        mask = np.zeros(a.profile.points.shape[0], bool)
-        th = np.degrees(a.profile.theta)
-        for v in a.violations:
-            for lo, hi in v.ranges_deg:
-                mask |= (th >= lo - 1e-9) & (th <= hi + 1e-9)
+        mask = violation_mask(a.violations, np.degrees(a.profile.theta))
         segs = _polyline_segments(_flat(a.profile.points, z), closed=True)
         bad = segs[mask & np.roll(mask, -1)]
         if bad.shape[0] == 0:
@@ -371,17 +368,17 @@ class SceneView:
             arr = np.array([[[*u, z], [*v, z]] for u, v in segs], np.float32)
             fz.points = arr
         fz.visible = bool(segs) and self.show["forces"]
-        # instant centre Q on the X axis at -V, with the common normals through it
-        q = (-float(a.prog.V[k]), 0.0)
+        # instant centre Q = I23 on the X axis, with the common normals through it
+        q = tuple(float(x) for x in profile.instant_centre(a.prog.V[k:k + 1])[0])
         self.nodes["q"].position = (q[0], q[1], z)
         self.nodes["q"].visible = self.show["instant_centre"]
         lines = []
+        centres = profile.face_centres(a.geo, a.prog.S[k:k + 1])[:, 0]
         for i in np.flatnonzero(on):
-            f = a.geo.faces[i]
-            c = (f.x_c, a.geo.y0 + S)
+            f, c = a.geo.faces[i], centres[i]
             lines.append(((q[0], q[1], z), (float(pw[i, 0]), float(pw[i, 1]), z)))
             if 0 < f.r < math.inf:
-                lines.append(((q[0], q[1], z), (c[0], c[1], z)))
+                lines.append(((q[0], q[1], z), (float(c[0]), float(c[1]), z)))
         self.nodes["q_lines"].points = np.array(lines, np.float32)
         self.nodes["q_lines"].visible = self.show["instant_centre"]
         # pressure angle at the driving face: normal vs. the follower's path (Y)

@@ -336,6 +336,19 @@ def _train(a) -> list[Violation]:
         "stiffen the train, raise the spring, or slow down)", ranges, -low)]
 
 
+def violation_mask(violations: list[Violation], theta_deg: np.ndarray,
+                   codes: set[str] | None = None) -> np.ndarray:
+    """Where on the angles ``theta_deg`` a limit is broken (any of ``codes``, or any
+    limit at all): the union of the violations' angle ranges, ends included."""
+    m = np.zeros(np.shape(theta_deg), bool)
+    for v in violations:
+        if codes is not None and v.code not in codes:
+            continue
+        for lo, hi in v.ranges_deg:
+            m |= (theta_deg >= lo - 1e-9) & (theta_deg <= hi + 1e-9)
+    return m
+
+
 def run_all(a, lift_error: float | None) -> list[Violation]:
     """Every violation of ``a`` (a camcore.analysis.Analysis)."""
     out = (_curvature_rules(a) + _pressure_angle(a) + _contact_stress(a) + _dwell_arcs(a)

@@ -155,6 +155,21 @@ def face_contact(geo: Geometry, face: Face, prog: Program) -> FaceContact:
     return FaceContact(n, point, phi)
 
 
+def instant_centre(V: np.ndarray) -> np.ndarray:
+    """I23 = Q [m], (N, 2) world frame: on the X axis at X = -V (Eqs. 1-4), where the
+    common normal of every face crosses it."""
+    V = np.asarray(V, dtype=float)
+    return np.stack([-V, np.zeros_like(V)], axis=-1)
+
+
+def face_centres(geo: Geometry, S: np.ndarray) -> np.ndarray:
+    """Centre C of each face [m], (F, N, 2) world frame: (x_c, y0 + S) (Eq. 3); for a
+    flat face the point of its plane on the face's axis."""
+    S = np.asarray(S, dtype=float)
+    return np.stack([np.stack([np.full_like(S, f.x_c), geo.y0 + S], axis=-1)
+                     for f in geo.faces])
+
+
 def to_body(theta: np.ndarray, world: np.ndarray) -> np.ndarray:
     """World X-Y to cam-fixed x-y (Eq. 11): [x, y] = R(theta) [X, Y]."""
     c, s = np.cos(theta), np.sin(theta)
