@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from pydantic import ValidationError
 
 from camcore.model import Design, FollowerKind, MotionLaw, format_validation_error
+from camcore.report import machine_rows
 
 
 @dataclass(frozen=True)
@@ -260,21 +261,7 @@ def summary_markdown(s: dict) -> str:
         ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
                         f"{f(s['guide_force_max_N']['F2'])} N"),
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
-        ("Spring rate min / proposed",
-         f"{f(s['spring_rate_min_N_per_m'], 0)} / "
-         f"{f(s['spring_proposal']['spring_rate_N_per_m'], 0)} N/m "
-         f"(×{s['spring_proposal']['safety_factor']:g}, preload "
-         f"{s['spring_proposal']['preload_mm']:g} mm)"),
-        ("Jump speed", "never" if s["jump_speed_rpm"] is None
-         else f"{f(s['jump_speed_rpm'], 0)} rpm"),
-        ("Shaft torque drive / brake", f"{f(s['cam_torque_max_Nm']['drive'], 3)} / "
-                                       f"{f(s['cam_torque_max_Nm']['brake'], 3)} N·m"),
-        ("Power max / mean (losses)", f"{f(s['power_max_W'], 1)} / {f(s['power_mean_W'], 2)} W"),
-        ("Flywheel ΔE / inertia", f"{f(s['flywheel_energy_J'], 3)} J / "
-                                  f"{f(s['flywheel_inertia_kg_m2'], 5)} kg·m²"),
-        ("Wear max (Archard)", f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} µm per 10⁶ cycles"),
-        ("Pitting life", "endurance" if s["pitting_life_cycles"] is None
-         else f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
+        *machine_rows(s),
         ("Contact half-width max", f"{f(s['contact_half_width_max_mm'], 4)} mm"
          + (" (Hertz beyond validity: conservative stress)"
             if s["hertz_beyond_validity_deg"] else "")),

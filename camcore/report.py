@@ -220,6 +220,38 @@ def _fmt(x, nd=3) -> str:
     return f"{x:.{nd}f}"
 
 
+def machine_rows(s: dict) -> list[tuple[str, str]]:
+    """The running machine's figures of a summary as (label, value) rows: the text
+    report and the app's key numbers show the same lines."""
+    return [
+        ("spring rate min / proposed", f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
+         f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
+         f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
+         f"{s['spring_proposal']['safety_factor']:g})"),
+        ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
+        ("jump speed", "never (nothing pulls the follower off)" if s["jump_speed_rpm"] is None
+         else f"{_fmt(s['jump_speed_rpm'], 1)} rpm"),
+        ("shaft torque drive / brake", f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
+         f"{_fmt(s['cam_torque_max_Nm']['brake'])} N m"),
+        ("power max / mean", f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W"),
+        ("flywheel energy / inertia", f"{_fmt(s['flywheel_energy_J'], 4)} J / "
+         f"{_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2"),
+        ("wear depth max (Archard)", f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
+         f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)"),
+        ("pitting life", "endurance (stress within the allowable)"
+         if s["pitting_life_cycles"] is None else
+         f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
+        ("elastic train", "rigid (dynamics.train_stiffness_N_per_m not set)"
+         if s["train"] is None else
+         f"f_n = {s['train']['natural_frequency_Hz']:.4g} Hz ({s['train']['frequency_ratio']:.3g}"
+         f" x cam speed), F_c {s['train']['contact_force_min_N']:.4g} .. "
+         f"{s['train']['contact_force_max_N']:.4g} N, error max "
+         f"{s['train']['error_max_mm']:.3g} mm, residual "
+         + ", ".join(f"{v['amplitude_mm']:.3g}" for v in s["train"]["residual_vibration"])
+         + " mm"),
+    ]
+
+
 def report_text(s: dict) -> str:
     """A readable table of one summary."""
     rows = [
@@ -254,31 +286,7 @@ def report_text(s: dict) -> str:
         ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),
         ("allowable stress / safety factor",
          f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}"),
-        ("spring rate min / proposed", f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
-         f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
-         f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
-         f"{s['spring_proposal']['safety_factor']:g})"),
-        ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
-        ("jump speed", "never (nothing pulls the follower off)" if s["jump_speed_rpm"] is None
-         else f"{_fmt(s['jump_speed_rpm'], 1)} rpm"),
-        ("shaft torque drive / brake", f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
-         f"{_fmt(s['cam_torque_max_Nm']['brake'])} N m"),
-        ("power max / mean", f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W"),
-        ("flywheel energy / inertia", f"{_fmt(s['flywheel_energy_J'], 4)} J / "
-         f"{_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2"),
-        ("wear depth max (Archard)", f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
-         f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)"),
-        ("pitting life", "endurance (stress within the allowable)"
-         if s["pitting_life_cycles"] is None else
-         f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
-        ("elastic train", "rigid (dynamics.train_stiffness_N_per_m not set)"
-         if s["train"] is None else
-         f"f_n = {s['train']['natural_frequency_Hz']:.4g} Hz ({s['train']['frequency_ratio']:.3g}"
-         f" x cam speed), F_c {s['train']['contact_force_min_N']:.4g} .. "
-         f"{s['train']['contact_force_max_N']:.4g} N, error max "
-         f"{s['train']['error_max_mm']:.3g} mm, residual "
-         + ", ".join(f"{v['amplitude_mm']:.3g}" for v in s["train"]["residual_vibration"])
-         + " mm"),
+        *machine_rows(s),
         ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
          f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
         ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "

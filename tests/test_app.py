@@ -452,7 +452,7 @@ def test_running_machine_controls_and_curves(tab):
     s = tab
     assert s.design.dynamics.train_stiffness_N_per_m is None
     assert s.controls["dynamics.train_stiffness_N_per_m"].value == 0.0
-    for text in ("Spring rate min", "Jump speed", "Shaft torque", "Wear max", "Pitting life"):
+    for text in ("spring rate min", "jump speed", "shaft torque", "wear depth max", "pitting life"):
         assert text in s.summary_md.content
     s.controls["dynamics.damping_ratio"].value = 0.02
     s.controls["dynamics.train_stiffness_N_per_m"].value = 2e4
