@@ -155,7 +155,8 @@ def row(base: dict, point: dict, verify: bool = True) -> dict:
     """One design's row: the grid values, valid, error and the flattened summary."""
     from .report import analyze_summary, summary
 
-    out = {f"grid.{k}": v for k, v in point.items()}
+    out = {f"grid.{k}": v if isinstance(v, int | float | str | bool) or v is None
+           else json.dumps(v) for k, v in point.items()}  # a list or object as JSON text
     try:
         design = design_at(base, point)
     except DesignError as exc:
@@ -236,7 +237,7 @@ def run(spec: Spec, out: str | Path, *, chunk: int = DEFAULT_CHUNK, verify: bool
     if progress:
         sys.stderr.write("\n")
     tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
-    table = pa.concat_tables(tables, promote_options="default")
+    table = pa.concat_tables(tables, promote_options="permissive")  # e.g. int with float
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
     write_atomic(out, buf.getvalue().to_pybytes())

@@ -121,3 +121,16 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     sweep.run(spec, tmp_path / "local.parquet", chunk=2, progress=None)
     sweep.run(spec, tmp_path / "dask.parquet", chunk=2, workers=2, progress=None)
     assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
+
+
+def test_mixed_value_types_and_structured_values_join_into_one_table(tmp_path):
+    """Chunks whose grid values differ in type (an int, then a float; a whole segment
+    list) still make one table."""
+    segs = [{"kind": "rise", "angle_deg": 180, "lift_mm": 10},
+            {"kind": "fall", "angle_deg": 180, "lift_mm": 10}]
+    spec = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [80, 85.5],
+                                                 "motion.segments": [segs]}}))
+    sweep.run(spec, tmp_path / "r.parquet", chunk=1, verify=False, progress=None)
+    rows = rows_of(tmp_path / "r.parquet")
+    assert [r["grid.cam.base_radius_mm"] for r in rows] == [80.0, 85.5]
+    assert json.loads(rows[0]["grid.motion.segments"]) == segs
