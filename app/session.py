@@ -100,6 +100,7 @@ class Session:
         self.base = design or load_preset(DEFAULT_PRESET)
         self.design = self.base
         self.analysis = None
+        self.station_events: list[str] = []  # what happens at each station, in words
         self.error: str | None = None
         self.verified = False
         self.gen = 0
@@ -360,7 +361,7 @@ class Session:
             self._sync_segment_rows(design)
             self._show_station_buttons(a)
             self.low_dwell_md.content = state.low_dwell_text(self.values(), design)
-            self.summary_md.content = state.summary_markdown(summary(a))
+            self._show_summary(summary(a))
             self._show_where(k)
             self._show_status()
         self._save_working()
@@ -564,14 +565,23 @@ class Session:
         j = int(np.clip(np.searchsorted(th, x), 1, th.size - 1))
         return j - 1 if x - th[j - 1] < th[j] - x else j
 
+    def _show_summary(self, s: dict) -> None:
+        """Key numbers, and what happens at each station in words (for _show_where)."""
+        self.summary_md.content = state.summary_markdown(s)
+        self.station_events = [st["event"] for st in s["stations"]]
+
     def _show_where(self, k: int) -> None:
         a = self.analysis
         th = math.degrees(a.theta[k])
         st = np.degrees(a.stations)
         step = a.design.limits.resolution_deg
         at = [i for i, s in enumerate(st) if abs(th - s) <= step / 2 + 1e-9]
+        events = ""
         if at:
             where = "at station " + " and ".join(str(i) for i in at)
+            known = self.station_events
+            events = "  \n" + "  \n".join(f"*{state.esc(known[i])}*" for i in at
+                                           if i < len(known))
         else:
             i, n = int(np.searchsorted(st, th)), len(st)
             where = (f"between stations {i - 1} and {i}" if 0 < i < n
@@ -584,7 +594,7 @@ class Session:
         self.where_md.content = (
             f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
             f"In contact: **{touch}** · S = {a.prog.S[k] * 1e3:.3f} mm · "
-            f"F_N = {a.guide.FN[k]:.1f} N")
+            f"F_N = {a.guide.FN[k]:.1f} N{events}")
 
     def _goto(self, theta_deg: float, markers: bool = True, slider: bool = True) -> None:
         """Lock held."""
@@ -707,7 +717,7 @@ class Session:
                 self.view.build(av)
                 for c in self.curves:
                     c.update(av, self._index(self.theta_deg))
-            self.summary_md.content = state.summary_markdown(summary(av))
+            self._show_summary(summary(av))
             self._show_status()
             self.compare_view.update(results)
 

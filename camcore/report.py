@@ -13,7 +13,7 @@ from . import checks, machine, train, wear
 from .analysis import Analysis, analyze, compare
 from .contact import hertz_validity
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
-from .motion import FALL, HIGH, RISE
+from .motion import FALL, HIGH, LOW, RISE
 
 R2D = 180.0 / math.pi
 
@@ -82,13 +82,42 @@ def _dwells(a: Analysis) -> list[dict]:
     return out
 
 
+_SEGMENT_NAMES = {RISE: "rise", HIGH: "high dwell", FALL: "fall", LOW: "low dwell"}
+
+
+def _event(k: int, names: list[str], before, after, seg_before: int, seg_after: int) -> str:
+    """What happens at station k, in words (for a class): the segment that begins and
+    the faces that start or stop touching, and who carries the load from there."""
+    parts = []
+    if seg_before != seg_after:
+        parts.append(f"the {_SEGMENT_NAMES[seg_before]} ends and the "
+                     f"{_SEGMENT_NAMES[seg_after]} begins")
+    gained = [names[i] for i in range(len(names)) if after[i] and not before[i]]
+    lost = [names[i] for i in range(len(names)) if before[i] and not after[i]]
+    parts += [f"{n} touches" for n in gained] + [f"{n} leaves the cam" for n in lost]
+    on = [names[i] for i in range(len(names)) if after[i]]
+    if len(names) == 2 and len(on) == 2 and (gained or lost):
+        parts.append("from here the load is shared (Eqs. 36-38)")
+    elif len(names) == 2 and len(on) == 1 and (gained or lost):
+        parts.append(f"from here {on[0]} carries the load alone")
+    return f"station {k}: " + ("; ".join(parts) if parts else "nothing changes")
+
+
 def _station_list(a: Analysis) -> list[dict]:
-    """The stations in order, with the faces touching just after each."""
+    """The stations in order, with the faces touching just after each and what happens
+    there in words (``event``)."""
     names = [f.name.split(" ")[0] for f in a.geo.faces]
-    after = a.local(np.mod(a.stations + 1e-7, 2 * math.pi)).in_contact
+    two_pi = 2 * math.pi
+    before = a.local(np.mod(a.stations - 1e-7, two_pi))
+    after = a.local(np.mod(a.stations + 1e-7, two_pi))
+    st = a.stations
     return [{"theta_deg": float(t * R2D),
-             "contacts": [names[i] for i in range(len(names)) if after[i, k]]}
-            for k, t in enumerate(a.stations)]
+             "contacts": [names[i] for i in range(len(names)) if after.in_contact[i, k]],
+             "event": (f"station {k}: the same angle as station {k - 1} (one face: nothing "
+                       "to hand over)" if k > 0 and abs(t - st[k - 1]) < 1e-12 else
+                       _event(k, names, before.in_contact[:, k], after.in_contact[:, k],
+                              int(before.prog.segment[k]), int(after.prog.segment[k])))}
+            for k, t in enumerate(st)]
 
 
 def _finite(x: float, factor: float = 1.0) -> float | None:

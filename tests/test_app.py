@@ -199,6 +199,7 @@ def test_stations_angle_and_animation(tab):
     s.stations_btn.value = "2"
     assert abs(np.radians(s.theta_deg) - s.analysis.stations[2]) < 1e-9
     assert "at station 2" in s.where_md.content
+    assert "station 2: S2 touches; from here the load is shared" in s.where_md.content
     assert "S1 (left face), S2 (right face)" in s.where_md.content  # both on the dwell arc
     wxyz = np.array(s.view.cam_frame.wxyz)
     assert abs(2 * np.arctan2(-wxyz[3], wxyz[0]) - s.analysis.stations[2]) < 1e-2

@@ -171,3 +171,18 @@ def test_law_families_name_vdi_2143_tasks():
     assert "R-R" in MotionLaw.cycloidal.family
     assert "G-G" in MotionLaw.constant_velocity.family
     assert "degree 5" in MotionLaw.polynomial.family
+
+
+def test_station_events_tell_the_papers_story():
+    """Sec. 4 / Fig. 4 of the paper in words: S1 alone drives the rise, the second face
+    touches the high-dwell arc at station 2 and the load is shared, S1 leaves at station
+    3, S2 drives the fall, and both rest on the base circle from station 5."""
+    events = [st["event"] for st in summary(analyze(PAPER, verify=False))["stations"]]
+    assert "rise begins" in events[0] and "S1 carries the load alone" in events[0]
+    assert events[1] == "station 1: the rise ends and the high dwell begins"
+    assert events[2] == "station 2: S2 touches; from here the load is shared (Eqs. 36-38)"
+    assert events[3] == "station 3: S1 leaves the cam; from here S2 carries the load alone"
+    assert events[4] == "station 4: the high dwell ends and the fall begins"
+    assert "low dwell begins; S1 touches; from here the load is shared" in events[5]
+    single = summary(analyze(PAPER.with_kind("single_roller"), verify=False))["stations"]
+    assert "same angle as station 1" in single[2]["event"]
