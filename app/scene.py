@@ -410,3 +410,31 @@ class SceneView:
             self.nodes[name].visible = on
         elif self.a is not None:
             self.pose(self.k)
+
+
+CAMERA_VIEWS = ("Front", "Contact close-up", "3D")
+FRONT_FOV = math.radians(8.0)  # a long lens: nearly orthographic, the cam looks round
+
+
+def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
+    """(position, look_at, fov [rad]) of a preset view of analysis ``a`` at grid index k.
+
+    Front: straight along -z with a long lens, the whole mechanism in frame. Contact
+    close-up: the same lens on the contact region, following the follower's lift (call
+    again as the cam turns). 3D: the perspective view from above and to the side."""
+    d = a.design
+    top = a.geo.r_b + a.geo.h + (d.dynamics.overhang_mm + d.dynamics.guide_length_mm) * 1e-3
+    bottom = -a.geo.r_b
+    H = top - bottom
+    cy = (top + bottom) / 2
+    if view == "3D":
+        look = np.array([0.18 * H, cy, 0.0])
+        pos = look + np.array([0.18 * H, 0.12 * H, 0.95 * H])
+        return tuple(pos), tuple(look), math.radians(50.0)
+    if view == "Contact close-up":
+        y = a.geo.r_b + float(a.prog.S[k])  # the contacts sit near the top of the cam
+        span = 0.8 * a.geo.r_b  # both faces of a double follower and the flanks in frame
+        dist = span / (2 * math.tan(FRONT_FOV / 2))
+        return (0.0, y, dist), (0.0, y, 0.0), FRONT_FOV
+    dist = 1.15 * H / (2 * math.tan(FRONT_FOV / 2))
+    return (0.0, cy, dist), (0.0, cy, 0.0), FRONT_FOV

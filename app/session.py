@@ -32,7 +32,7 @@ from camcore.motion import FALL, HIGH, LOW, RISE
 from camcore.report import summary
 
 from . import compare, plots, state, storage, uploads
-from .scene import OFF_BY_DEFAULT, OVERLAYS, SceneView
+from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS, SceneView, camera_for
 
 DEFAULT_PRESET = "paper_example"
 FPS = 30.0
@@ -101,6 +101,7 @@ class Session:
         self.design = self.base
         self.analysis = None
         self.station_events: list[str] = []  # what happens at each station, in words
+        self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
         self.error: str | None = None
         self.verified = False
         self.gen = 0
@@ -175,6 +176,8 @@ class Session:
                 cb = gui.add_checkbox(OVERLAY_LABELS[name], name not in OFF_BY_DEFAULT)
                 cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
                 self.overlay_boxes[name] = cb
+            self.view_btns = gui.add_button_group("Camera", CAMERA_VIEWS)
+            self.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))
             self.camera_btn = gui.add_button("Reset camera")
             self.camera_btn.on_click(lambda _: self.reset_camera())
         with tabs.add_tab("Files"):
@@ -608,6 +611,8 @@ class Session:
                     self.angle_slider.value = round(self.theta_deg, 1)  # as the text
                 finally:
                     self._syncing = False
+            if self.camera_view == "Contact close-up":
+                self.reset_camera()  # follow the contacts as the follower rises
             if markers:
                 self._show_where(k)
                 for c in self.curves:
@@ -721,19 +726,21 @@ class Session:
             self._show_status()
             self.compare_view.update(results)
 
+    def set_camera_view(self, view: str) -> None:
+        """A preset view (Front by default; the close-up follows the animation)."""
+        if view not in CAMERA_VIEWS:  # a client may send anything
+            return
+        with self.lock:
+            self.camera_view = view
+            self.reset_camera()
+
     def reset_camera(self) -> None:
-        a = self.analysis
-        d = a.design
-        top = a.geo.r_b + a.geo.h + (d.dynamics.overhang_mm + d.dynamics.guide_length_mm) * 1e-3
-        bottom = -a.geo.r_b
-        H = top - bottom
-        cy = (top + bottom) / 2
-        dist = 0.95 * H
-        look = np.array([0.18 * H, cy, 0.0])
+        pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k)
         cam = self.client.camera
         cam.up_direction = (0.0, 1.0, 0.0)
-        cam.position = tuple(look + np.array([0.18 * H, 0.12 * H, dist]))
-        cam.look_at = tuple(look)
+        cam.fov = fov
+        cam.position = pos
+        cam.look_at = look
 
     def close(self) -> None:
         self.closed.set()

@@ -5,6 +5,7 @@ curves and panels change as they should."""
 from __future__ import annotations
 
 import io
+import math
 import time
 
 import numpy as np
@@ -480,3 +481,18 @@ def test_no_pressure_angle_construction_where_nothing_touches(tab):
     assert not s.view.nodes["phi"].visible and not s.view.nodes["phi_label"].visible
     s.angle_slider.value = 50.0
     assert s.view.nodes["phi"].visible
+
+
+def test_camera_presets_front_by_default_and_a_close_up_that_follows(tab):
+    s = tab
+    cam = s.client.camera
+    assert s.camera_view == "Front" and cam.fov < math.radians(10)  # a long, flat lens
+    assert abs(cam.position[0]) < 1e-12 and abs(cam.look_at[0]) < 1e-12  # straight on
+    s.view_btns.value = "Contact close-up"
+    s.angle_slider.value = 50.0
+    S = float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))
+    assert cam.look_at[1] == pytest.approx(s.analysis.geo.r_b + S, abs=1e-4)
+    s.set_camera_view("../../etc")  # anything else a client sends is ignored
+    assert s.camera_view == "Contact close-up"
+    s.view_btns.value = "3D"
+    assert cam.fov > math.radians(30)
