@@ -170,7 +170,7 @@ class Session:
             self.curves = plots.build_curves(gui, analyze(self.base, verify=False))
         with tabs.add_tab("Compare"):
             self.compare_view = compare.CompareView(gui)
-        with tabs.add_tab("View"):
+        with tabs.add_tab("View") as self.view_folder:
             self.overlay_boxes = {}
             for name in OVERLAYS:
                 cb = gui.add_checkbox(OVERLAY_LABELS[name], name not in OFF_BY_DEFAULT)
@@ -180,6 +180,9 @@ class Session:
             self.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))
             self.camera_btn = gui.add_button("Reset camera")
             self.camera_btn.on_click(lambda _: self.reset_camera())
+            self.stations_fig_btn = gui.add_button("Stations diagram (the paper's Fig. 4)")
+            self.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
+            self.stations_img = None
         with tabs.add_tab("Files"):
             names = preset_names()
             self.preset_dd = gui.add_dropdown(
@@ -725,6 +728,21 @@ class Session:
             self._show_summary(summary(av))
             self._show_status()
             self.compare_view.update(results)
+
+    def show_stations_diagram(self) -> None:
+        """The mechanism at every station side by side (camcore.document), under the
+        button; drawn from the design on screen, replaced on each click."""
+        from camcore.document import stations_image
+
+        with self.lock:
+            a = self.analysis
+        image = stations_image(a)  # ~0.5 s of matplotlib, outside the lock
+        with self.lock:
+            if self.stations_img is not None:
+                self.stations_img.image = image
+            else:
+                with self.view_folder:
+                    self.stations_img = self.client.gui.add_image(image, format="png")
 
     def set_camera_view(self, view: str) -> None:
         """A preset view (Front by default; the close-up follows the animation)."""

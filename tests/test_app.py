@@ -496,3 +496,15 @@ def test_camera_presets_front_by_default_and_a_close_up_that_follows(tab):
     assert s.camera_view == "Contact close-up"
     s.view_btns.value = "3D"
     assert cam.fov > math.radians(30)
+
+
+def test_stations_diagram_in_the_view_tab(tab):
+    """The paper's Fig. 4 for the design on screen: one panel per station, drawn on
+    request and replaced on the next request."""
+    s = tab
+    s.stations_fig_btn.value = True  # click
+    img = s.stations_img
+    assert img is not None and img.image.ndim == 3 and img.image.shape[1] == 700
+    assert img.image.std() > 10  # something is drawn
+    s.stations_fig_btn.value = True
+    assert s.stations_img is img  # the same element, a new picture

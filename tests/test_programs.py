@@ -186,3 +186,17 @@ def test_station_events_tell_the_papers_story():
     assert "low dwell begins; S1 touches; from here the load is shared" in events[5]
     single = summary(analyze(PAPER.with_kind("single_roller"), verify=False))["stations"]
     assert "same angle as station 1" in single[2]["event"]
+
+
+def test_stations_figure_has_a_panel_per_station():
+    """The paper's Fig. 4 for any program: one panel per station, titled with its angle
+    and captioned with its event; in the printable report too."""
+    from camcore import document
+
+    a = analyze(load_preset("double_index"), verify=False)
+    fig = document.stations_figure(a)
+    drawn = [ax for ax in fig.axes if ax.axison]
+    assert len(drawn) == len(a.stations)
+    assert drawn[2].get_title().startswith("station 2: theta = ")
+    assert drawn[2].get_xlabel() == summary(a)["stations"][2]["event"].split(": ", 1)[1]
+    assert "Stations (the paper's Fig. 4" in document.html_report(a)
