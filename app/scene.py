@@ -19,6 +19,7 @@ from camcore.export import ExportError, cam_mesh
 
 CAM_RGB = (150, 165, 185)
 FOLLOWER_RGB = (205, 110, 30)
+IDLE_FACE_RGB = (230, 205, 180)  # a double follower's face that does not touch: dimmed
 STEM_RGB = (235, 165, 80)
 GUIDE_RGB = (120, 120, 130)
 BAD_RGB = (220, 20, 30)
@@ -196,6 +197,7 @@ class SceneView:
         self.follower_frame = scene.add_frame("/follower", show_axes=False)
         self.nodes: dict[str, object] = {}
         self.builds = 0  # geometry rebuilds
+        self._face_rgb: dict[int, tuple] = {}
         self._geometry: str | None = None
 
     # --- build once per analysis ---------------------------------------------------
@@ -239,6 +241,7 @@ class SceneView:
         self._build_arcs(a, zt + 2e-4, thick * 1.5)
         parts = follower_parts(a)
         self._face_meshes = [parts[f"face{i}"][0] for i in range(len(a.geo.faces))]
+        self._face_rgb: dict[int, tuple] = {}  # new nodes: the colour is set on the next pose
         for name, (mesh, rgb) in parts.items():
             parent = "" if name == "guide" else "/follower"
             self.nodes[name] = s.add_mesh_simple(
@@ -344,6 +347,7 @@ class SceneView:
         self.cam_frame.wxyz = quat_z(-th)  # clockwise cam
         self.follower_frame.position = (0.0, S, 0.0)
         on = a.in_contact[:, k]
+        self._highlight_faces(on)
         z = self.zt
         pw = a.point_world[:, k, :]
         for i in range(len(a.geo.faces)):
@@ -403,6 +407,18 @@ class SceneView:
         lab.position = (p[0] + side * 0.35 * L, p[1] - 0.05 * L, z)
         lab.text = f"φ = {math.degrees(phi):.1f}°"
         lab.visible = self.show["pressure_angle"] and touching
+
+    def _highlight_faces(self, on: np.ndarray) -> None:
+        """The touching face of a double follower in full colour, the idle one dimmed
+        (sent only when it changes, not every frame)."""
+        if on.size != 2:
+            return
+        for i in range(2):
+            rgb = FOLLOWER_RGB if on[i] else IDLE_FACE_RGB
+            node = self.nodes.get(f"face{i}")
+            if node is not None and self._face_rgb.get(i) != rgb:
+                node.color = rgb
+                self._face_rgb[i] = rgb
 
     def set_overlay(self, name: str, on: bool) -> None:
         self.show[name] = on

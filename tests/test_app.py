@@ -508,3 +508,14 @@ def test_stations_diagram_in_the_view_tab(tab):
     assert img.image.std() > 10  # something is drawn
     s.stations_fig_btn.value = True
     assert s.stations_img is img  # the same element, a new picture
+
+
+def test_the_touching_face_is_highlighted_and_the_idle_one_dimmed(tab):
+    from app.scene import FOLLOWER_RGB, IDLE_FACE_RGB
+
+    s = tab
+    s.angle_slider.value = 50.0  # the rise: S1 drives, S2 is off the cam
+    assert tuple(s.view.nodes["face0"].color) == FOLLOWER_RGB
+    assert tuple(s.view.nodes["face1"].color) == IDLE_FACE_RGB
+    s.goto_station(2)  # both on the high-dwell arc
+    assert tuple(s.view.nodes["face1"].color) == FOLLOWER_RGB
