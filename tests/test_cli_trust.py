@@ -220,7 +220,8 @@ def test_concurrent_reads_do_not_interfere(tmp_path):
 
 
 def test_html_and_pdf_report(tmp_path):
-    """`report --html/--pdf`: a self-contained page (inline SVG plots, no external
+    """`report --html/--pdf`: a self-contained page (inline SVG plots: curves, profile,
+    stations; no external
     reference) with the key numbers and the violations, the design name escaped; a PDF
     that starts like one. stdout stays pure JSON with --json."""
     d = json.loads(load_preset("paper_example").model_dump_json())
@@ -234,7 +235,7 @@ def test_html_and_pdf_report(tmp_path):
     assert json.loads(proc.stdout)["valid"] is False
     text = page.read_text()
     assert "<b id=inj>" not in text and "&lt;b id=inj&gt;x&lt;/b&gt; &amp; co" in text
-    assert text.count("<svg") == 2 and "Eq. 28" in text and "high_dwell_arc" in text
+    assert text.count("<svg") == 3 and "Eq. 28" in text and "high_dwell_arc" in text
     for external in ("<link", "<script", "<img", "src=", 'href="http', "url(http"):
         assert external not in text  # nothing to fetch: XML namespaces only
     assert "Hertz contact stress" in text and "Jerk" in text
