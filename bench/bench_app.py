@@ -4,13 +4,18 @@ and the cost and rate of animation frames. ``python bench/bench_app.py`` prints 
 
 from __future__ import annotations
 
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
-from app.fake_tab import FakeTab
-from app.main import App
-from camcore.analysis import analyze
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test helper
+
+from fake_tab import FakeTab  # noqa: E402
+
+from app.main import App  # noqa: E402
+from camcore.analysis import analyze  # noqa: E402
 
 
 def _row(name, samples_s, note=""):

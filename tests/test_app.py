@@ -1,6 +1,6 @@
 """Server-side tests of the design studio: drive the GUI handles of a real viser server
-(through websocket clients that viser counts as browser tabs, app.fake_tab) and check the scene,
-curves and panels change as they should."""
+(through websocket clients that viser counts as browser tabs, tests/fake_tab.py) and
+check the scene, curves and panels change as they should."""
 
 from __future__ import annotations
 
@@ -11,9 +11,9 @@ import time
 import numpy as np
 import pytest
 import trimesh
+from fake_tab import FakeTab
 from viser._gui_handles import GuiEvent, UploadedFile
 
-from app.fake_tab import FakeTab
 from app.main import App
 from camcore.model import Design, design_to_json, load_preset
 
