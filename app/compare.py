@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import numpy as np
-from pydantic import ValidationError
 
-from camcore.analysis import analyze
-from camcore.model import PAPER_FOLLOWERS, Design, format_validation_error
+from camcore import analysis
+from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import PAPER_TABLE1_N, summary
 
 from .plots import COLORS, stride_index
@@ -17,13 +16,7 @@ KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
 def compute(design: Design) -> dict:
     """{kind: Analysis | error message} for the four followers."""
-    out: dict = {}
-    for k in KINDS:
-        try:
-            out[k] = analyze(design.with_kind(k), verify=False)
-        except ValidationError as exc:
-            out[k] = format_validation_error(exc)
-    return out
+    return analysis.compare(design, kinds=KINDS, errors=True)
 
 
 def table_markdown(results: dict) -> str:

@@ -219,7 +219,22 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
 
 
 def compare(design: Design, verify: bool = False,
-            kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS) -> dict[FollowerKind, Analysis]:
+            kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS,
+            errors: bool = False) -> dict[FollowerKind, Analysis | str]:
     """The same design with each follower in ``kinds`` (default: the paper's four,
-    Table 1, Figs. 11-13)."""
-    return {k: analyze(design.with_kind(k), verify=verify) for k in kinds}
+    Table 1, Figs. 11-13). ``errors``: a follower for which the design is not valid
+    input (e.g. a face radius a roller cannot take) gets the reason as a string instead
+    of raising."""
+    from pydantic import ValidationError
+
+    from .model import format_validation_error
+
+    out: dict[FollowerKind, Analysis | str] = {}
+    for k in kinds:
+        try:
+            out[k] = analyze(design.with_kind(k), verify=verify)
+        except ValidationError as exc:
+            if not errors:
+                raise
+            out[k] = format_validation_error(exc)
+    return out

@@ -181,3 +181,24 @@ def test_new_followers_export_watertight(kind):
     mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
     assert mesh.is_watertight
     assert mesh.volume == pytest.approx(a.profile.area * 1e9 * 15.0 / 1e3, rel=1e-6)
+
+
+def test_compare_reports_followers_the_design_cannot_take():
+    """A face radius smaller than the base radius suits rollers, not concave faces:
+    compare(errors=True) gives the reason for those (the app's Compare tab), and
+    without errors=True the first one raises."""
+    import pytest
+    from pydantic import ValidationError
+
+    from camcore.analysis import compare
+    from camcore.model import load_preset
+
+    data = load_preset("paper_example").with_kind("single_roller").model_dump(mode="json")
+    data["follower"]["face_radius_mm"] = -70.0
+    d = type(load_preset("paper_example")).model_validate(data)
+    out = compare(d, errors=True)
+    kinds = {k.value: v for k, v in out.items()}
+    assert not isinstance(kinds["single_roller"], str)
+    assert isinstance(kinds["double_concave"], str) and "face_radius_mm" in kinds["double_concave"]
+    with pytest.raises(ValidationError):
+        compare(d)
