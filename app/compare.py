@@ -7,6 +7,7 @@ import numpy as np
 from camcore import analysis
 from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import PAPER_TABLE1_N, summary
+from camcore.units import to_mpa
 
 from .plots import COLORS, stride_index
 from .state import esc
@@ -99,6 +100,6 @@ class CompareView:
                 continue
             xa = np.degrees(a.theta)
             fn.append(np.interp(x, xa, a.guide.FN))
-            st.append(np.interp(x, xa, a.stress.max(axis=0) / 1e6))
+            st.append(np.interp(x, xa, to_mpa(a.stress.max(axis=0))))
         self.fn.data = tuple(fn)
         self.stress.data = tuple(st)

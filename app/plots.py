@@ -12,6 +12,7 @@ import numpy as np
 from camcore import machine, motion, train, wear
 from camcore.checks import rho_reference_mm, violation_mask
 from camcore.model import omega_rad_s
+from camcore.units import to_mm, to_mpa, to_um_per_mcycle
 
 MAX_POINTS = 720
 X_AXIS = {"label": "cam angle θ [°]", "size": 36}
@@ -109,7 +110,7 @@ def build_curves(gui, a) -> list[Curve]:
     ref_label, ref = rho_reference_mm(a.design)
 
     def rho_mm(a):
-        r = a.primary(a.rho) * 1e3
+        r = to_mm(a.primary(a.rho))
         cap = max(3 * rho_reference_mm(a.design)[1], 2 * a.design.cam.base_radius_mm)
         return np.clip(np.nan_to_num(r, nan=cap, posinf=cap, neginf=-cap), -cap, cap)
 
@@ -119,14 +120,15 @@ def build_curves(gui, a) -> list[Curve]:
 
     curves = [
         Curve(gui, "Displacement S", [("mm", "S [mm]")], [
-            {"label": "S [mm]", "scale": "mm", "stroke": COLORS[0], "fn": lambda a: a.prog.S * 1e3},
+            {"label": "S [mm]", "scale": "mm", "stroke": COLORS[0],
+             "fn": lambda a: to_mm(a.prog.S)},
         ], codes=None),
         Curve(gui, "Velocity V and acceleration A (per radian of cam angle)",
               [("V", "V [mm/rad]"), ("A", "A [mm/rad²]")], [
             {"label": "V [mm/rad]", "scale": "V", "stroke": COLORS[1],
-             "fn": lambda a: a.prog.V * 1e3},
+             "fn": lambda a: to_mm(a.prog.V)},
             {"label": "A [mm/rad²]", "scale": "A", "stroke": COLORS[2],
-             "fn": lambda a: a.prog.A * 1e3},
+             "fn": lambda a: to_mm(a.prog.A)},
         ], codes=set()),
         Curve(gui, "Velocity, acceleration and jerk per second at the design speed",
               [("ms", "V [m/s]"), ("ms2", "A [m/s²]"), ("ms3", "J [m/s³]")], [
@@ -157,7 +159,7 @@ def build_curves(gui, a) -> list[Curve]:
         ], codes={"jump", "guide_jam", "contact_lost"}),
         Curve(gui, "Contact (Hertz) stress σ_H", [("MPa", "σ_H [MPa]")], [
             {"label": "σ_H [MPa]", "scale": "MPa", "stroke": COLORS[4],
-             "fn": lambda a: a.stress.max(axis=0) / 1e6},
+             "fn": lambda a: to_mpa(a.stress.max(axis=0))},
         ], codes={"jump"}),
         Curve(gui, "Spring force and the force that keeps contact (jump where it wins)",
               [("N", "force [N]")], [
@@ -180,9 +182,9 @@ def build_curves(gui, a) -> list[Curve]:
         Curve(gui, "Cam wear per 10⁶ cycles (Archard), at the point each face touches",
               [("um", "wear [µm]")], [
             {"label": "face 1 [µm]", "scale": "um", "stroke": COLORS[3],
-             "fn": lambda a: wear.depth_per_pass(a)[0] * 1e12},
+             "fn": lambda a: to_um_per_mcycle(wear.depth_per_pass(a)[0])},
             {"label": "face 2 (double followers) [µm]", "scale": "um", "stroke": COLORS[4],
-             "fn": lambda a: (wear.depth_per_pass(a)[1] * 1e12 if a.FN.shape[0] == 2
+             "fn": lambda a: (to_um_per_mcycle(wear.depth_per_pass(a)[1]) if a.FN.shape[0] == 2
                               else np.zeros(a.theta.size))},
         ], codes=set()),
     ]

@@ -16,6 +16,7 @@ import trimesh
 from camcore import profile, wear
 from camcore.checks import violation_mask
 from camcore.export import ExportError, cam_mesh
+from camcore.units import from_mm
 
 CAM_RGB = (150, 165, 185)
 FOLLOWER_RGB = (205, 110, 30)
@@ -104,7 +105,7 @@ def _classic_body(a, f, z0: float, z1: float):
 def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]:
     """Meshes of the follower (at zero lift, world frame) and the fixed guide [m]."""
     d, geo = a.design, a.geo
-    w = d.cam.width_mm * 1e-3
+    w = from_mm(d.cam.width_mm)
     z0, z1 = -w / 2, w / 2
     parts: dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]] = {}
     tops, xs = [], []
@@ -141,12 +142,12 @@ def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]
             ends = [f.x_c + (R + PAD_T) * math.sin(t) for t in (a0, a1)]
             tops.append(max(geo.y0 + (R + PAD_T) * math.cos(t) for t in (a0, a1)))
             xs += ends
-    sw = d.dynamics.guide_width_mm * 1e-3
+    sw = from_mm(d.dynamics.guide_width_mm)
     y_yoke = max(tops)
     sx = geo.stem_x  # a single follower's axis (its offset)
     x_lo, x_hi = min(min(xs), sx - sw / 2), max(max(xs), sx + sw / 2)
     parts["yoke"] = (_box(x_lo, x_hi, y_yoke - 1e-4, y_yoke + YOKE_T, z0, z1), STEM_RGB)
-    l1, l2 = d.dynamics.overhang_mm * 1e-3, d.dynamics.guide_length_mm * 1e-3
+    l1, l2 = from_mm(d.dynamics.overhang_mm), from_mm(d.dynamics.guide_length_mm)
     g0 = y_yoke + YOKE_T + l1
     stem_top = g0 + l2 + max(0.02, 1.2 * geo.h)
     parts["stem"] = (_box(sx - sw / 2, sx + sw / 2, y_yoke + YOKE_T - 1e-4, stem_top,
@@ -205,7 +206,7 @@ class SceneView:
         """Show a new analysis. The geometry (cam, follower, arcs, overlay markers) is
         rebuilt only when it changed: a new speed, spring or material moves no node."""
         self.a = a
-        w = a.design.cam.width_mm * 1e-3
+        w = from_mm(a.design.cam.width_mm)
         zt = w / 2 + 2e-4
         thick = max(2e-4, 0.004 * a.geo.r_b)
         key = geometry_key(a.design)
@@ -222,7 +223,7 @@ class SceneView:
         s = self.scene
         try:
             m = cam_mesh(a, max_points=DISPLAY_POINTS)
-            verts = np.asarray(m.vertices) * 1e-3 - np.array([0.0, 0.0, w / 2])
+            verts = from_mm(np.asarray(m.vertices)) - np.array([0.0, 0.0, w / 2])
             self.nodes["cam"] = s.add_mesh_simple(
                 "/cam/solid", verts.astype(np.float32), np.asarray(m.faces, dtype=np.uint32),
                 color=CAM_RGB, flat_shading=True)
@@ -439,7 +440,7 @@ def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
     close-up: the same lens on the contact region, following the follower's lift (call
     again as the cam turns). 3D: the perspective view from above and to the side."""
     d = a.design
-    top = a.geo.r_b + a.geo.h + (d.dynamics.overhang_mm + d.dynamics.guide_length_mm) * 1e-3
+    top = a.geo.r_b + a.geo.h + from_mm(d.dynamics.overhang_mm + d.dynamics.guide_length_mm)
     bottom = -a.geo.r_b
     H = top - bottom
     cy = (top + bottom) / 2

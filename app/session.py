@@ -30,6 +30,7 @@ from camcore.model import (
 )
 from camcore.motion import FALL, HIGH, LOW, RISE
 from camcore.report import summary
+from camcore.units import to_mm
 
 from . import compare, plots, state, storage, uploads
 from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS, SceneView, camera_for
@@ -599,7 +600,7 @@ class Session:
             seg = f"{SEGMENT[int(a.prog.segment[k - 1])]} ends, {seg} begins"
         self.where_md.content = (
             f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
-            f"In contact: **{touch}** · S = {a.prog.S[k] * 1e3:.3f} mm · "
+            f"In contact: **{touch}** · S = {to_mm(a.prog.S[k]):.3f} mm · "
             f"F_N = {a.guide.FN[k]:.1f} N{events}")
 
     def _goto(self, theta_deg: float, markers: bool = True, slider: bool = True) -> None:

@@ -16,6 +16,7 @@ from pydantic import ValidationError
 
 from camcore.model import Design, FollowerKind, MotionLaw, format_validation_error
 from camcore.report import machine_rows
+from camcore.units import to_mm
 
 
 @dataclass(frozen=True)
@@ -227,7 +228,7 @@ def status_html(error: str | None, violations, lift_error: float | None,
     if not violations:
         check = ""
         if verified and lift_error is not None:
-            check = f"; geometric check max |lift − S| = {lift_error * 1e3:.2g} mm"
+            check = f"; geometric check max |lift − S| = {to_mm(lift_error):.2g} mm"
         elif not verified:
             check = "; geometric check running…"
         parts.append(_BOX.format(bg="#e3f5e1", fg="#2ca02c",

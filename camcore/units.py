@@ -44,3 +44,8 @@ def from_deg(x_deg):
 def to_mpa(x_pa):
     """Pascals -> megapascals."""
     return x_pa / MPA
+
+
+def to_um_per_mcycle(x_m_per_cycle):
+    """Metres per cycle -> micrometres per million cycles (wear depth)."""
+    return x_m_per_cycle / UM * 1e6
