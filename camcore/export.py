@@ -20,7 +20,7 @@ import numpy as np
 from .model import Design, design_to_json, omega_rad_s
 from .motion import FALL, HIGH, LOW, RISE, per_second
 from .train import on_grid
-from .units import to_deg, to_mm, to_mpa
+from .units import to_deg, to_mm, to_mpa, to_um_per_mcycle
 from .wear import depth_per_pass, sliding_speed
 
 
@@ -275,7 +275,7 @@ def series_columns(a) -> dict[str, np.ndarray]:
         cols[f"rho_mm_{f + 1}"] = to_mm(a.rho[f])
         cols[f"stress_MPa_{f + 1}"] = to_mpa(a.stress[f])
         cols[f"sliding_m_per_s_{f + 1}"] = slide[f]
-        cols[f"wear_um_per_Mcycle_{f + 1}"] = wear[f] * 1e12  # m per pass -> um per 1e6
+        cols[f"wear_um_per_Mcycle_{f + 1}"] = to_um_per_mcycle(wear[f])
     cols["cam_torque_Nm"] = a.torque.sum(axis=0)
     if a.train is not None:  # the elastic follower train (camcore.train)
         cols["Fc_train_N"] = on_grid(a.train, a.theta, a.train.contact_force)

@@ -14,6 +14,7 @@ from .analysis import Analysis, analyze, compare
 from .contact import hertz_validity
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
 from .motion import FALL, HIGH, LOW, RISE
+from .units import to_um_per_mcycle
 
 R2D = 180.0 / math.pi
 
@@ -161,7 +162,7 @@ def _wear(a: Analysis) -> dict:
     life = wear.pitting_life_cycles(a)
     revs_per_hour = a.design.cam.speed_rpm * 60.0
     return {
-        "wear_depth_max_um_per_Mcycle": float(depth.max()) * 1e6 * 1e6,
+        "wear_depth_max_um_per_Mcycle": float(to_um_per_mcycle(depth.max())),
         "sliding_speed_max_m_per_s": float(wear.sliding_speed(a).max()),
         "pitting_life_cycles": _finite(life),
         "pitting_life_hours": _finite(life / revs_per_hour),
