@@ -175,6 +175,12 @@ def _circle(r: float, n: int = 180) -> np.ndarray:
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
 
 
+def _label_size(a) -> dict:
+    """Labels sized in the scene (a fixed share of the base radius), so they grow as a
+    teacher zooms in and stay readable from the back of a room."""
+    return {"font_size_mode": "scene", "font_scene_height": 0.06 * a.geo.r_b}
+
+
 def geometry_key(design) -> str:
     """Everything the drawn geometry depends on (not speed, spring, mass, material)."""
     return design.model_dump_json(include={
@@ -310,7 +316,7 @@ class SceneView:
             left = i == 0 and len(a.geo.faces) == 2
             self.nodes[key] = self.scene.add_label(
                 f"/follower/{key}", name, position=(lo if left else hi, y, 0.0),
-                font_screen_scale=0.8, anchor="bottom-right" if left else "bottom-left")
+                **_label_size(a), anchor="bottom-right" if left else "bottom-left")
 
     def _build_overlays(self, a, zt) -> None:
         s = self.scene
@@ -329,11 +335,11 @@ class SceneView:
                                                    thickness=self.thin * 1.4)
         self.nodes["q"] = s.add_icosphere("/ov/q", radius=r * 1.2, color=Q_RGB)
         self.nodes["q_label"] = s.add_label("/ov/q/label", "I23 = Q", position=(0, -2 * r, 0),
-                                            font_screen_scale=0.8, anchor="top-center")
+                                            **_label_size(a), anchor="top-center")
         self.nodes["q_lines"] = s.add_line_segments("/ov/q_lines", one, Q_RGB,
                                                     thickness=self.thin * 0.5)
         self.nodes["phi"] = s.add_line_segments("/ov/phi", one, PHI_RGB, thickness=self.thin * 0.6)
-        self.nodes["phi_label"] = s.add_label("/ov/phi_label", "φ", font_screen_scale=0.8,
+        self.nodes["phi_label"] = s.add_label("/ov/phi_label", "φ", **_label_size(a),
                                               anchor="center-center")
 
     # --- per frame -----------------------------------------------------------------
