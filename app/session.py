@@ -140,6 +140,9 @@ class Session:
     def _build_gui(self) -> None:
         gui = self.client.gui
         self.status = gui.add_html("")
+        # the part, one click away for the maker (the other formats are in Files)
+        self.quick_stl_btn = gui.add_button("⬇ Download the cam (STL, mm)")
+        self.quick_stl_btn.on_click(lambda _: self.download("stl"))
         with gui.add_folder("Animation", expand_by_default=True):
             self.play_btn = gui.add_button("▶ Play", color="green")
             self.speed_slider = gui.add_slider("Speed [°/s]", 5, 360, 5, self.speed)

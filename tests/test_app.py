@@ -187,6 +187,8 @@ def test_preset_and_downloads(tab):
     assert mesh.is_watertight
     expect = s.analysis.profile.area * 1e6 * s.design.cam.width_mm
     assert abs(mesh.volume - expect) / expect < 1e-6
+    s.quick_stl_btn.value = True  # the same part from the button above the tabs
+    assert s.last_download == (name, data)
     s.download_btns["json"].value = True
     assert s.last_download[1].decode().startswith("{")
     for kind, ext in (("dxf", ".dxf"), ("csv", "_profile.csv"), ("series", "_series.csv"),
