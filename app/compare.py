@@ -70,7 +70,7 @@ class CompareView:
             {"label": k.label, "stroke": COLORS[i], "width": 1.5, "scale": "y"}
             for i, k in enumerate(KINDS))
         common = dict(scales={"x": {"time": False, "range": (0.0, 360.0)}, "y": {"auto": True}},
-                      height=210, legend={"show": True})
+                      height=210, legend={"show": True, "live": False})
         zeros = tuple(np.zeros(2) for _ in ser)
         self.fn = gui.add_uplot(
             zeros, ser, title="Contact force F_N of the four followers (Fig. 11)",

@@ -60,7 +60,7 @@ class Curve:
         self.nser = len(ser)
         self.handle = gui.add_uplot(
             tuple(np.zeros(2) for _ in ser), tuple(ser), title=title, scales=scales,
-            axes=tuple(ax), height=height, legend={"show": True},
+            axes=tuple(ax), height=height, legend={"show": True, "live": False},
             cursor={"drag": {"x": False, "y": False}})
         self.x = None
         self.ys: list[np.ndarray] = []
