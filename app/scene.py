@@ -175,6 +175,11 @@ def _circle(r: float, n: int = 180) -> np.ndarray:
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
 
 
+def _display_points(a) -> np.ndarray:
+    """The profile thinned to about DISPLAY_POINTS vertices for drawing."""
+    return a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
+
+
 def _label_size(a) -> dict:
     """Labels sized in the scene (a fixed share of the base radius), so they grow as a
     teacher zooms in and stay readable from the back of a room."""
@@ -238,7 +243,7 @@ class SceneView:
             self.mesh_error = str(exc)
             if "cam" in self.nodes:
                 self.nodes.pop("cam").remove()
-        pts = a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
+        pts = _display_points(a)
         self.nodes["outline"] = s.add_line_segments(
             "/cam/outline", _polyline_segments(_flat(pts, zt), closed=True), EDGE_RGB,
             thickness=thick * 0.6)
@@ -275,7 +280,7 @@ class SceneView:
     def _build_wear(self, a, z, thick) -> None:
         """The cam's Archard wear along its profile as a heat band on the top face (pale:
         none, dark red: the profile's largest), from camcore.wear.along_profile."""
-        pts = a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
+        pts = _display_points(a)
         phi, depth = wear.along_profile(a)
         polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
         top = float(depth.max())

@@ -28,7 +28,7 @@ from camcore.model import (
     load_preset,
     preset_names,
 )
-from camcore.motion import FALL, HIGH, LOW, RISE
+from camcore.motion import SEGMENT_NAMES
 from camcore.report import summary
 from camcore.units import to_mm
 
@@ -37,7 +37,6 @@ from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS, SceneView, camera_for
 
 DEFAULT_PRESET = "paper_example"
 FPS = 30.0
-SEGMENT = {RISE: "rise", HIGH: "high dwell", FALL: "fall", LOW: "low dwell"}
 OVERLAY_LABELS = {
     "contacts": "Contact points",
     "forces": "Contact normals as force arrows (∝ F_N)",
@@ -598,9 +597,9 @@ class Session:
                      else f"between stations {n - 1} and 0")
         faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
         touch = ", ".join(faces) if faces else "none"
-        seg = SEGMENT[int(a.prog.segment[k])]
+        seg = SEGMENT_NAMES[int(a.prog.segment[k])]
         if a.prog.index[k] != a.prog.index[k - 1]:  # a boundary: say both (k - 1 wraps)
-            seg = f"{SEGMENT[int(a.prog.segment[k - 1])]} ends, {seg} begins"
+            seg = f"{SEGMENT_NAMES[int(a.prog.segment[k - 1])]} ends, {seg} begins"
         self.where_md.content = (
             f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
             f"In contact: **{touch}** · S = {to_mm(a.prog.S[k]):.3f} mm · "

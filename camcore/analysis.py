@@ -51,7 +51,7 @@ def _contact_slide(design: Design, geo: profile.Geometry, point_world, normal, p
     mu = design.dynamics.contact_friction
     if mu == 0.0 or (geo.r > 0 and not geo.flat):
         return None
-    return mu * forces.sliding_sign(point_world, normal, prog.V)
+    return mu * np.sign(forces.tangential_slip(point_world, normal, prog.V))
 
 
 @dataclass(frozen=True)

@@ -321,14 +321,17 @@ def _forces(a) -> list[Violation]:
 def _train(a) -> list[Violation]:
     """The elastic follower train (camcore.train) leaves the cam where its contact force
     F_c <= 0: the dynamic jump, which a rigid analysis cannot see."""
+    from .train import contact_force_fine
+
     r = a.train
     if r is None:
         return []
-    bad = r.contact_force <= 0
+    theta, Fc = contact_force_fine(r)  # between the samples too
+    bad = Fc <= 0
     if not bad.any():
         return []
-    ranges = runs_deg(r.theta, bad)
-    low = float(r.contact_force.min())
+    ranges = runs_deg(theta, bad)
+    low = float(Fc.min())
     return [Violation(
         "dynamic_jump", "Eqs. 29-41, elastic train",
         f"the elastic follower train leaves the cam: F_c = {low:.3g} N <= 0 at "

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import Design, design_to_json, omega_rad_s
-from .motion import FALL, HIGH, LOW, RISE, per_second
+from .motion import SEGMENT_NAMES, per_second
 from .train import on_grid
 from .units import to_deg, to_mm, to_mpa, to_um_per_mcycle
 from .wear import depth_per_pass, sliding_speed
@@ -223,7 +223,7 @@ def dxf_bytes(a) -> bytes:
     return buf.getvalue().encode("utf-8")
 
 
-_PART = {RISE: "rise", HIGH: "high_dwell", FALL: "fall", LOW: "low_dwell"}
+_PART = {k: v.replace(" ", "_") for k, v in SEGMENT_NAMES.items()}  # CSV: no spaces
 
 
 def csv_text(a) -> str:

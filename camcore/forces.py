@@ -33,17 +33,27 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import MM, Design, omega_rad_s
+from .units import GRAM
 
 MODES = ((1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0))
 TWO_CONTACTS = 4  # mode code of a two-contact dwell (Eqs. 36-38); -1 = self-locking
 
 
+def inertia_load(design: Design, A: np.ndarray) -> np.ndarray:
+    """M (g + a) with a = A omega^2 [N]: the part of Eq. 29 the spring must overcome."""
+    d = design.dynamics
+    return d.mass_g * GRAM * (d.gravity_m_s2 + A * omega_rad_s(design) ** 2)
+
+
+def spring_load(design: Design, S: np.ndarray) -> np.ndarray:
+    """k s with s = S + s_p [N]: the spring's part of Eq. 29 (Eq. 30)."""
+    d = design.dynamics
+    return d.spring_rate_N_per_m * (S + d.preload_mm * MM)
+
+
 def total_load(design: Design, S: np.ndarray, A: np.ndarray) -> np.ndarray:
     """F_t = M (g + a) + k s with a = A omega^2 and s = S + s_p  [N] (Eqs. 29-30)."""
-    d = design.dynamics
-    M = d.mass_g * 1e-3
-    a = A * omega_rad_s(design) ** 2
-    return M * (d.gravity_m_s2 + a) + d.spring_rate_N_per_m * (S + d.preload_mm * MM)
+    return inertia_load(design, A) + spring_load(design, S)
 
 
 @dataclass(frozen=True)
@@ -143,12 +153,14 @@ def two_contacts_with_friction(design: Design, Ft, normal, x_c, r: float, S, V,
     return GuideSolution(g.F1, g.F2, g.FN / scale, mode, g.side1, g.side2)
 
 
-def sliding_sign(point_world, normal, V) -> np.ndarray:
-    """sigma (F, N): the sign of the cam surface's sliding past the follower along the
-    tangent t = (n_y, -n_x) at each contact; the friction the cam exerts on the face
-    points along sigma t. v_cam = w (p_y, -p_x) (clockwise cam), v_follower = (0, V w)."""
+def tangential_slip(point_world, normal, V) -> np.ndarray:
+    """t . (v_cam - v_follower) / w [m/rad], (F, N): how fast the cam surface slides past
+    a face fixed to the follower, along the tangent t = (n_y, -n_x) at each contact,
+    per unit cam speed. v_cam = w (p_y, -p_x) (clockwise cam), v_follower = (0, V w).
+    Its sign sigma orients the contact friction (the cam drags the face along sigma t);
+    its size is the sliding speed of camcore.wear."""
     rel_x, rel_y = point_world[..., 1], -point_world[..., 0] - V
-    return np.sign(normal[..., 1] * rel_x - normal[..., 0] * rel_y)
+    return normal[..., 1] * rel_x - normal[..., 0] * rel_y
 
 
 def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V,

@@ -30,21 +30,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import extremes, motion
+from . import extremes, forces, motion
 from .model import Design, omega_rad_s
 from .units import GRAM, MM, RPM
 
 
 def spring_free_load(design: Design, prog: motion.Program) -> np.ndarray:
     """D = M (g + A w^2) [N]: the load F_t of Eq. 29 without the spring."""
-    d = design.dynamics
-    return d.mass_g * GRAM * (d.gravity_m_s2 + prog.A * omega_rad_s(design) ** 2)
+    return forces.inertia_load(design, prog.A)
 
 
 def spring_force(design: Design, prog: motion.Program) -> np.ndarray:
     """k (S + s_p) [N]: the spring's share of Eq. 29."""
-    d = design.dynamics
-    return d.spring_rate_N_per_m * (prog.S + d.preload_mm * MM)
+    return forces.spring_load(design, prog.S)
 
 
 def _over(num: np.ndarray, den: np.ndarray) -> np.ndarray:
@@ -53,27 +51,31 @@ def _over(num: np.ndarray, den: np.ndarray) -> np.ndarray:
         return np.where(num > 0, np.where(den > 0, num / den, np.inf), 0.0)
 
 
-def _sup(design: Design, theta: np.ndarray, per_program) -> tuple[float, float]:
-    """Sup over the cycle of per_program(program) (>= 0), between samples too."""
+def _sup(design: Design, theta: np.ndarray, per_program,
+         prog: motion.Program | None = None) -> tuple[float, float]:
+    """Sup over the cycle of per_program(program) (>= 0), between samples too; ``prog``
+    is the program on ``theta`` if the caller has it already."""
     def f(x):
         return per_program(motion.program(design, x))
 
-    grid = f(theta)
+    grid = f(theta) if prog is None else per_program(prog)
     if np.isinf(grid).any():  # unbounded: no finite value will do
         return np.inf, float(theta[np.argmax(grid)])
     value, at = extremes.refine_max(f, theta, grid)
     return max(value, 0.0), at
 
 
-def spring_rate_min(design: Design, theta: np.ndarray) -> tuple[float, float]:
+def spring_rate_min(design: Design, theta: np.ndarray,
+                    prog: motion.Program | None = None) -> tuple[float, float]:
     """The smallest spring rate k [N/m] that keeps contact with the design's preload,
     and the cam angle [rad] that sets it; inf if no rate does (the follower must be
     pulled back where the spring is not compressed, S + s_p = 0)."""
     s_p = design.dynamics.preload_mm * MM
-    return _sup(design, theta, lambda p: _over(-spring_free_load(design, p), p.S + s_p))
+    return _sup(design, theta, lambda p: _over(-spring_free_load(design, p), p.S + s_p), prog)
 
 
-def preload_min(design: Design, theta: np.ndarray) -> tuple[float, float]:
+def preload_min(design: Design, theta: np.ndarray,
+                prog: motion.Program | None = None) -> tuple[float, float]:
     """The smallest preload s_p [m] that keeps contact with the design's spring rate,
     and the angle [rad] that sets it; inf if none does (k = 0 and D < 0 somewhere)."""
     k = design.dynamics.spring_rate_N_per_m
@@ -84,10 +86,11 @@ def preload_min(design: Design, theta: np.ndarray) -> tuple[float, float]:
             return np.where(D < 0, np.inf, 0.0)
         return np.maximum(-D / k - p.S, 0.0)
 
-    return _sup(design, theta, need)
+    return _sup(design, theta, need, prog)
 
 
-def jump_speed_rpm(design: Design, theta: np.ndarray) -> tuple[float, float]:
+def jump_speed_rpm(design: Design, theta: np.ndarray,
+                   prog: motion.Program | None = None) -> tuple[float, float]:
     """The cam speed [rpm] at which F_N first reaches zero with the design's spring, and
     the angle [rad] where it does; inf if the follower never leaves the cam (no
     deceleration anywhere).
@@ -97,7 +100,7 @@ def jump_speed_rpm(design: Design, theta: np.ndarray) -> tuple[float, float]:
     d = design.dynamics
     M, k, s_p = d.mass_g * GRAM, d.spring_rate_N_per_m, d.preload_mm * MM
     inv_w2, at = _sup(design, theta,
-                      lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p)))
+                      lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p)), prog)
     if inv_w2 == 0.0:
         return np.inf, at
     return 1.0 / np.sqrt(inv_w2) / RPM, at
@@ -152,10 +155,12 @@ class Spring:
     proposed_rate: float  # [N/m], n k_min at the design's preload (inf if none)
 
 
-def spring(design: Design, theta: np.ndarray) -> Spring:
-    """Spring sizing and jump speed of ``design`` over the grid ``theta`` [rad]."""
-    k_min, k_at = spring_rate_min(design, theta)
-    s_min, _ = preload_min(design, theta)
-    rpm, at = jump_speed_rpm(design, theta)
+def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None) -> Spring:
+    """Spring sizing and jump speed of ``design`` over the grid ``theta`` [rad] (``prog``:
+    its program there, if at hand, e.g. an Analysis's)."""
+    prog = motion.program(design, theta) if prog is None else prog
+    k_min, k_at = spring_rate_min(design, theta, prog)
+    s_min, _ = preload_min(design, theta, prog)
+    rpm, at = jump_speed_rpm(design, theta, prog)
     n = design.dynamics.spring_safety_factor
     return Spring(k_min, k_at, s_min, rpm, at, n, n * k_min)

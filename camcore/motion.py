@@ -165,6 +165,7 @@ def peak_factors(law: MotionLaw, n: int = 20001) -> tuple[float, float, float]:
 
 RISE, HIGH, FALL, LOW = 0, 1, 2, 3  # segment codes: rise, high dwell, fall, low dwell
 MOTIONS = (RISE, FALL)
+SEGMENT_NAMES = {RISE: "rise", HIGH: "high dwell", FALL: "fall", LOW: "low dwell"}
 # Every rise or fall gets at least this many analysis steps, whatever the resolution:
 # a segment shorter than the grid step is otherwise judged on one sample (issue 8).
 MIN_MOTION_STEPS = 120

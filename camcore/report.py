@@ -13,7 +13,7 @@ from . import checks, machine, train, wear
 from .analysis import Analysis, analyze, compare
 from .contact import hertz_validity
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
-from .motion import FALL, HIGH, LOW, RISE
+from .motion import FALL, HIGH, RISE, SEGMENT_NAMES
 from .units import to_um_per_mcycle
 
 R2D = 180.0 / math.pi
@@ -83,16 +83,13 @@ def _dwells(a: Analysis) -> list[dict]:
     return out
 
 
-_SEGMENT_NAMES = {RISE: "rise", HIGH: "high dwell", FALL: "fall", LOW: "low dwell"}
-
-
 def _event(k: int, names: list[str], before, after, seg_before: int, seg_after: int) -> str:
     """What happens at station k, in words (for a class): the segment that begins and
     the faces that start or stop touching, and who carries the load from there."""
     parts = []
     if seg_before != seg_after:
-        parts.append(f"the {_SEGMENT_NAMES[seg_before]} ends and the "
-                     f"{_SEGMENT_NAMES[seg_after]} begins")
+        parts.append(f"the {SEGMENT_NAMES[seg_before]} ends and the "
+                     f"{SEGMENT_NAMES[seg_after]} begins")
     gained = [names[i] for i in range(len(names)) if after[i] and not before[i]]
     lost = [names[i] for i in range(len(names)) if before[i] and not after[i]]
     parts += [f"{n} touches" for n in gained] + [f"{n} leaves the cam" for n in lost]
@@ -128,7 +125,7 @@ def _finite(x: float, factor: float = 1.0) -> float | None:
 
 def _machine(a: Analysis) -> dict:
     """Spring sizing, jump speed, shaft torque, power and flywheel (camcore.machine)."""
-    sp, sh = machine.spring(a.design, a.theta), machine.shaft(a)
+    sp, sh = machine.spring(a.design, a.theta, a.prog), machine.shaft(a)
     return {
         "spring_rate_min_N_per_m": _finite(sp.rate_min),
         "preload_min_mm": _finite(sp.preload_min, 1e3),
@@ -175,14 +172,15 @@ def _train(a: Analysis) -> dict | None:
     if r is None:
         return None
     w = omega_rad_s(a.design)
+    theta, Fc = train.contact_force_fine(r)  # between the samples too
     return {
         "natural_frequency_Hz": r.natural_frequency / (2 * math.pi),
         "frequency_ratio": r.natural_frequency / w,
-        "contact_force_min_N": float(r.contact_force.min()),
-        "contact_force_max_N": float(r.contact_force.max()),
+        "contact_force_min_N": float(Fc.min()),
+        "contact_force_max_N": float(Fc.max()),
         "error_max_mm": float(np.abs(r.x - r.s).max()) * 1e3,
         "residual_vibration": train.residual_vibration(a.design, r),
-        "dynamic_jump_deg": [list(x) for x in checks.runs_deg(r.theta, r.contact_force <= 0)],
+        "dynamic_jump_deg": [list(x) for x in checks.runs_deg(theta, Fc <= 0)],
     }
 
 

@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 
+from .forces import tangential_slip
 from .model import allowable_contact_stress_MPa, omega_rad_s
 from .sampling import contact_travel
 from .units import MM, MPA
@@ -46,10 +47,7 @@ def sliding_ratio(a) -> np.ndarray:
     move along the cam (u = 0)."""
     if a.geo.r > 0 and not a.geo.flat:  # rollers roll
         return np.zeros(a.FN.shape)
-    p, n, V = a.point_world, a.normal, a.prog.V
-    t = np.stack([n[..., 1], -n[..., 0]], axis=-1)  # unit tangent at the contact
-    rel = np.stack([p[..., 1], -p[..., 0] - V], axis=-1)  # (v_cam - v_follower) / w
-    vs = np.abs((t * rel).sum(axis=-1))
+    vs = np.abs(tangential_slip(a.point_world, a.normal, a.prog.V))
     u = contact_travel(a, a.geo)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(u > 0, vs / u, np.nan)

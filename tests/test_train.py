@@ -104,3 +104,25 @@ def test_dynamic_jump_and_report():
         "amplitude_mm"] / 10
     assert not t["dynamic_jump_deg"]
     assert summary(analyze(PAPER, verify=False))["train"] is None
+
+
+def test_contact_force_between_the_samples_is_the_harmonic_sum():
+    """The fine contact force (zero-padded spectrum) equals the closed-form one-harmonic
+    F_c at angles between the solver's samples, so the dynamic-jump verdict does not
+    depend on where the samples fall."""
+    d = harmonic_cam(train_stiffness_N_per_m=2e5, damping_ratio=0.1)
+    r = train.respond(d)
+    theta, Fc = train.contact_force_fine(r)
+    assert theta.size == 8 * r.theta.size
+    dyn, w = d.dynamics, d.cam.speed_rpm * RPM
+    m, k1 = dyn.mass_g * GRAM, 2e5
+    K = k1 + dyn.spring_rate_N_per_m
+    c = 2 * 0.1 * math.sqrt(K * m)
+    h = 10 * MM
+    G = (k1 + 1j * w * c) / (K - m * w**2 + 1j * w * c)
+    F0 = dyn.spring_rate_N_per_m * dyn.preload_mm * MM + m * dyn.gravity_m_s2
+    x = (k1 * h / 2 - F0) / K - (h / 2) * np.real(G * np.exp(1j * theta))
+    s = h / 2 * (1 - np.cos(theta))
+    ref = k1 * (s - x) + c * w * (h / 2 * np.sin(theta)
+                                  + (h / 2) * np.real(1j * G * np.exp(1j * theta)))
+    np.testing.assert_allclose(Fc, ref, atol=1e-6 * np.abs(ref).max())
