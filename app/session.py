@@ -617,8 +617,9 @@ class Session:
                     self.angle_slider.value = round(self.theta_deg, 1)  # as the text
                 finally:
                     self._syncing = False
-            if self.camera_view == "Contact close-up":
-                self.reset_camera()  # follow the contacts as the follower rises
+            if self.camera_view == "Contact close-up":  # follow the contacts as S changes
+                pos, look, _ = camera_for(self.camera_view, self.analysis, k)
+                self.client.camera.position, self.client.camera.look_at = pos, look
             if markers:
                 self._show_where(k)
                 for c in self.curves:
