@@ -9,8 +9,8 @@ from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import PAPER_TABLE1_N, summary
 from camcore.units import to_mpa
 
+from .panels import esc
 from .plots import COLORS, stride_index
-from .state import esc
 
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 

@@ -1,332 +1,111 @@
-"""One browser tab: its design, analysis, GUI, 3D view, curves and animation.
+"""One browser tab: its design, its analysis, and what it shows.
 
-Data flows one way: controls -> Design -> camcore.analysis.analyze -> views. All
-state of a tab lives here and is guarded by one re-entrant lock (viser runs plain
-callbacks in a thread pool; programmatic value changes call callbacks inline).
+Data flows one way: controls -> Design -> camcore.analysis.analyze -> views. The
+session owns the state of a tab and composes the parts that do the work:
+app.layout (the widgets), app.segments (the program table), app.scene (the 3D
+view), app.plots / app.compare (the curves), app.panels (the words), app.ticker
+(animation and background loops), app.storage (the browser's own storage).
+
+All state is guarded by one re-entrant lock: viser runs plain callbacks in a thread
+pool, and a value the session writes into a widget calls that widget's callback
+inline.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import re
 import threading
-import time
-from dataclasses import dataclass
-
-import numpy as np
 
 from camcore import export
-from camcore.analysis import analyze
-from camcore.model import (
-    MAX_SEGMENTS,
-    Design,
-    DesignError,
-    MotionLaw,
-    design_from_json,
-    design_to_json,
-    load_preset,
-    preset_names,
-)
-from camcore.motion import SEGMENT_NAMES
+from camcore.analysis import Analysis, analyze
+from camcore.model import Design, DesignError, design_from_json, design_to_json, preset_names
+from camcore.model import load_preset as load_preset_design
 from camcore.report import summary
-from camcore.units import to_mm
 
-from . import compare, plots, state, storage, uploads
-from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS, SceneView, camera_for
+from . import compare, controls, plots, storage, uploads
+from .layout import DEFAULT_PRESET, Layout, build_layout
+from .panels import (
+    esc,
+    file_stem,
+    low_dwell_text,
+    nearest_index,
+    status_html,
+    summary_markdown,
+    where_markdown,
+)
+from .scene import CAMERA_VIEWS, SceneView, camera_for
+from .ticker import Debouncer, Ticker
 
-DEFAULT_PRESET = "paper_example"
 FPS = 30.0
-OVERLAY_LABELS = {
-    "contacts": "Contact points",
-    "forces": "Contact normals as force arrows (∝ F_N)",
-    "instant_centre": "Instant centre I23 = Q and normals",
-    "pressure_angle": "Pressure angle φ",
-    "arcs": "Base circle and dwell arcs",
-    "wear": "Wear along the profile (Archard; pale none → dark red most)",
-}
-
-
 # Background work (the verified analysis and the comparison: ~0.1 s each) waits until a
 # tab has been still this long, and runs for one tab at a time across the server.
 SETTLE_S = 0.6
 BACKGROUND = threading.BoundedSemaphore(1)
 
 
-def slug(name: str) -> str:
-    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
-    return (s or "cam")[:40].rstrip("_")
-
-
-def file_stem(design: Design) -> str:
-    """A download's name: the design, its follower, and a short fingerprint of the
-    whole design, so two files of different (edited) designs never share a name and a
-    file says which design it holds."""
-    import hashlib
-
-    digest = hashlib.sha256(design_to_json(design).encode()).hexdigest()[:6]
-    return f"{slug(design.name)}-{design.follower.kind.value}-{digest}"
-
-
-@dataclass(frozen=True)
-class MotionSegmentView:
-    """One row of the segment table, from a MotionSegment or a dict of the table."""
-
-    kind: str
-    angle_deg: float
-    lift_mm: float | None
-    law: str | None
-
-    @classmethod
-    def of(cls, g) -> MotionSegmentView:
-        if isinstance(g, dict):
-            kind = str(g.get("kind"))
-            law = g.get("law")
-            return cls(kind if kind in ("rise", "fall", "dwell") else "dwell",
-                       float(g.get("angle_deg", 0.0)), g.get("lift_mm"),
-                       law if law in MotionLaw.__members__ else None)
-        return cls(g.kind.value, float(g.angle_deg), g.lift_mm,
-                   g.law.value if g.law else None)
-
-
 class Session:
-    """Everything one client sees. ``client`` is a viser ClientHandle."""
+    """Everything one client sees. ``client`` is a viser ClientHandle; ``animate``
+    False starts no background loops (tests and the bench drive them by hand)."""
 
     def __init__(self, client, design: Design | None = None, animate: bool = True):
         self.client = client
         self.lock = threading.RLock()
-        self._syncing = False
         self.closed = threading.Event()
-        self.base = design or load_preset(DEFAULT_PRESET)
+        self.base = design or load_preset_design(DEFAULT_PRESET)
         self.design = self.base
-        self.analysis = None
-        self.station_events: list[str] = []  # what happens at each station, in words
-        self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
-        self.error: str | None = None
-        self.verified = False
-        self.gen = 0
+        self.analysis: Analysis = analyze(self.base, verify=False)
+        self.error: str | None = None  # the input's error; the last valid design stays
+        self.verified = False  # self.analysis is the geometrically checked one
+        self.gen = 0  # bumped by every new design: background results of older ones drop
         self.theta_deg = 0.0
-        self.playing = False
-        self.speed = 45.0
-        self.last_download: tuple[str, bytes] | None = None
-        self.timings: list[float] = []  # seconds per re-analysis + redraw
-        self.frames_played = 0  # animation frames drawn by the loop
-        self._ticket_lock = threading.Lock()
-        self._ticket = 0  # newest design-control change (see on_control)
-        self._wake_anim = threading.Event()
-        self._wake_settle = threading.Event()
+        self.speed = 45.0  # animation, cam degrees per second
+        self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
+        self.station_events: list[str] = []  # what happens at each station, in words
         self.store = storage.BrowserStore(client)
-        self.saved: dict[str, str] = {}
+        self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
         self._persist = False  # on once the browser's stored design has been read
+        self._syncing = False  # True while the session writes into its own widgets
+        self._ticket_lock, self._ticket = threading.Lock(), 0
+        self.ticker = Ticker(self.frame, FPS, name=f"cam-animate-{id(self)}")
+        self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND,
+                                 name=f"cam-refine-{id(self)}")
         with self.lock:
-            self._build_gui()
+            self.ui: Layout = build_layout(client.gui, self.base, self.analysis, self.speed)
+            self._wire(self.ui)
             self.view = SceneView(client.scene)
             client.scene.set_up_direction("+y")
-            self._apply(self.base, reset_camera=True)
-        self.threads = []
-        restore = threading.Thread(target=self._restore, daemon=True,
-                                   name=f"cam-restore-{id(self)}")
-        restore.start()
-        self.threads.append(restore)
+            self._apply(self.base, self.analysis, reset_camera=True)
+        self._restorer = threading.Thread(target=self._restore, daemon=True,
+                                          name=f"cam-restore-{id(self)}")
+        self._restorer.start()
         if animate:
-            for target in (self._animate, self._settle):
-                t = threading.Thread(target=target, daemon=True,
-                                     name=f"cam-{target.__name__}-{id(self)}")
-                t.start()
-                self.threads.append(t)
+            self.ticker.start()
+            self.refiner.start()
 
-    # --- GUI ------------------------------------------------------------------------
-    def _build_gui(self) -> None:
-        gui = self.client.gui
-        self.status = gui.add_html("")
-        # the part, one click away for the maker (the other formats are in Files)
-        self.quick_stl_btn = gui.add_button("⬇ Download the cam (STL, mm)")
-        self.quick_stl_btn.on_click(lambda _: self.download("stl"))
-        with gui.add_folder("Animation", expand_by_default=True):
-            self.play_btn = gui.add_button("▶ Play", color="green")
-            self.speed_slider = gui.add_slider("Speed [°/s]", 5, 360, 5, self.speed)
-            self.angle_slider = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
-            self.stations_btn = gui.add_button_group("Go to station", ["0", "1", "2", "3",
-                                                                       "4", "5"])
-            self.where_md = gui.add_markdown("")
-        self.play_btn.on_click(lambda _: self.toggle_play())
-        self.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
-        self.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
-        self.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
-
-        tabs = gui.add_tab_group()
-        self.controls: dict[str, object] = {}
-        with tabs.add_tab("Design"):
-            for title, expand, specs in state.FOLDERS:
-                with gui.add_folder(title, expand_by_default=expand):
-                    for spec in specs:
-                        self.controls[spec.path] = self._add_control(gui, spec)
-                    if title == "Motion program":
-                        self.low_dwell_md = gui.add_markdown("")
-                        self.seg_folder = gui.add_folder("Program segments (any program)",
-                                                         expand_by_default=False)
-                        self.seg_rows: list[dict] = []
-                        self.seg_extra: list = []
-            with gui.add_folder("Key numbers", expand_by_default=True):
-                self.summary_md = gui.add_markdown("")
-        with tabs.add_tab("Curves"):
-            self.curves = plots.build_curves(gui, analyze(self.base, verify=False))
-        with tabs.add_tab("Compare"):
-            self.compare_view = compare.CompareView(gui)
-        with tabs.add_tab("View") as self.view_folder:
-            self.overlay_boxes = {}
-            for name in OVERLAYS:
-                cb = gui.add_checkbox(OVERLAY_LABELS[name], name not in OFF_BY_DEFAULT)
-                cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
-                self.overlay_boxes[name] = cb
-            self.view_btns = gui.add_button_group("Camera", CAMERA_VIEWS)
-            self.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))
-            self.camera_btn = gui.add_button("Reset camera")
-            self.camera_btn.on_click(lambda _: self.reset_camera())
-            self.stations_fig_btn = gui.add_button("Stations diagram (the paper's Fig. 4)")
-            self.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
-            self.stations_img = None
-        with tabs.add_tab("Files"):
-            names = preset_names()
-            self.preset_dd = gui.add_dropdown(
-                "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names
-                else names[0])
-            self.preset_btn = gui.add_button("Load preset")
-            self.preset_btn.on_click(lambda _: self.load_preset(self.preset_dd.value))
-            self.upload_btn = gui.add_upload_button("Open design JSON…",
-                                                    mime_type="application/json")
-            self.upload_btn.on_upload(lambda e: self.upload(e.target.value.name,
-                                                            e.target.value.content))
-            gui.add_markdown("**Kept in this browser** (only you see them)")
-            self.save_name = gui.add_text("Name", "my cam")
-            self.save_btn = gui.add_button("Save in this browser")
-            self.save_btn.on_click(lambda _: self.save_named(self.save_name.value))
-            self.saved_dd = gui.add_dropdown("Saved designs", ("–",), initial_value="–")
-            self.open_saved_btn = gui.add_button("Open saved")
-            self.open_saved_btn.on_click(lambda _: self.open_saved(self.saved_dd.value))
-            self.delete_saved_btn = gui.add_button("Delete saved")
-            self.delete_saved_btn.on_click(lambda _: self.delete_saved(self.saved_dd.value))
-            gui.add_markdown("**Download**")
-            self.download_btns = {}
-            for kind, label in (("json", "Design JSON"), ("stl", "Cam STL (mm)"),
-                                ("dxf", "Profile DXF (mm)"), ("csv", "Profile CSV"),
-                                ("series", "Per-angle CSV"),
-                                ("toolpath", "G-code (cutter path)"),
-                                ("html", "Printable report"), ("pdf", "Report PDF")):
-                b = gui.add_button(label)
-                b.on_click(lambda _, k=kind: self.download(k))
-                self.download_btns[kind] = b
-            self.files_md = gui.add_markdown("")
-
-    # --- the browser's storage ---------------------------------------------------------
-    def _restore(self) -> None:
-        """Read this browser's working design and saved list (a reload, or a server
-        restart, brings the user back to them). Until the read returns nothing is
-        written, so the default design never overwrites what the browser kept."""
-        gen0 = self.gen
-        working = storage.parse_working(self.store.read(storage.WORKING_KEY))
-        saved = storage.parse_saved(self.store.read(storage.SAVED_KEY))
-        if self.closed.is_set():
-            return
-        with self.lock:
-            self.saved = saved
-            self._show_saved()
-            restore = working is not None and self.gen == gen0 and working != self.design
-            self._persist = True
-        if restore:
-            self.set_design(working)
-            with self.lock:
-                self.files_md.content = (f"Restored your last design from this browser: "
-                                         f"*{state.esc(working.name)}*.")
-        else:
-            with self.lock:
-                self._save_working()
-
-    def _save_working(self) -> None:
-        if self._persist and self.error is None:
-            self.store.write(storage.WORKING_KEY, design_to_json(self.design))
-
-    def _show_saved(self) -> None:
-        names = tuple(self.saved) or ("–",)
-        self.saved_dd.options = names
-        if self.saved_dd.value not in names:
-            self.saved_dd.value = names[0]
-
-    def save_named(self, name: str) -> None:
-        with self.lock:
-            try:
-                self.saved = storage.with_saved(self.saved, str(name), self.design)
-            except ValueError as exc:
-                self.files_md.content = f"✖ Not saved: {state.esc(exc)}."
-                return
-            self.store.write(storage.SAVED_KEY, json.dumps(self.saved))
-            self._show_saved()
-            self.saved_dd.value = str(name).strip()
-            self.files_md.content = f"Saved **{state.esc(str(name).strip())}** in this browser."
-
-    def open_saved(self, name: str) -> None:
-        text = self.saved.get(name) if isinstance(name, str) else None
-        design = storage.parse_working(text)
-        if design is None:
-            with self.lock:
-                self.files_md.content = "✖ Choose a saved design first."
-            return
-        self.set_design(design)
-        with self.lock:
-            self.files_md.content = f"Opened **{state.esc(name)}** from this browser."
-
-    def delete_saved(self, name: str) -> None:
-        with self.lock:
-            if not isinstance(name, str) or name not in self.saved:
-                self.files_md.content = "✖ Choose a saved design first."
-                return
-            self.saved = {k: v for k, v in self.saved.items() if k != name}
-            self.store.write(storage.SAVED_KEY, json.dumps(self.saved))
-            self._show_saved()
-            self.files_md.content = f"Deleted **{state.esc(name)}** from this browser."
-
-    def _add_control(self, gui, spec: state.Spec):
-        v = state.get_path(self.base, spec.path)
-        if v is None:  # e.g. a classic slider on another program: the default's value
-            v = state.get_path(Design(), spec.path)
-        if spec.widget == "slider":
-            lo, hi = min(spec.lo, v), max(spec.hi, v)
-            h = gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)
-        elif spec.widget == "number":
-            h = gui.add_number(spec.label, float(v), step=spec.step, hint=spec.hint)
-        elif spec.widget == "dropdown":
-            h = gui.add_dropdown(spec.label, spec.options, initial_value=v, hint=spec.hint)
-        else:
-            h = gui.add_checkbox(spec.label, bool(v), hint=spec.hint)
-        h.on_update(lambda _e: self.on_control())
-        return h
-
-    def values(self) -> dict[str, object]:
-        return {p: h.value for p, h in self.controls.items()}
-
-    def _sync_controls(self, design: Design) -> None:
-        self._syncing = True
-        try:
-            classic = design.motion.classic is not None
-            for spec in state.SPECS:
-                h = self.controls[spec.path]
-                v = state.get_path(design, spec.path)
-                if spec.path.startswith("motion."):
-                    h.disabled = not classic  # other programs: edited as segments
-                if v is None:
-                    continue
-                if spec.widget == "slider":
-                    h.min, h.max = min(h.min, v), max(h.max, v)
-                h.value = v
-        finally:
-            self._syncing = False
-
-    def _enable_for_kind(self, design: Design) -> None:
-        k = design.follower.kind
-        self.controls["follower.face_radius_mm"].disabled = not k.is_concave
-        self.controls["follower.roller_radius_mm"].disabled = not k.is_roller
-        self.controls["follower.offset_mm"].disabled = not k.is_double
-        self.controls["follower.single_offset_mm"].disabled = k.is_double
+    def _wire(self, ui: Layout) -> None:
+        """Connect the widgets to the session's actions."""
+        ui.quick_stl_btn.on_click(lambda _: self.download("stl"))
+        ui.play_btn.on_click(lambda _: self.toggle_play())
+        ui.speed_slider.on_update(lambda e: setattr(self, "speed", float(e.target.value)))
+        ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
+        ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
+        for h in ui.controls.values():
+            h.on_update(lambda _e: self.on_control())
+        ui.segments.on_change = self.on_segments
+        for name, cb in ui.overlay_boxes.items():
+            cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
+        ui.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))
+        ui.camera_btn.on_click(lambda _: self.reset_camera())
+        ui.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
+        ui.preset_btn.on_click(lambda _: self.load_preset(ui.preset_dd.value))
+        ui.upload_btn.on_upload(lambda e: self.upload(e.target.value.name,
+                                                      e.target.value.content))
+        ui.save_btn.on_click(lambda _: self.save_named(ui.save_name.value))
+        ui.open_saved_btn.on_click(lambda _: self.open_saved(ui.saved_dd.value))
+        ui.delete_saved_btn.on_click(lambda _: self.delete_saved(ui.saved_dd.value))
+        for kind, b in ui.download_btns.items():
+            b.on_click(lambda _, k=kind: self.download(k))
 
     # --- design changes -------------------------------------------------------------
     def on_control(self) -> None:
@@ -342,299 +121,275 @@ class Session:
         with self.lock:
             if self._syncing or self.closed.is_set() or mine != self._ticket:
                 return
-            vals = self.values()
-            design, err = state.try_design(self.base, vals)
-            if err is not None:
-                self.error = err
-                self.low_dwell_md.content = state.low_dwell_text(vals)  # e.g. "negative"
-                self._show_status()
+            values = self._values()
+            design, err = controls.try_design(self.base, values)
+            if design is None:
+                self._show_error(err)
+                self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
                 return
             self.error = None
             self._apply(design)
 
-    def _apply(self, design: Design, reset_camera: bool = False) -> None:
+    def on_segments(self, segs: list[dict]) -> None:
+        """The program table changed: the program is its segments, every other control
+        as it is. Invalid input keeps the last valid design and shows the user's edit."""
+        with self.lock:
+            if self._syncing or self.closed.is_set():
+                return
+            data = self.design.model_dump(mode="json")
+            data["motion"] = {"segments": segs}
+            design, err = controls.try_design_dict(data)
+            if design is None:
+                self.ui.segments.show(segs)
+                self._show_error(err)
+                return
+            self.set_design(design, reset_camera=False)
+
+    def set_design(self, design: Design, reset_camera: bool = True) -> None:
+        """Replace the whole design (preset, upload, program table): controls follow."""
+        with self.lock:
+            self.base, self.error = design, None
+            self._sync_controls(design)
+            self._apply(design, reset_camera=reset_camera)
+
+    def _values(self) -> dict[str, object]:
+        return {p: h.value for p, h in self.ui.controls.items()}
+
+    def _sync_controls(self, design: Design) -> None:
+        """Write the design's values into the controls (firing no change)."""
+        self._syncing = True
+        try:
+            classic = design.motion.classic is not None
+            for spec in controls.SPECS:
+                h, v = self.ui.controls[spec.path], controls.get_path(design, spec.path)
+                if spec.path.startswith("motion."):
+                    h.disabled = not classic  # other programs: edited as segments
+                if v is None:
+                    continue
+                if spec.widget == "slider":
+                    h.min, h.max = min(h.min, v), max(h.max, v)
+                h.value = v
+        finally:
+            self._syncing = False
+
+    def _apply(self, design: Design, a: Analysis | None = None,
+               reset_camera: bool = False) -> None:
         """Analyse (fast path, no verification) and redraw everything. Lock held."""
-        t0 = time.perf_counter()
-        a = analyze(design, verify=False)
+        a = analyze(design, verify=False) if a is None else a
         self.design, self.analysis = design, a
         self.gen += 1
         self.verified = False
-        k = self._index(self.theta_deg)
+        k = self._index()
+        ui = self.ui
         with self.client.atomic():
             self.view.build(a)
             self.view.pose(k)
-            for c in self.curves:
+            for c in ui.curves:
                 c.update(a, k)
-            plots.relabel_limits(self.curves, a)
+            plots.relabel_limits(ui.curves, a)
             self._enable_for_kind(design)
-            self._sync_segment_rows(design)
+            ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
-            self.low_dwell_md.content = state.low_dwell_text(self.values(), design)
+            ui.low_dwell_md.content = low_dwell_text(self._values(), design)
             self._show_summary(summary(a))
-            self._show_where(k)
+            ui.where_md.content = where_markdown(a, k, self.station_events)
             self._show_status()
         self._save_working()
         if reset_camera:
             self.reset_camera()
-        self.timings.append(time.perf_counter() - t0)
-        del self.timings[:-200]
-        self._wake_settle.set()
+        self.refiner.poke()
+
+    def _enable_for_kind(self, design: Design) -> None:
+        k, c = design.follower.kind, self.ui.controls
+        c["follower.face_radius_mm"].disabled = not k.is_concave
+        c["follower.roller_radius_mm"].disabled = not k.is_roller
+        c["follower.offset_mm"].disabled = not k.is_double
+        c["follower.single_offset_mm"].disabled = k.is_double
+
+    def _show_error(self, err: str | None) -> None:
+        self.error = err
+        self._show_status()
 
     def _show_status(self) -> None:
         a = self.analysis
-        viol = list(a.violations) if a is not None else []
-        mesh = self.view.mesh_error if hasattr(self, "view") else None
-        html = state.status_html(self.error, viol, a.lift_error if a else None, self.verified)
-        if mesh:
-            html += state._BOX.format(bg="#fde2e2", fg="#d62728",
-                                      body=f"<b>No solid:</b> {mesh}")
-        self.status.content = html
+        self.ui.status.content = status_html(self.error, list(a.violations), a.lift_error,
+                                             self.verified, self.view.mesh_error)
 
-    def set_design(self, design: Design, reset_camera: bool = True) -> None:
-        """Replace the whole design (preset, upload): controls follow."""
+    def _show_summary(self, s: dict) -> None:
+        """Key numbers, and what happens at each station in words (for where_md)."""
+        self.ui.summary_md.content = summary_markdown(s)
+        self.station_events = [st["event"] for st in s["stations"]]
+
+    def _show_station_buttons(self, a: Analysis) -> None:
+        names = tuple(str(i) for i in range(len(a.stations)))
+        if tuple(self.ui.stations_btn.options) != names:
+            self.ui.stations_btn.options = names
+
+    # --- background: the verified analysis and the comparison ------------------------
+    def refine(self) -> None:
+        """Verify the design on screen and compare the four followers (run by the
+        refiner once the tab is still; results of a design changed meanwhile drop)."""
         with self.lock:
-            self.base = design
-            self.error = None
-            self._sync_controls(design)
-            self._apply(design, reset_camera=reset_camera)
-
-    # --- the segment table (issue 10) -----------------------------------------------
-    def _sync_segment_rows(self, design: Design) -> None:
-        """Show the design's segments in the table: values in place when the rows
-        match, rebuilt when segments were added, removed or changed kind. Lock held."""
-        segs = design.motion.segments
-        if [r["kind"].value for r in self.seg_rows] != [g.kind.value for g in segs]:
-            self._build_segment_rows(design)
-        self._syncing = True
-        try:
-            for row, g in zip(self.seg_rows, segs, strict=True):
-                row["angle"].value = float(g.angle_deg)
-                if g.lift_mm is not None:
-                    row["lift"].value = float(g.lift_mm)
-                    row["law"].value = g.law.value
-        finally:
-            self._syncing = False
-        self._show_segment_sums(design.motion.segments)
-
-    def _build_segment_rows(self, design: Design | list[dict]) -> None:
-        segs = [MotionSegmentView.of(g) for g in
-                (design.motion.segments if isinstance(design, Design) else design)]
-        for row in self.seg_rows:
-            for h in row.values():
-                h.remove()
-        for h in self.seg_extra:
-            h.remove()
-        self.seg_rows, self.seg_extra = [], []
-        gui = self.client.gui
-        laws = tuple(law.value for law in MotionLaw)
-        with self.seg_folder:
-            for i, g in enumerate(segs):
-                dwell = g.kind == "dwell"
-                row = {
-                    "kind": gui.add_dropdown(f"{i + 1}. kind", ("rise", "fall", "dwell"),
-                                             initial_value=g.kind),
-                    "angle": gui.add_number(f"{i + 1}. angle [°]", g.angle_deg,
-                                            min=0.0, max=360.0, step=0.5),
-                    "lift": gui.add_number(f"{i + 1}. lift [mm]", g.lift_mm or 5.0,
-                                           min=0.001, max=1000.0, step=0.5, disabled=dwell),
-                    "law": gui.add_dropdown(f"{i + 1}. law", laws, disabled=dwell,
-                                            initial_value=g.law or laws[0]),
-                    "move": gui.add_button_group(f"{i + 1}.", ("↑", "↓", "✕")),
-                }
-                for key in ("kind", "angle", "lift", "law"):
-                    row[key].on_update(lambda _e: self.on_segments())
-                row["move"].on_click(lambda e, j=i: self.on_segment_move(j, e.target.value))
-                self.seg_rows.append(row)
-            add = gui.add_button("Add a segment (a 0° dwell at the end)")
-            add.on_click(lambda _e: self.on_segment_move(len(self.seg_rows), "+"))
-            self.seg_sums = gui.add_markdown("")
-            self.seg_extra = [add, self.seg_sums]
-
-    def _show_segment_sums(self, segs) -> None:
-        total = sum(float(g["angle_deg"] if isinstance(g, dict) else g.angle_deg) for g in segs)
-        net = sum((1 if k == "rise" else -1 if k == "fall" else 0) * float(lift or 0) for k, lift in
-                  ((g["kind"], g.get("lift_mm")) if isinstance(g, dict)
-                   else (g.kind.value, g.lift_mm) for g in segs))
-        ok = abs(total - 360) <= 1e-6 and abs(net) <= 1e-9
-        self.seg_sums.content = (f"Σ angles = **{total:g}°** (must be 360) · rises − falls = "
-                                 f"**{net:g} mm** (must be 0){'' if ok else ' ⚠'}")
-
-    def _segment_rows_as_dicts(self) -> list[dict]:
-        out = []
-        for row in self.seg_rows:
-            kind = row["kind"].value
-            g = {"kind": kind, "angle_deg": float(row["angle"].value)}
-            if kind != "dwell":
-                g.update(lift_mm=float(row["lift"].value), law=row["law"].value)
-            out.append(g)
-        return out
-
-    def on_segments(self, segs: list[dict] | None = None) -> None:
-        """A table value changed (or a row moved): the program is the table's segments
-        with every other control as it is; invalid input keeps the last valid design."""
+            design, gen = self.design, self.gen
+        av = analyze(design, verify=True)
+        if self._stale(gen):
+            return
+        results = compare.compute(design)
         with self.lock:
-            if self._syncing or self.closed.is_set():
+            if self._stale(gen):
                 return
-            segs = self._segment_rows_as_dicts() if segs is None else segs
-            data = self.design.model_dump(mode="json")
-            data["motion"] = {"segments": segs}
-            self._show_segment_sums(segs)
-            design, err = state.try_design_dict(data)
-            if err is not None:
-                self.error = err
-                if len(segs) != len(self.seg_rows) or [r["kind"].value for r in self.seg_rows] \
-                        != [g["kind"] for g in segs]:
-                    self._build_segment_rows(segs)  # show the user's edit, even if invalid
-                    self._show_segment_sums(segs)
-                self._show_status()
-                return
-            self.error = None
-            self.base = design
-            self._sync_controls(design)
-            self._apply(design)
+            old = [(v.code, v.ranges_deg) for v in self.analysis.violations]
+            self.analysis, self.verified = av, True
+            if [(v.code, v.ranges_deg) for v in av.violations] != old:
+                self.view.build(av)
+                for c in self.ui.curves:
+                    c.update(av, self._index())
+            self._show_summary(summary(av))
+            self._show_status()
+            self.ui.compare_view.update(results)
 
-    def on_segment_move(self, i: int, action: str) -> None:
-        """↑ / ↓ move segment i, ✕ removes it, + appends a 0° dwell."""
+    def _stale(self, gen: int) -> bool:
         with self.lock:
-            segs = self._segment_rows_as_dicts()
-            if action == "+" and len(segs) < MAX_SEGMENTS:
-                segs.append({"kind": "dwell", "angle_deg": 0.0})
-            elif action == "✕" and len(segs) > 1 and 0 <= i < len(segs):
-                segs.pop(i)
-            elif action == "↑" and 0 < i < len(segs):
-                segs[i - 1], segs[i] = segs[i], segs[i - 1]
-            elif action == "↓" and 0 <= i < len(segs) - 1:
-                segs[i], segs[i + 1] = segs[i + 1], segs[i]
-            else:
-                return
-            self.on_segments(segs)
+            return gen != self.gen or self.closed.is_set()
 
+    # --- files: presets, uploads, downloads ----------------------------------------
     def load_preset(self, name: str) -> None:
         # viser does not check a dropdown's value against its options: only a shipped
         # name is looked up (camcore.model.load_preset never joins it onto a path)
         if name not in preset_names():
-            with self.lock:
-                self.files_md.content = f"✖ No preset {state.esc(str(name)[:60])}."
-            return
+            return self._say(f"✖ No preset {esc(str(name)[:60])}.")
         try:
-            d = load_preset(name)
+            d = load_preset_design(name)
         except DesignError as exc:
             with self.lock:
-                self.error = f"preset {name}: {exc}"
-                self._show_status()
-            return
+                return self._show_error(f"preset {name}: {exc}")
         self.set_design(d)
-        with self.lock:
-            self.files_md.content = f"Loaded preset **{state.esc(name)}**."
+        self._say(f"Loaded preset **{esc(name)}**.")
 
     def upload(self, name: str, content: bytes) -> None:
         try:
             d = design_from_json(content)
         except DesignError as exc:
             with self.lock:
-                self.error = f"file {name or 'upload'}: {exc} (the current design is kept)"
-                self._show_status()
-                self.files_md.content = (f"✖ Could not open **{state.esc(name)}**: "
-                                         f"{state.esc(exc)}")
-            return
+                self._show_error(f"file {name or 'upload'}: {exc} (the current design is kept)")
+            return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
         self.set_design(d)
-        with self.lock:
-            self.files_md.content = f"Opened **{state.esc(name)}** ({state.esc(d.name)})."
+        self._say(f"Opened **{esc(name)}** ({esc(d.name)}).")
 
     def upload_refused(self, name: str, size: int) -> None:
         """The upload guard (app.uploads) dropped a transfer larger than its cap."""
-        with self.lock:
-            self.files_md.content = (
-                f"✖ **{state.esc(name)}** refused: {size:,} bytes, more than the "
-                f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB).")
+        self._say(f"✖ **{esc(name)}** refused: {size:,} bytes, more than the "
+                  f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB).")
 
     def download(self, kind: str) -> None:
         with self.lock:
             a, d = self.analysis, self.design
             if self.error is not None:  # the controls no longer describe d: say so
-                self.files_md.content = (
-                    "✖ Download refused: the input is invalid (see the red panel). "
-                    "Fix it, or load a design, and the files will hold what you see.")
-                return
+                return self._say("✖ Download refused: the input is invalid (see the red "
+                                 "panel). Fix it, or load a design, and the files will hold "
+                                 "what you see.")
             try:
                 spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
                 name, data = f"{file_stem(d)}{spec.suffix}", spec.write(a)
             except (KeyError, export.ExportError) as exc:
-                self.files_md.content = f"✖ Cannot export {state.esc(kind)}: {state.esc(exc)}"
-                return
-            self.last_download = (name, data)
-            self.files_md.content = (f"Sent **{state.esc(name)}** ({len(data):,} bytes) of "
-                                     f"*{state.esc(d.name)}*, {d.follower.kind.label}.")
+                return self._say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
+            self._say(f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
+                      f"{d.follower.kind.label}.")
         self.client.send_file_download(name, data, save_immediately=True)
 
+    def _say(self, markdown: str) -> None:
+        """A line under the Files tab's buttons (user strings already escaped)."""
+        with self.lock:
+            self.ui.files_md.content = markdown
+
+    # --- the browser's storage ---------------------------------------------------------
+    def _restore(self) -> None:
+        """Read this browser's working design and saved list (a reload, or a server
+        restart, brings the user back to them). Until the read returns nothing is
+        written, so the default design never overwrites what the browser kept."""
+        gen0 = self.gen
+        working = storage.parse_working(self.store.read(storage.WORKING_KEY))
+        saved = storage.parse_saved(self.store.read(storage.SAVED_KEY))
+        if self.closed.is_set():
+            return
+        with self.lock:
+            self._show_saved(saved)
+            restore = working is not None and self.gen == gen0 and working != self.design
+            self._persist = True
+            if not restore:
+                return self._save_working()
+        self.set_design(working)
+        self._say(f"Restored your last design from this browser: *{esc(working.name)}*.")
+
+    def _save_working(self) -> None:
+        if self._persist and self.error is None:
+            self.store.write(storage.WORKING_KEY, design_to_json(self.design))
+
+    def _show_saved(self, saved: dict[str, str], write: bool = False) -> None:
+        self.saved = saved
+        if write:
+            self.store.write(storage.SAVED_KEY, json.dumps(saved))
+        names = tuple(saved) or ("–",)
+        self.ui.saved_dd.options = names
+        if self.ui.saved_dd.value not in names:
+            self.ui.saved_dd.value = names[0]
+
+    def save_named(self, name: str) -> None:
+        with self.lock:
+            try:
+                saved = storage.with_saved(self.saved, str(name), self.design)
+            except ValueError as exc:
+                return self._say(f"✖ Not saved: {esc(exc)}.")
+            self._show_saved(saved, write=True)
+            self.ui.saved_dd.value = str(name).strip()
+            self._say(f"Saved **{esc(str(name).strip())}** in this browser.")
+
+    def open_saved(self, name: str) -> None:
+        design = storage.parse_working(self.saved.get(name) if isinstance(name, str) else None)
+        if design is None:
+            return self._say("✖ Choose a saved design first.")
+        self.set_design(design)
+        self._say(f"Opened **{esc(name)}** from this browser.")
+
+    def delete_saved(self, name: str) -> None:
+        with self.lock:
+            if not isinstance(name, str) or name not in self.saved:
+                return self._say("✖ Choose a saved design first.")
+            self._show_saved({k: v for k, v in self.saved.items() if k != name}, write=True)
+            self._say(f"Deleted **{esc(name)}** from this browser.")
+
     # --- angle, stations, animation ------------------------------------------------
-    def _index(self, theta_deg: float) -> int:
-        th = self.analysis.theta
-        x = math.radians(theta_deg % 360.0)
-        j = int(np.clip(np.searchsorted(th, x), 1, th.size - 1))
-        return j - 1 if x - th[j - 1] < th[j] - x else j
-
-    def _show_summary(self, s: dict) -> None:
-        """Key numbers, and what happens at each station in words (for _show_where)."""
-        self.summary_md.content = state.summary_markdown(s)
-        self.station_events = [st["event"] for st in s["stations"]]
-
-    def _show_where(self, k: int) -> None:
-        a = self.analysis
-        th = math.degrees(a.theta[k])
-        st = np.degrees(a.stations)
-        step = a.design.limits.resolution_deg
-        at = [i for i, s in enumerate(st) if abs(th - s) <= step / 2 + 1e-9]
-        events = ""
-        if at:
-            where = "at station " + " and ".join(str(i) for i in at)
-            known = self.station_events
-            events = "  \n" + "  \n".join(f"*{state.esc(known[i])}*" for i in at
-                                           if i < len(known))
-        else:
-            i, n = int(np.searchsorted(st, th)), len(st)
-            where = (f"between stations {i - 1} and {i}" if 0 < i < n
-                     else f"between stations {n - 1} and 0")
-        faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
-        touch = ", ".join(faces) if faces else "none"
-        seg = SEGMENT_NAMES[int(a.prog.segment[k])]
-        if a.prog.index[k] != a.prog.index[k - 1]:  # a boundary: say both (k - 1 wraps)
-            seg = f"{SEGMENT_NAMES[int(a.prog.segment[k - 1])]} ends, {seg} begins"
-        self.where_md.content = (
-            f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
-            f"In contact: **{touch}** · S = {to_mm(a.prog.S[k]):.3f} mm · "
-            f"F_N = {a.guide.FN[k]:.1f} N{events}")
+    def _index(self) -> int:
+        return nearest_index(self.analysis.theta, self.theta_deg)
 
     def _goto(self, theta_deg: float, markers: bool = True, slider: bool = True) -> None:
-        """Lock held."""
+        """Show the mechanism at theta_deg: pose, slider, close-up camera and (with
+        ``markers``) the text and curve markers, in one atomic update. Lock held."""
         self.theta_deg = theta_deg % 360.0
-        k = self._index(self.theta_deg)
+        k = self._index()
         with self.client.atomic():
             self.view.pose(k)
             if slider:
                 self._syncing = True
                 try:
-                    self.angle_slider.value = round(self.theta_deg, 1)  # as the text
+                    self.ui.angle_slider.value = round(self.theta_deg, 1)  # as the text
                 finally:
                     self._syncing = False
             if self.camera_view == "Contact close-up":  # follow the contacts as S changes
                 pos, look, _ = camera_for(self.camera_view, self.analysis, k)
                 self.client.camera.position, self.client.camera.look_at = pos, look
             if markers:
-                self._show_where(k)
-                for c in self.curves:
-                    c.marker(math.degrees(self.analysis.theta[k]))
+                self._show_markers(k)
+
+    def _show_markers(self, k: int) -> None:
+        self.ui.where_md.content = where_markdown(self.analysis, k, self.station_events)
+        for c in self.ui.curves:
+            c.marker(math.degrees(self.analysis.theta[k]))
 
     def _on_angle(self, value: float) -> None:
         with self.lock:
-            if self._syncing:
-                return
-            self._goto(float(value), slider=False)
-
-    def _show_station_buttons(self, a) -> None:
-        names = tuple(str(i) for i in range(len(a.stations)))
-        if tuple(self.stations_btn.options) != names:
-            self.stations_btn.options = names
+            if not self._syncing:
+                self._goto(float(value), slider=False)
 
     def goto_station(self, i: int | str) -> None:
         """Jump to station i; anything else (a hostile client's value) is ignored."""
@@ -645,19 +400,18 @@ class Session:
             self._set_playing(False)
             self._goto(math.degrees(float(self.analysis.stations[int(i)])))
 
-    def _set_speed(self, v: float) -> None:
-        self.speed = float(v)
-
     def _set_overlay(self, name: str, on: bool) -> None:
         with self.lock:
             self.view.set_overlay(name, bool(on))
 
+    @property
+    def playing(self) -> bool:
+        return self.ticker.running
+
     def _set_playing(self, on: bool) -> None:
-        self.playing = on
-        self.play_btn.label = "⏸ Pause" if on else "▶ Play"
-        self.play_btn.color = "orange" if on else "green"
-        if on:
-            self._wake_anim.set()
+        self.ticker.run(on)
+        self.ui.play_btn.label = "⏸ Pause" if on else "▶ Play"
+        self.ui.play_btn.color = "orange" if on else "green"
 
     def toggle_play(self) -> None:
         with self.lock:
@@ -666,73 +420,16 @@ class Session:
                 self._goto(self.theta_deg)
 
     def frame(self, dt: float, n: int = 0) -> None:
-        """One animation step of dt seconds (called by the loop; public for the bench)."""
+        """One animation step of dt seconds, the n-th since play (the ticker's step)."""
         with self.lock:
             if self.closed.is_set():
                 return
             slow = n % 3 == 0  # angle slider and label at 10 Hz
             self._goto(self.theta_deg + self.speed * dt, markers=False, slider=slow)
             if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
-                k = self._index(self.theta_deg)
-                self._show_where(k)
-                for c in self.curves:
-                    c.marker(math.degrees(self.analysis.theta[k]))
+                self._show_markers(self._index())
 
-    def _animate(self) -> None:
-        period, n, last = 1.0 / FPS, 0, time.perf_counter()
-        while not self.closed.is_set():
-            if not self.playing:
-                self._wake_anim.wait(0.5)  # asleep while paused
-                self._wake_anim.clear()
-                last = time.perf_counter()
-                continue
-            now = time.perf_counter()
-            try:
-                self.frame(min(now - last, 0.2), n)
-                self.frames_played += 1
-            except Exception:  # client gone mid-frame
-                if self.closed.is_set():
-                    return
-                raise
-            last, n = now, n + 1
-            time.sleep(max(0.0, period - (time.perf_counter() - now)))
-
-    def _settle(self) -> None:
-        """Background: verified analysis and the four-follower comparison, once the tab
-        has been still for SETTLE_S, and one tab at a time across the server
-        (BACKGROUND), so that the cheap re-analysis of every tab always comes first."""
-        while not self.closed.is_set():
-            if not self._wake_settle.wait(0.5):
-                continue
-            self._wake_settle.clear()
-            time.sleep(SETTLE_S)  # let a slider drag finish
-            if self._wake_settle.is_set():
-                continue
-            with BACKGROUND:
-                if not self._wake_settle.is_set() and not self.closed.is_set():
-                    self.settle_once()
-
-    def settle_once(self) -> None:
-        with self.lock:
-            design, gen = self.design, self.gen
-        av = analyze(design, verify=True)
-        with self.lock:
-            if gen != self.gen or self.closed.is_set():
-                return  # changed meanwhile: the comparison would be stale too
-        results = compare.compute(design)
-        with self.lock:
-            if gen != self.gen or self.closed.is_set():
-                return
-            old = [(v.code, v.ranges_deg) for v in self.analysis.violations]
-            self.analysis, self.verified = av, True
-            if [(v.code, v.ranges_deg) for v in av.violations] != old:
-                self.view.build(av)
-                for c in self.curves:
-                    c.update(av, self._index(self.theta_deg))
-            self._show_summary(summary(av))
-            self._show_status()
-            self.compare_view.update(results)
-
+    # --- view ----------------------------------------------------------------------
     def show_stations_diagram(self) -> None:
         """The mechanism at every station side by side (camcore.document), under the
         button; drawn from the design on screen, replaced on each click."""
@@ -742,11 +439,11 @@ class Session:
             a = self.analysis
         image = stations_image(a)  # ~0.5 s of matplotlib, outside the lock
         with self.lock:
-            if self.stations_img is not None:
-                self.stations_img.image = image
+            if self.ui.stations_img is not None:
+                self.ui.stations_img.image = image
             else:
-                with self.view_folder:
-                    self.stations_img = self.client.gui.add_image(image, format="png")
+                with self.ui.view_folder:
+                    self.ui.stations_img = self.client.gui.add_image(image, format="png")
 
     def set_camera_view(self, view: str) -> None:
         """A preset view (Front by default; the close-up follows the animation)."""
@@ -764,10 +461,15 @@ class Session:
         cam.position = pos
         cam.look_at = look
 
+    @property
+    def threads(self) -> tuple[threading.Thread, ...]:
+        """The tab's own threads (all end on close)."""
+        return self._restorer, self.ticker.thread, self.refiner.thread
+
     def close(self) -> None:
         self.closed.set()
-        self._wake_anim.set()
-        self._wake_settle.set()
+        self.ticker.close()
+        self.refiner.close()
         for t in self.threads:
-            if t is not threading.current_thread():
+            if t.is_alive() and t is not threading.current_thread():
                 t.join(timeout=2.0)

@@ -45,7 +45,7 @@ def run(quick: bool = False) -> list[dict]:
         tab, s = _session(app)
         time.sleep(1.5)  # let the background verification of the first design finish
         for kind in ("double_concave", "single_concave", "double_roller", "single_roller"):
-            s.controls["follower.kind"].value = kind
+            s.ui.controls["follower.kind"].value = kind
             d = s.design
             t = []
             for _ in range(n):
@@ -56,17 +56,17 @@ def run(quick: bool = False) -> list[dict]:
             t = []
             for i in range(n):
                 t0 = time.perf_counter()
-                s.controls["motion.lift_mm"].value = 15.0 + (i % 2) * 0.5  # a slider step
+                s.ui.controls["motion.lift_mm"].value = 15.0 + (i % 2) * 0.5  # a slider step
                 t.append(time.perf_counter() - t0)
             rows.append(_row(f"slider change -> re-analysis + redraw, {kind}", t,
                              "server side: analyze + cam mesh + follower + overlays + "
                              "6 plots + panels, queued to the client"))
-        s.controls["follower.kind"].value = "double_concave"
+        s.ui.controls["follower.kind"].value = "double_concave"
         time.sleep(1.0)
         t = []
         for i in range(n):
             t0 = time.perf_counter()
-            s.controls["cam.speed_rpm"].value = 1200.0 + (i % 2) * 10  # geometry unchanged
+            s.ui.controls["cam.speed_rpm"].value = 1200.0 + (i % 2) * 10  # geometry unchanged
             t.append(time.perf_counter() - t0)
         rows.append(_row("speed change -> re-analysis + redraw (geometry kept)", t,
                          "analyze + plots + panels; cam and follower nodes not re-sent"))
@@ -85,18 +85,18 @@ def run(quick: bool = False) -> list[dict]:
         rows.append(_row("animation frame with plot markers", t, "2 of 30 frames per second"))
         # the real loop: frames delivered per second while playing, GUI still responsive
         s.speed = 90.0
-        th0, f0 = s.theta_deg, s.frames_played
+        th0, f0 = s.theta_deg, s.ticker.ticks
         s.toggle_play()
         t0 = time.perf_counter()
         gui = []
         for i in range(10):  # slider changes while the animation runs
             time.sleep(0.25)
             a = time.perf_counter()
-            s.controls["motion.lift_mm"].value = 15.0 + (i % 2) * 0.5
+            s.ui.controls["motion.lift_mm"].value = 15.0 + (i % 2) * 0.5
             gui.append(time.perf_counter() - a)
         dt = time.perf_counter() - t0
         s.toggle_play()
-        fps = (s.frames_played - f0) / dt
+        fps = (s.ticker.ticks - f0) / dt
         rows.append(_row("slider change while animating", gui,
                          f"loop drew {fps:.1f} frames/s over {dt:.1f} s "
                          f"(cam advanced {(s.theta_deg - th0) % 360:.0f} deg at 90 deg/s)"))

@@ -11,39 +11,11 @@ import time
 import numpy as np
 import pytest
 import trimesh
+from conftest import wait_for
 from fake_tab import FakeTab
 from viser._gui_handles import GuiEvent, UploadedFile
 
-from app.main import App
 from camcore.model import Design, design_to_json, load_preset
-
-
-def wait_for(pred, timeout=10.0):
-    t0 = time.time()
-    while time.time() - t0 < timeout:
-        if pred():
-            return True
-        time.sleep(0.02)
-    return False
-
-
-@pytest.fixture(scope="module")
-def app():
-    a = App(host="127.0.0.1", port=0)
-    yield a
-    a.stop()
-
-
-@pytest.fixture()
-def tab(app):
-    before = set(app.sessions)
-    t = FakeTab(app.port)
-    assert wait_for(lambda: set(app.sessions) - before), "no session for the new tab"
-    (cid,) = set(app.sessions) - before
-    s = app.sessions[cid]
-    yield s
-    t.close()
-    wait_for(lambda: cid not in app.sessions)
 
 
 def fire_upload(handle, name: str, content: bytes) -> None:
@@ -57,73 +29,73 @@ def test_session_starts_on_paper_example(tab):
     s = tab
     assert s.design == load_preset("paper_example")
     assert s.error is None
-    assert "All design limits met" in s.status.content
+    assert "All design limits met" in s.ui.status.content
     assert s.view.nodes["cam"].vertices.shape[0] > 1000
     assert s.view.builds == 1
-    assert "station 0" in s.where_md.content
-    assert "S1 (left face), S2 (right face)" in s.where_md.content  # low dwell: both touch
+    assert "station 0" in s.ui.where_md.content
+    assert "S1 (left face), S2 (right face)" in s.ui.where_md.content  # low dwell: both touch
 
 
 def test_control_change_reanalyses_and_redraws(tab):
     s = tab
     old_verts = s.view.nodes["cam"].vertices.copy()
     builds = s.view.builds
-    s.controls["motion.lift_mm"].value = 25.0
+    s.ui.controls["motion.lift_mm"].value = 25.0
     assert s.design.motion.lift_mm == 25.0
     assert s.view.builds == builds + 1
     new_verts = s.view.nodes["cam"].vertices
     r_old = np.hypot(old_verts[:, 0], old_verts[:, 1]).max()
     r_new = np.hypot(new_verts[:, 0], new_verts[:, 1]).max()
     assert r_new > r_old + 0.009  # the high-dwell arc moved out by ~10 mm
-    s_curve = s.curves[0].handle.data[1]  # S [mm]
+    s_curve = s.ui.curves[0].handle.data[1]  # S [mm]
     assert abs(np.nanmax(s_curve) - 25.0) < 1e-6
-    assert "Low dwell" in s.low_dwell_md.content
+    assert "Low dwell" in s.ui.low_dwell_md.content
 
 
 def test_speed_change_redraws_forces_but_keeps_the_geometry(tab):
     s = tab
     builds, cam = s.view.builds, s.view.nodes["cam"]
-    force_plot = next(c for c in s.curves if "F_N" in c.handle.title)
+    force_plot = next(c for c in s.ui.curves if "F_N" in c.handle.title)
     before = np.array(force_plot.handle.data[1])
-    s.controls["cam.speed_rpm"].value = 600.0
+    s.ui.controls["cam.speed_rpm"].value = 600.0
     assert s.design.cam.speed_rpm == 600.0
     assert s.view.builds == builds and s.view.nodes["cam"] is cam  # nothing re-sent
     # a quarter of the inertia force M A omega^2 (about 53 N at 1200 rpm): F_N falls where
     # the follower accelerates and rises where it decelerates
     change = np.array(force_plot.handle.data[1]) - before
     assert np.nanmin(change) < -10 and np.nanmax(change) > 10
-    s.controls["cam.base_radius_mm"].value = 90.0
+    s.ui.controls["cam.base_radius_mm"].value = 90.0
     assert s.view.builds == builds + 1 and s.view.nodes["cam"] is not cam
 
 
 def test_invalid_value_keeps_last_design_and_explains(tab):
     s = tab
     good, a = s.design, s.analysis
-    s.controls["motion.rise_deg"].value = 250.0  # 250 + 70 + 130 > 360
+    s.ui.controls["motion.rise_deg"].value = 250.0  # 250 + 70 + 130 > 360
     assert s.design == good and s.analysis is a or s.analysis.design == good
-    assert "Invalid input" in s.status.content
-    assert "exceeds 360 deg by 90 deg" in s.status.content
-    assert "−90" in s.low_dwell_md.content or "-90" in s.low_dwell_md.content
-    s.controls["follower.face_radius_mm"].value = -50.0  # still invalid, now two problems
+    assert "Invalid input" in s.ui.status.content
+    assert "exceeds 360 deg by 90 deg" in s.ui.status.content
+    assert "−90" in s.ui.low_dwell_md.content or "-90" in s.ui.low_dwell_md.content
+    s.ui.controls["follower.face_radius_mm"].value = -50.0  # still invalid, now two problems
     assert s.design == good
-    s.controls["motion.rise_deg"].value = 100.0
-    assert "face_radius_mm" in s.status.content and "base radius" in s.status.content
-    s.controls["follower.face_radius_mm"].value = -250.0
-    assert s.error is None and "Invalid input" not in s.status.content
+    s.ui.controls["motion.rise_deg"].value = 100.0
+    assert "face_radius_mm" in s.ui.status.content and "base radius" in s.ui.status.content
+    s.ui.controls["follower.face_radius_mm"].value = -250.0
+    assert s.error is None and "Invalid input" not in s.ui.status.content
     assert s.design == good
 
 
 def test_limit_violations_are_highlighted(tab):
     s = tab
     assert "bad" not in s.view.nodes
-    s.controls["motion.lift_mm"].value = 40.0
-    s.controls["motion.rise_deg"].value = 30.0
+    s.ui.controls["motion.lift_mm"].value = 40.0
+    s.ui.controls["motion.rise_deg"].value = 30.0
     codes = {v.code for v in s.analysis.violations}
     assert "pressure_angle" in codes
-    assert "design-limit violation" in s.status.content
-    assert "Eqs. 5, 13" in s.status.content
+    assert "design-limit violation" in s.ui.status.content
+    assert "Eqs. 5, 13" in s.ui.status.content
     assert s.view.nodes["bad"].points.shape[0] > 0  # red segments on the cam profile
-    phi_plot = next(c for c in s.curves if c.title.startswith("Pressure angle"))
+    phi_plot = next(c for c in s.ui.curves if c.title.startswith("Pressure angle"))
     assert np.max(phi_plot.shade) > 0  # shaded angles on the pressure-angle curve
     on = phi_plot.x[phi_plot.shade > 0]
     assert on.min() >= 0 and on.max() <= 31  # only over the (short) rise
@@ -131,31 +103,31 @@ def test_limit_violations_are_highlighted(tab):
 
 def test_follower_kind_changes_the_body(tab):
     s = tab
-    s.controls["follower.kind"].value = "double_roller"
+    s.ui.controls["follower.kind"].value = "double_roller"
     assert s.design.follower.kind.value == "double_roller"
     assert {"pin0", "pin1"} <= set(s.view.nodes)
-    assert s.controls["follower.face_radius_mm"].disabled
-    assert not s.controls["follower.roller_radius_mm"].disabled
-    s.controls["follower.kind"].value = "single_concave"
+    assert s.ui.controls["follower.face_radius_mm"].disabled
+    assert not s.ui.controls["follower.roller_radius_mm"].disabled
+    s.ui.controls["follower.kind"].value = "single_concave"
     assert "pin0" not in s.view.nodes and "face1" not in s.view.nodes
-    assert s.controls["follower.offset_mm"].disabled
-    assert "In contact: **face**" in s.where_md.content
+    assert s.ui.controls["follower.offset_mm"].disabled
+    assert "In contact: **face**" in s.ui.where_md.content
 
 
 def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     s = tab
     good = s.design
-    fire_upload(s.upload_btn, "broken.json", b"{not json")
+    fire_upload(s.ui.upload_btn, "broken.json", b"{not json")
     assert s.design == good
-    assert "not a JSON document" in s.status.content
-    assert "broken.json" in s.files_md.content
-    fire_upload(s.upload_btn, "bad.json", b'{"cam": {"base_radius_mm": -5}}')
-    assert s.design == good and "base_radius_mm" in s.status.content
+    assert "not a JSON document" in s.ui.status.content
+    assert "broken.json" in s.ui.files_md.content
+    fire_upload(s.ui.upload_btn, "bad.json", b'{"cam": {"base_radius_mm": -5}}')
+    assert s.design == good and "base_radius_mm" in s.ui.status.content
     other = load_preset("valve_lift_roller")
-    fire_upload(s.upload_btn, "valve.json", design_to_json(other).encode())
+    fire_upload(s.ui.upload_btn, "valve.json", design_to_json(other).encode())
     assert s.design == other and s.error is None
-    assert s.controls["cam.base_radius_mm"].value == other.cam.base_radius_mm
-    assert s.controls["follower.kind"].value == other.follower.kind.value
+    assert s.ui.controls["cam.base_radius_mm"].value == other.cam.base_radius_mm
+    assert s.ui.controls["follower.kind"].value == other.follower.kind.value
 
 
 @pytest.mark.parametrize("name, content, message", [
@@ -168,58 +140,58 @@ def test_bad_upload_keeps_design_then_good_upload_loads(tab):
 def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content, message):
     s = tab
     good = s.design
-    fire_upload(s.upload_btn, name, content)
-    assert s.design == good and message in s.status.content and name in s.files_md.content
+    fire_upload(s.ui.upload_btn, name, content)
+    assert s.design == good and message in s.ui.status.content and name in s.ui.files_md.content
     # the server keeps serving: the same tab still redraws on a control change
-    s.controls["motion.lift_mm"].value = 12.0
+    s.ui.controls["motion.lift_mm"].value = 12.0
     assert s.design.motion.lift_mm == 12.0 and s.error is None
 
 
-def test_preset_and_downloads(tab):
+def test_preset_and_downloads(tab, downloads):
     s = tab
-    s.preset_dd.value = "classroom_harmonic"
-    s.preset_btn.value = True  # click
+    s.ui.preset_dd.value = "classroom_harmonic"
+    s.ui.preset_btn.value = True  # click
     assert s.design == load_preset("classroom_harmonic")
-    s.download_btns["stl"].value = True
-    name, data = s.last_download
+    s.ui.download_btns["stl"].value = True
+    name, data = downloads[-1]
     assert name.endswith(".stl")
     mesh = trimesh.load(io.BytesIO(data), file_type="stl")
     assert mesh.is_watertight
     expect = s.analysis.profile.area * 1e6 * s.design.cam.width_mm
     assert abs(mesh.volume - expect) / expect < 1e-6
-    s.quick_stl_btn.value = True  # the same part from the button above the tabs
-    assert s.last_download == (name, data)
-    s.download_btns["json"].value = True
-    assert s.last_download[1].decode().startswith("{")
+    s.ui.quick_stl_btn.value = True  # the same part from the button above the tabs
+    assert downloads[-1] == (name, data)
+    s.ui.download_btns["json"].value = True
+    assert downloads[-1][1].decode().startswith("{")
     for kind, ext in (("dxf", ".dxf"), ("csv", "_profile.csv"), ("series", "_series.csv"),
                       ("toolpath", ".nc")):
-        s.download_btns[kind].value = True
-        assert s.last_download[0].endswith(ext) and len(s.last_download[1]) > 1000
+        s.ui.download_btns[kind].value = True
+        assert downloads[-1][0].endswith(ext) and len(downloads[-1][1]) > 1000
 
 
 def test_stations_angle_and_animation(tab):
     s = tab
-    s.stations_btn.value = "2"
+    s.ui.stations_btn.value = "2"
     assert abs(np.radians(s.theta_deg) - s.analysis.stations[2]) < 1e-9
-    assert "at station 2" in s.where_md.content
-    assert "station 2: S2 touches; from here the load is shared" in s.where_md.content
-    assert "S1 (left face), S2 (right face)" in s.where_md.content  # both on the dwell arc
+    assert "at station 2" in s.ui.where_md.content
+    assert "station 2: S2 touches; from here the load is shared" in s.ui.where_md.content
+    assert "S1 (left face), S2 (right face)" in s.ui.where_md.content  # both on the dwell arc
     wxyz = np.array(s.view.cam_frame.wxyz)
     assert abs(2 * np.arctan2(-wxyz[3], wxyz[0]) - s.analysis.stations[2]) < 1e-2
-    assert s.angle_slider.value == pytest.approx(107.4)  # as the text says, not 107.5
-    assert "θ = 107.4°" in s.where_md.content
-    s.angle_slider.value = 50.0
-    assert s.theta_deg == 50.0 and "rise" in s.where_md.content
+    assert s.ui.angle_slider.value == pytest.approx(107.4)  # as the text says, not 107.5
+    assert "θ = 107.4°" in s.ui.where_md.content
+    s.ui.angle_slider.value = 50.0
+    assert s.theta_deg == 50.0 and "rise" in s.ui.where_md.content
     y = s.view.follower_frame.position[1]
     assert abs(y - float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))) < 1e-4
-    s.angle_slider.value = 0.0  # a boundary: both segments are named
-    assert "low dwell ends, rise begins" in s.where_md.content
-    s.angle_slider.value = 50.0
+    s.ui.angle_slider.value = 0.0  # a boundary: both segments are named
+    assert "low dwell ends, rise begins" in s.ui.where_md.content
+    s.ui.angle_slider.value = 50.0
     builds = s.view.builds
-    s.play_btn.value = True
-    assert s.playing and "Pause" in s.play_btn.label
+    s.ui.play_btn.value = True
+    assert s.playing and "Pause" in s.ui.play_btn.label
     assert wait_for(lambda: s.theta_deg > 52.0, 5.0)
-    s.play_btn.value = True
+    s.ui.play_btn.value = True
     assert not s.playing
     t = s.theta_deg
     time.sleep(0.3)
@@ -229,17 +201,17 @@ def test_stations_angle_and_animation(tab):
 
 def test_overlays_switch(tab):
     s = tab
-    s.angle_slider.value = 120.0
+    s.ui.angle_slider.value = 120.0
     assert s.view.nodes["forces"].visible
-    s.overlay_boxes["forces"].value = False
+    s.ui.overlay_boxes["forces"].value = False
     assert not s.view.nodes["forces"].visible
-    s.overlay_boxes["arcs"].value = False
+    s.ui.overlay_boxes["arcs"].value = False
     assert not s.view.nodes["arcs"].visible
-    s.overlay_boxes["instant_centre"].value = False
+    s.ui.overlay_boxes["instant_centre"].value = False
     assert not s.view.nodes["q"].visible
     # the wear heat band along the profile: off by default, darker where wear is larger
     assert not s.view.nodes["wear"].visible
-    s.overlay_boxes["wear"].value = True
+    s.ui.overlay_boxes["wear"].value = True
     assert s.view.nodes["wear"].visible
     colors = np.asarray(s.view.nodes["wear"].colors, float)
     assert colors.shape[1:] == (2, 3) and np.ptp(colors[:, 0, 0]) > 50
@@ -247,15 +219,15 @@ def test_overlays_switch(tab):
 
 def test_compare_tab(tab):
     s = tab
-    s.settle_once()
-    md = s.compare_view.md.content
+    s.refine()
+    md = s.ui.compare_view.md.content
     for label in ("single roller", "double roller", "single concave", "double concave"):
         assert label in md
     assert "67.297" in md  # Table 1 reference column
-    data = s.compare_view.fn.data
+    data = s.ui.compare_view.fn.data
     assert len(data) == 5 and data[0].size > 100
     assert np.all(np.isfinite(data[1])) and s.verified
-    assert "geometric check max" in s.status.content
+    assert "geometric check max" in s.ui.status.content
 
 
 def test_tabs_are_isolated_and_freed(app):
@@ -267,9 +239,9 @@ def test_tabs_are_isolated_and_freed(app):
         return t, app.sessions[cid]
 
     (t1, s1), (t2, s2) = open_tab(), open_tab()
-    s1.controls["motion.lift_mm"].value = 30.0
+    s1.ui.controls["motion.lift_mm"].value = 30.0
     assert s1.design.motion.lift_mm == 30.0 and s2.design.motion.lift_mm == 15.0
-    s1.play_btn.value = True
+    s1.ui.play_btn.value = True
     assert wait_for(lambda: s1.theta_deg > 1.0, 5.0)
     assert s2.theta_deg == 0.0
     n = len(app.sessions)
@@ -286,17 +258,17 @@ def test_new_follower_kinds_render_and_offset(tab, kind):
     """The flat-faced tappet and the knife edge are drawn and animated; a single
     follower's axis offset is a live control (greyed out for double followers)."""
     s = tab
-    s.controls["follower.kind"].value = kind
+    s.ui.controls["follower.kind"].value = kind
     assert s.design.follower.kind.value == kind and s.error is None
     assert "face0" in s.view.nodes and "face1" not in s.view.nodes
-    assert not s.controls["follower.single_offset_mm"].disabled
-    assert s.controls["follower.face_radius_mm"].disabled
-    assert s.controls["follower.roller_radius_mm"].disabled
-    s.controls["follower.single_offset_mm"].value = 12.0
+    assert not s.ui.controls["follower.single_offset_mm"].disabled
+    assert s.ui.controls["follower.face_radius_mm"].disabled
+    assert s.ui.controls["follower.roller_radius_mm"].disabled
+    s.ui.controls["follower.single_offset_mm"].value = 12.0
     assert s.design.follower.single_offset_mm == 12.0 and s.analysis.geo.stem_x < 0
     s.view.pose(len(s.analysis.theta) // 3)  # animate a frame
-    s.controls["follower.kind"].value = "double_concave"
-    assert s.controls["follower.single_offset_mm"].disabled
+    s.ui.controls["follower.kind"].value = "double_concave"
+    assert s.ui.controls["follower.single_offset_mm"].disabled
 
 
 def test_a_multi_segment_program_loads_and_keeps_its_segments(tab):
@@ -305,13 +277,13 @@ def test_a_multi_segment_program_loads_and_keeps_its_segments(tab):
     s = tab
     s.load_preset("double_index")
     assert s.error is None and len(s.design.motion.segments) == 8
-    assert s.controls["motion.rise_deg"].disabled and s.controls["motion.lift_mm"].disabled
-    assert "Program of 8 segments" in s.low_dwell_md.content
-    s.controls["cam.base_radius_mm"].value = 90.0
+    assert s.ui.controls["motion.rise_deg"].disabled and s.ui.controls["motion.lift_mm"].disabled
+    assert "Program of 8 segments" in s.ui.low_dwell_md.content
+    s.ui.controls["cam.base_radius_mm"].value = 90.0
     assert s.design.cam.base_radius_mm == 90.0 and len(s.design.motion.segments) == 8
     assert len(s.analysis.stations) == 12
     s.load_preset("paper_example")
-    assert not s.controls["motion.rise_deg"].disabled
+    assert not s.ui.controls["motion.rise_deg"].disabled
 
 
 def test_a_dropdown_value_outside_the_presets_reads_no_file(tab, tmp_path):
@@ -322,8 +294,8 @@ def test_a_dropdown_value_outside_the_presets_reads_no_file(tab, tmp_path):
     (tmp_path / "x.json").write_text(before.model_dump_json())
     for name in ("../../x", str(tmp_path / "x"), "<b id=inj>x</b>"):
         s.load_preset(name)
-        assert s.design == before and "No preset" in s.files_md.content
-        assert "<b" not in s.files_md.content
+        assert s.design == before and "No preset" in s.ui.files_md.content
+        assert "<b" not in s.ui.files_md.content
 
 
 def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
@@ -336,14 +308,14 @@ def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
 
     s = tab
     gui_api = s.client.gui  # the tab's own GUI API holds its upload button
-    button = s.upload_btn._impl.uuid
+    button = s.ui.upload_btn._impl.uuid
     cid = s.client.client_id
     big = _messages.FileTransferStartUpload(
         source_component_uuid=button, transfer_uuid="t-big", filename="<i>big</i>.json",
         mime_type="application/json", part_count=50, size_bytes=45_000_000)
     gui_api._handle_file_transfer_start(cid, big)
     assert "t-big" not in gui_api._current_file_upload_states
-    assert "refused" in s.files_md.content and "<i>" not in s.files_md.content
+    assert "refused" in s.ui.files_md.content and "<i>" not in s.ui.files_md.content
     liar = _messages.FileTransferStartUpload(
         source_component_uuid=button, transfer_uuid="t-liar", filename="liar.json",
         mime_type="application/json", part_count=3, size_bytes=10)
@@ -379,12 +351,12 @@ def test_browser_storage_values_are_untrusted():
 
 
 def test_download_names_say_which_design_they_hold(tab):
-    from app.session import file_stem
+    from app.panels import file_stem
 
     s = tab
     stem = file_stem(s.design)
     assert stem.startswith("chuang_hsu_chang_section_6_example_doubl-double_concave-")
-    s.controls["cam.base_radius_mm"].value = 85.0
+    s.ui.controls["cam.base_radius_mm"].value = 85.0
     assert file_stem(s.design) != stem  # an edited design gets another name
 
 
@@ -408,29 +380,30 @@ def test_segment_table_edits_the_program(tab):
     and editing rows re-analyses at once; a program that does not close says so and
     keeps the last valid design; the station buttons follow the program."""
     s = tab
-    assert [r["kind"].value for r in s.seg_rows] == ["rise", "dwell", "fall", "dwell"]
+    assert [r["kind"].value for r in s.ui.segments.rows] == ["rise", "dwell", "fall", "dwell"]
     # split the high dwell: shorten it and add a 0 deg dwell, then turn that into a
     # rise/fall pair by editing rows: first an invalid step (lifts do not close)
-    s.on_segment_move(4, "+")
-    assert len(s.design.motion.segments) == 5 and len(s.seg_rows) == 5
-    s.seg_rows[1]["angle"].value = 50.0  # the sum is 340: invalid, the design stays
+    s.ui.segments.act(4, "+")
+    assert len(s.design.motion.segments) == 5 and len(s.ui.segments.rows) == 5
+    s.ui.segments.rows[1]["angle"].value = 50.0  # the sum is 340: invalid, the design stays
     assert s.error is not None and "360" in s.error and len(s.design.motion.segments) == 5
-    assert "340" in s.seg_sums.content
-    s.seg_rows[4]["angle"].value = 20.0  # 360 again
+    assert "340" in s.ui.segments.sums.content
+    s.ui.segments.rows[4]["angle"].value = 20.0  # 360 again
     assert s.error is None and s.design.motion.segments[4].angle_deg == 20.0
-    s.seg_rows[1]["kind"].value = "spin"  # a hostile value: refused, naming the field
+    s.ui.segments.rows[1]["kind"].value = "spin"  # a hostile value: refused, naming the field
     assert s.error is not None and "kind" in s.error
-    s.seg_rows[1]["kind"].value = "dwell"
+    s.ui.segments.rows[1]["kind"].value = "dwell"
     assert s.error is None
-    s.on_segment_move(4, "↑")  # the new dwell before the low dwell... (4 -> 3)
+    s.ui.segments.act(4, "↑")  # the new dwell before the low dwell... (4 -> 3)
     kinds = [g.kind.value for g in s.design.motion.segments]
     assert kinds == ["rise", "dwell", "fall", "dwell", "dwell"]
     assert s.design.motion.segments[3].angle_deg == 20.0
-    s.on_segment_move(3, "✕")  # 340 deg again: the table shows the edit, the design stays
-    assert len(s.seg_rows) == 4 and s.error is not None
+    s.ui.segments.act(3, "✕")  # 340 deg again: the table shows the edit, the design stays
+    assert len(s.ui.segments.rows) == 4 and s.error is not None
     assert len(s.design.motion.segments) == 5
     s.load_preset("double_index")
-    assert len(s.seg_rows) == 8 and s.stations_btn.options == tuple(str(i) for i in range(12))
+    assert len(s.ui.segments.rows) == 8
+    assert s.ui.stations_btn.options == tuple(str(i) for i in range(12))
     s.goto_station("11")
     assert abs(s.theta_deg - 350.0) < 0.6
     s.goto_station("12")  # no such station: ignored
@@ -441,11 +414,11 @@ def test_motion_per_second_curve(tab):
     """V, A and J also per second at the design speed (the issue 9 designer's view):
     the cycloid's peak velocity 2 h w / beta_r, and it follows the speed."""
     s = tab
-    plot = next(c for c in s.curves if c.title.startswith("Velocity, acceleration and jerk"))
+    plot = next(c for c in s.ui.curves if c.title.startswith("Velocity, acceleration and jerk"))
     w = s.design.cam.speed_rpm * 2 * np.pi / 60
     h, beta = s.design.motion.lift_mm * 1e-3, np.radians(s.design.motion.rise_deg)
     assert np.nanmax(plot.handle.data[1]) == pytest.approx(2 * h * w / beta, rel=1e-3)
-    s.controls["cam.speed_rpm"].value = 600.0
+    s.ui.controls["cam.speed_rpm"].value = 600.0
     assert np.nanmax(plot.handle.data[1]) == pytest.approx(h * w / beta, rel=1e-3)
 
 
@@ -455,18 +428,18 @@ def test_running_machine_controls_and_curves(tab):
     torque and wear, and back to 0 restores the rigid follower."""
     s = tab
     assert s.design.dynamics.train_stiffness_N_per_m is None
-    assert s.controls["dynamics.train_stiffness_N_per_m"].value == 0.0
+    assert s.ui.controls["dynamics.train_stiffness_N_per_m"].value == 0.0
     for text in ("spring rate min", "jump speed", "shaft torque", "wear depth max", "pitting life"):
-        assert text in s.summary_md.content
-    s.controls["dynamics.damping_ratio"].value = 0.02
-    s.controls["dynamics.train_stiffness_N_per_m"].value = 2e4
+        assert text in s.ui.summary_md.content
+    s.ui.controls["dynamics.damping_ratio"].value = 0.02
+    s.ui.controls["dynamics.train_stiffness_N_per_m"].value = 2e4
     assert s.design.dynamics.train_stiffness_N_per_m == 2e4
     assert "dynamic_jump" in {v.code for v in s.analysis.violations}
-    train_plot = next(c for c in s.curves if "elastic train" in c.handle.title)
+    train_plot = next(c for c in s.ui.curves if "elastic train" in c.handle.title)
     assert np.max(train_plot.shade) > 0  # the jump is shaded on its curve
     elastic, rigid = np.array(train_plot.handle.data[2]), np.array(train_plot.handle.data[1])
     assert np.nanmin(elastic) < 0 < np.nanmin(rigid)
-    s.controls["dynamics.train_stiffness_N_per_m"].value = 0.0
+    s.ui.controls["dynamics.train_stiffness_N_per_m"].value = 0.0
     assert s.design.dynamics.train_stiffness_N_per_m is None and s.analysis.train is None
 
 
@@ -478,10 +451,10 @@ def test_no_pressure_angle_construction_where_nothing_touches(tab):
     data["motion"]["high_dwell_deg"] = 3.0
     s.set_design(Design.model_validate(data))
     assert "contact_lost" in {v.code for v in s.analysis.violations}
-    s.angle_slider.value = 101.0
-    assert "In contact: **none**" in s.where_md.content
+    s.ui.angle_slider.value = 101.0
+    assert "In contact: **none**" in s.ui.where_md.content
     assert not s.view.nodes["phi"].visible and not s.view.nodes["phi_label"].visible
-    s.angle_slider.value = 50.0
+    s.ui.angle_slider.value = 50.0
     assert s.view.nodes["phi"].visible
 
 
@@ -490,13 +463,13 @@ def test_camera_presets_front_by_default_and_a_close_up_that_follows(tab):
     cam = s.client.camera
     assert s.camera_view == "Front" and cam.fov < math.radians(10)  # a long, flat lens
     assert abs(cam.position[0]) < 1e-12 and abs(cam.look_at[0]) < 1e-12  # straight on
-    s.view_btns.value = "Contact close-up"
-    s.angle_slider.value = 50.0
+    s.ui.view_btns.value = "Contact close-up"
+    s.ui.angle_slider.value = 50.0
     S = float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))
     assert cam.look_at[1] == pytest.approx(s.analysis.geo.r_b + S, abs=1e-4)
     s.set_camera_view("../../etc")  # anything else a client sends is ignored
     assert s.camera_view == "Contact close-up"
-    s.view_btns.value = "3D"
+    s.ui.view_btns.value = "3D"
     assert cam.fov > math.radians(30)
 
 
@@ -504,19 +477,19 @@ def test_stations_diagram_in_the_view_tab(tab):
     """The paper's Fig. 4 for the design on screen: one panel per station, drawn on
     request and replaced on the next request."""
     s = tab
-    s.stations_fig_btn.value = True  # click
-    img = s.stations_img
+    s.ui.stations_fig_btn.value = True  # click
+    img = s.ui.stations_img
     assert img is not None and img.image.ndim == 3 and img.image.shape[1] == 700
     assert img.image.std() > 10  # something is drawn
-    s.stations_fig_btn.value = True
-    assert s.stations_img is img  # the same element, a new picture
+    s.ui.stations_fig_btn.value = True
+    assert s.ui.stations_img is img  # the same element, a new picture
 
 
 def test_the_touching_face_is_highlighted_and_the_idle_one_dimmed(tab):
     from app.scene import FOLLOWER_RGB, IDLE_FACE_RGB
 
     s = tab
-    s.angle_slider.value = 50.0  # the rise: S1 drives, S2 is off the cam
+    s.ui.angle_slider.value = 50.0  # the rise: S1 drives, S2 is off the cam
     assert tuple(s.view.nodes["face0"].color) == FOLLOWER_RGB
     assert tuple(s.view.nodes["face1"].color) == IDLE_FACE_RGB
     s.goto_station(2)  # both on the high-dwell arc

@@ -140,7 +140,7 @@ def test_trust_in_the_browser(tmp_path):
             assert "my cam" in session.saved
 
             # invalid input: the download is refused and says why
-            session.controls["follower.face_radius_mm"].value = -70.0  # |r_f| < r_b
+            session.ui.controls["follower.face_radius_mm"].value = -70.0  # |r_f| < r_b
             page.get_by_text("Invalid input").first.wait_for()
             page.get_by_role("tab", name="Files").click()
             page.get_by_role("button", name="Cam STL (mm)").click()

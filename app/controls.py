@@ -1,5 +1,6 @@
-"""The controls as data: which design field each control edits, and the text of the
-status panel. Pure functions, no viser: the GUI layer reads these tables.
+"""The design controls as data: which design field each control edits, and how the
+controls' values become a design. Pure functions, no viser: app.layout builds the
+widgets from these tables, app.session reads them back.
 
 A design is rebuilt from *all* control values on every change (``merged``), so a
 value that is invalid alone or in combination stays invalid until it is fixed, and
@@ -8,15 +9,11 @@ the last valid design stays on screen meanwhile.
 
 from __future__ import annotations
 
-import html
-import re
 from dataclasses import dataclass, field
 
 from pydantic import ValidationError
 
 from camcore.model import Design, FollowerKind, MotionLaw, format_validation_error
-from camcore.report import machine_rows
-from camcore.units import to_mm
 
 
 @dataclass(frozen=True)
@@ -153,119 +150,3 @@ def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, 
         return Design.model_validate(merged(base, values)), None
     except ValidationError as exc:
         return None, format_validation_error(exc)
-
-
-def program_text(design: Design) -> str:
-    """One line describing a program the classic sliders cannot edit."""
-    parts = []
-    for g in design.motion.segments:
-        lift = f" {g.lift_mm:g} mm {g.law.value}" if g.lift_mm else ""
-        parts.append(f"{g.kind.value} {g.angle_deg:g}°{lift}")
-    return ("Program of " + str(len(parts)) + " segments (edit it in the design file): "
-            + "; ".join(parts))
-
-
-def low_dwell_text(values: dict[str, object], design: Design | None = None) -> str:
-    if design is not None and design.motion.classic is None:
-        return program_text(design)
-    try:
-        bl = 360.0 - float(values["motion.rise_deg"]) - float(values["motion.high_dwell_deg"]) \
-            - float(values["motion.fall_deg"])
-    except (KeyError, TypeError, ValueError):
-        return "Low dwell β_l: -"
-    flag = "  ⚠ negative" if bl < 0 else ""
-    return f"Low dwell β_l = 360 − β_r − β_h − β_f = **{bl:g}°**{flag}"
-
-
-# --- status panel --------------------------------------------------------------------
-
-_BOX = ("<div style='border-radius:6px;padding:6px 10px;margin:2px 0;font-size:0.85em;"
-        "line-height:1.35;background:{bg};border:2px solid {fg};color:#222'>{body}</div>")
-
-
-_MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
-
-
-def esc(text: object) -> str:
-    """User-provided text (a design or file name, a message quoting input) made safe for
-    viser's Markdown, which renders raw HTML: HTML-escaped, and Markdown's special
-    characters backslash-escaped so they show as typed. Every such string goes through
-    here before it is shown."""
-    return _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
-
-
-def status_html(error: str | None, violations, lift_error: float | None,
-                verified: bool) -> str:
-    """The always-visible panel: input errors (red), limit violations (amber), or OK.
-
-    With an input error the panel says so and nothing green: the limits shown below it
-    are those of the last valid design, which stays on screen (and in the downloads'
-    refusal) until the input is fixed."""
-    parts = []
-    if error:
-        items = "".join(f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
-                        f"{html.escape(p.split(': ', 1)[-1])}</li>" for p in error.split("; "))
-        parts.append(_BOX.format(
-            bg="#fde2e2", fg="#d62728",
-            body="<b>✖ Invalid input — the last valid design stays on screen</b>"
-                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
-    if violations:
-        items = "".join(
-            f"<li><b>{html.escape(v.equation)}</b> <code>{html.escape(v.code)}</code>: "
-            f"{html.escape(v.message)}</li>" for v in violations)
-        parts.append(_BOX.format(
-            bg="#fff3d6", fg="#e08a00",
-            body=f"<b>⚠ {len(violations)} design-limit violation"
-                 f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
-                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
-    if error:
-        parts.append(_BOX.format(
-            bg="#eeeeee", fg="#555555",
-            body=f"Last valid design: {len(violations) or 'no'} limit violation"
-                 f"{'' if len(violations) == 1 else 's'}. Downloads are refused until the "
-                 "input is valid."))
-        return "".join(parts)
-    if not violations:
-        check = ""
-        if verified and lift_error is not None:
-            check = f"; geometric check max |lift − S| = {to_mm(lift_error):.2g} mm"
-        elif not verified:
-            check = "; geometric check running…"
-        parts.append(_BOX.format(bg="#e3f5e1", fg="#2ca02c",
-                                 body=f"<b>✔ All design limits met</b>{check}"))
-    return "".join(parts)
-
-
-def summary_markdown(s: dict) -> str:
-    """Key numbers of camcore.report.summary as a compact table."""
-
-    def f(x, nd=2):
-        if x is None:
-            return "–"
-        if isinstance(x, list):
-            return " … ".join(f(v, nd) for v in x)
-        return f"{x:.{nd}f}"
-
-    pa, rho = s["pressure_angle_max_deg"], s["curvature_radius_mm"]
-    fn, st = s["contact_force_max_N"], s["contact_stress_max_MPa"]
-    rows = [
-        ("High-dwell radius R", f"{f(s['dwell_radius_mm'], 3)} mm"),
-        ("ψ_h / ψ_l", f"{f(s['psi_h_deg'], 3)} / {f(s['psi_l_deg'], 3)} °"),
-        ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
-        ("ρ rise", f"{f(rho['rise'], 1)} mm"),
-        ("ρ fall", f"{f(rho['fall'], 1)} mm"),
-        ("Max F_N per contact: whole cycle / high dwell (one-face windows included)",
-         f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N"),
-        ("Max F_N per face while both faces touch the high dwell (Table 1's figure)",
-         f"{f(fn['high_dwell_two_contact'])} N" if fn["high_dwell_two_contact"] is not None
-         else "– (one face only)"),
-        ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
-                        f"{f(s['guide_force_max_N']['F2'])} N"),
-        ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
-        *machine_rows(s),
-        ("Contact half-width max", f"{f(s['contact_half_width_max_mm'], 4)} mm"
-         + (" (Hertz beyond validity: conservative stress)"
-            if s["hertz_beyond_validity_deg"] else "")),
-        ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
-    ]
-    return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)

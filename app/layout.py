@@ -1,0 +1,153 @@
+"""The tab's GUI: built once by ``build_layout``, returned as a dataclass of handles.
+
+Nothing here reacts to anything: app.session wires the handles' callbacks to its
+actions. Above the tabs: the status panel, the cam's STL one click away, and the
+animation (play, speed, angle, stations, where we are). Tabs: Design (controls,
+program table, key numbers), Curves, Compare, View (overlays, cameras, stations
+diagram), Files (presets, upload, kept designs, downloads).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+from camcore.model import Design, preset_names
+
+from . import compare, controls, plots
+from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS
+from .segments import SegmentTable
+
+DEFAULT_PRESET = "paper_example"
+OVERLAY_LABELS = {
+    "contacts": "Contact points",
+    "forces": "Contact normals as force arrows (∝ F_N)",
+    "instant_centre": "Instant centre I23 = Q and normals",
+    "pressure_angle": "Pressure angle φ",
+    "arcs": "Base circle and dwell arcs",
+    "wear": "Wear along the profile (Archard; pale none → dark red most)",
+}
+DOWNLOADS = (("json", "Design JSON"), ("stl", "Cam STL (mm)"), ("dxf", "Profile DXF (mm)"),
+             ("csv", "Profile CSV"), ("series", "Per-angle CSV"),
+             ("toolpath", "G-code (cutter path)"), ("html", "Printable report"),
+             ("pdf", "Report PDF"))
+STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session adapts them
+
+
+@dataclass
+class Layout:
+    """Handles of one tab's widgets (viser GUI handles unless said otherwise)."""
+
+    status: Any
+    quick_stl_btn: Any
+    # animation
+    play_btn: Any
+    speed_slider: Any
+    angle_slider: Any
+    stations_btn: Any
+    where_md: Any
+    # Design tab
+    controls: dict[str, Any]  # by design path, see app.controls.SPECS
+    low_dwell_md: Any
+    segments: SegmentTable
+    summary_md: Any
+    # Curves, Compare
+    curves: list[plots.Curve]
+    compare_view: compare.CompareView
+    # View tab
+    view_folder: Any
+    overlay_boxes: dict[str, Any]
+    view_btns: Any
+    camera_btn: Any
+    stations_fig_btn: Any
+    # Files tab
+    preset_dd: Any
+    preset_btn: Any
+    upload_btn: Any
+    save_name: Any
+    save_btn: Any
+    saved_dd: Any
+    open_saved_btn: Any
+    delete_saved_btn: Any
+    download_btns: dict[str, Any]
+    files_md: Any
+    stations_img: Any = field(default=None)  # added on the first diagram
+
+
+def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
+    """Build the whole tab in ``gui`` (a client's GuiApi) for design ``base`` whose
+    analysis is ``first`` (the curves take their series from it)."""
+    h: dict[str, Any] = {"status": gui.add_html("")}
+    h["quick_stl_btn"] = gui.add_button("⬇ Download the cam (STL, mm)")
+    with gui.add_folder("Animation", expand_by_default=True):
+        h["play_btn"] = gui.add_button("▶ Play", color="green")
+        h["speed_slider"] = gui.add_slider("Speed [°/s]", 5, 360, 5, speed_deg_s)
+        h["angle_slider"] = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
+        h["stations_btn"] = gui.add_button_group("Go to station", STATION_NAMES)
+        h["where_md"] = gui.add_markdown("")
+    tabs = gui.add_tab_group()
+    with tabs.add_tab("Design"):
+        _design_tab(gui, base, h)
+    with tabs.add_tab("Curves"):
+        h["curves"] = plots.build_curves(gui, first)
+    with tabs.add_tab("Compare"):
+        h["compare_view"] = compare.CompareView(gui)
+    with tabs.add_tab("View") as h["view_folder"]:
+        _view_tab(gui, h)
+    with tabs.add_tab("Files"):
+        _files_tab(gui, h)
+    return Layout(**h)
+
+
+def _design_tab(gui, base: Design, h: dict) -> None:
+    h["controls"] = {}
+    for title, expand, specs in controls.FOLDERS:
+        with gui.add_folder(title, expand_by_default=expand):
+            for spec in specs:
+                h["controls"][spec.path] = _control(gui, spec, base)
+            if title == "Motion program":
+                h["low_dwell_md"] = gui.add_markdown("")
+                folder = gui.add_folder("Program segments (any program)",
+                                        expand_by_default=False)
+                h["segments"] = SegmentTable(gui, folder, on_change=lambda segs: None)
+    with gui.add_folder("Key numbers", expand_by_default=True):
+        h["summary_md"] = gui.add_markdown("")
+
+
+def _control(gui, spec: controls.Spec, base: Design):
+    v = controls.get_path(base, spec.path)
+    if v is None:  # e.g. a classic slider on another program: the default's value
+        v = controls.get_path(Design(), spec.path)
+    if spec.widget == "slider":
+        lo, hi = min(spec.lo, v), max(spec.hi, v)
+        return gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)
+    if spec.widget == "number":
+        return gui.add_number(spec.label, float(v), step=spec.step, hint=spec.hint)
+    if spec.widget == "dropdown":
+        return gui.add_dropdown(spec.label, spec.options, initial_value=v, hint=spec.hint)
+    return gui.add_checkbox(spec.label, bool(v), hint=spec.hint)
+
+
+def _view_tab(gui, h: dict) -> None:
+    h["overlay_boxes"] = {name: gui.add_checkbox(OVERLAY_LABELS[name], name not in
+                                                 OFF_BY_DEFAULT) for name in OVERLAYS}
+    h["view_btns"] = gui.add_button_group("Camera", CAMERA_VIEWS)
+    h["camera_btn"] = gui.add_button("Reset camera")
+    h["stations_fig_btn"] = gui.add_button("Stations diagram (the paper's Fig. 4)")
+
+
+def _files_tab(gui, h: dict) -> None:
+    names = preset_names()
+    h["preset_dd"] = gui.add_dropdown(
+        "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names else names[0])
+    h["preset_btn"] = gui.add_button("Load preset")
+    h["upload_btn"] = gui.add_upload_button("Open design JSON…", mime_type="application/json")
+    gui.add_markdown("**Kept in this browser** (only you see them)")
+    h["save_name"] = gui.add_text("Name", "my cam")
+    h["save_btn"] = gui.add_button("Save in this browser")
+    h["saved_dd"] = gui.add_dropdown("Saved designs", ("–",), initial_value="–")
+    h["open_saved_btn"] = gui.add_button("Open saved")
+    h["delete_saved_btn"] = gui.add_button("Delete saved")
+    gui.add_markdown("**Download**")
+    h["download_btns"] = {kind: gui.add_button(label) for kind, label in DOWNLOADS}
+    h["files_md"] = gui.add_markdown("")

@@ -1,0 +1,207 @@
+"""What the tab shows in words: the status panel, key numbers, where the cam is, the
+segment sums and the download names. Pure functions of camcore results (no viser,
+no session), so they are tested without a server.
+
+Every user-provided string shown here goes through ``esc`` (viser's Markdown renders
+raw HTML).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import html
+import math
+import re
+
+import numpy as np
+
+from camcore.model import Design, design_to_json
+from camcore.motion import SEGMENT_NAMES
+from camcore.report import machine_rows
+from camcore.units import to_mm
+
+
+def program_text(design: Design) -> str:
+    """One line describing a program the classic sliders cannot edit."""
+    parts = []
+    for g in design.motion.segments:
+        lift = f" {g.lift_mm:g} mm {g.law.value}" if g.lift_mm else ""
+        parts.append(f"{g.kind.value} {g.angle_deg:g}°{lift}")
+    return ("Program of " + str(len(parts)) + " segments (edit it in the design file): "
+            + "; ".join(parts))
+
+
+def low_dwell_text(values: dict[str, object], design: Design | None = None) -> str:
+    if design is not None and design.motion.classic is None:
+        return program_text(design)
+    try:
+        bl = 360.0 - float(values["motion.rise_deg"]) - float(values["motion.high_dwell_deg"]) \
+            - float(values["motion.fall_deg"])
+    except (KeyError, TypeError, ValueError):
+        return "Low dwell β_l: -"
+    flag = "  ⚠ negative" if bl < 0 else ""
+    return f"Low dwell β_l = 360 − β_r − β_h − β_f = **{bl:g}°**{flag}"
+
+
+# --- status panel --------------------------------------------------------------------
+
+_BOX = ("<div style='border-radius:6px;padding:6px 10px;margin:2px 0;font-size:0.85em;"
+        "line-height:1.35;background:{bg};border:2px solid {fg};color:#222'>{body}</div>")
+
+
+_MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
+
+
+def esc(text: object) -> str:
+    """User-provided text (a design or file name, a message quoting input) made safe for
+    viser's Markdown, which renders raw HTML: HTML-escaped, and Markdown's special
+    characters backslash-escaped so they show as typed. Every such string goes through
+    here before it is shown."""
+    return _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
+
+
+def status_html(error: str | None, violations, lift_error: float | None,
+                verified: bool, mesh_error: str | None = None) -> str:
+    """The always-visible panel: input errors (red), limit violations (amber), or OK.
+
+    With an input error the panel says so and nothing green: the limits shown below it
+    are those of the last valid design, which stays on screen (and in the downloads'
+    refusal) until the input is fixed."""
+    parts = []
+    if error:
+        items = "".join(f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
+                        f"{html.escape(p.split(': ', 1)[-1])}</li>" for p in error.split("; "))
+        parts.append(_BOX.format(
+            bg="#fde2e2", fg="#d62728",
+            body="<b>✖ Invalid input — the last valid design stays on screen</b>"
+                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+    if violations:
+        items = "".join(
+            f"<li><b>{html.escape(v.equation)}</b> <code>{html.escape(v.code)}</code>: "
+            f"{html.escape(v.message)}</li>" for v in violations)
+        parts.append(_BOX.format(
+            bg="#fff3d6", fg="#e08a00",
+            body=f"<b>⚠ {len(violations)} design-limit violation"
+                 f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
+                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+    if error:
+        parts.append(_BOX.format(
+            bg="#eeeeee", fg="#555555",
+            body=f"Last valid design: {len(violations) or 'no'} limit violation"
+                 f"{'' if len(violations) == 1 else 's'}. Downloads are refused until the "
+                 "input is valid."))
+        return "".join(parts) + _mesh_box(mesh_error)
+    if not violations:
+        check = ""
+        if verified and lift_error is not None:
+            check = f"; geometric check max |lift − S| = {to_mm(lift_error):.2g} mm"
+        elif not verified:
+            check = "; geometric check running…"
+        parts.append(_BOX.format(bg="#e3f5e1", fg="#2ca02c",
+                                 body=f"<b>✔ All design limits met</b>{check}"))
+    return "".join(parts) + _mesh_box(mesh_error)
+
+
+def _mesh_box(mesh_error: str | None) -> str:
+    """The cam has no solid to draw or export (e.g. a self-intersecting profile)."""
+    if not mesh_error:
+        return ""
+    return _BOX.format(bg="#fde2e2", fg="#d62728",
+                       body=f"<b>No solid:</b> {html.escape(mesh_error)}")
+
+
+def summary_markdown(s: dict) -> str:
+    """Key numbers of camcore.report.summary as a compact table."""
+
+    def f(x, nd=2):
+        if x is None:
+            return "–"
+        if isinstance(x, list):
+            return " … ".join(f(v, nd) for v in x)
+        return f"{x:.{nd}f}"
+
+    pa, rho = s["pressure_angle_max_deg"], s["curvature_radius_mm"]
+    fn, st = s["contact_force_max_N"], s["contact_stress_max_MPa"]
+    rows = [
+        ("High-dwell radius R", f"{f(s['dwell_radius_mm'], 3)} mm"),
+        ("ψ_h / ψ_l", f"{f(s['psi_h_deg'], 3)} / {f(s['psi_l_deg'], 3)} °"),
+        ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
+        ("ρ rise", f"{f(rho['rise'], 1)} mm"),
+        ("ρ fall", f"{f(rho['fall'], 1)} mm"),
+        ("Max F_N per contact: whole cycle / high dwell (one-face windows included)",
+         f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N"),
+        ("Max F_N per face while both faces touch the high dwell (Table 1's figure)",
+         f"{f(fn['high_dwell_two_contact'])} N" if fn["high_dwell_two_contact"] is not None
+         else "– (one face only)"),
+        ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
+                        f"{f(s['guide_force_max_N']['F2'])} N"),
+        ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
+        *machine_rows(s),
+        ("Contact half-width max", f"{f(s['contact_half_width_max_mm'], 4)} mm"
+         + (" (Hertz beyond validity: conservative stress)"
+            if s["hertz_beyond_validity_deg"] else "")),
+        ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
+    ]
+    return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
+
+
+# --- where the cam is ----------------------------------------------------------------
+
+def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
+    """Index of the grid angle (rad, increasing over one turn) nearest theta_deg."""
+    x = math.radians(theta_deg % 360.0)
+    j = int(np.clip(np.searchsorted(theta, x), 1, theta.size - 1))
+    return j - 1 if x - theta[j - 1] < theta[j] - x else j
+
+
+def where_markdown(a, k: int, events: list[str]) -> str:
+    """The line under the angle slider: angle, segment (both names at a boundary), the
+    station reached or the two it lies between, what happens there in words, the
+    faces in contact, S and F_N at grid index k of analysis ``a``."""
+    th = math.degrees(a.theta[k])
+    st = np.degrees(a.stations)
+    step = a.design.limits.resolution_deg
+    at = [i for i, s in enumerate(st) if abs(th - s) <= step / 2 + 1e-9]
+    said = ""
+    if at:
+        where = "at station " + " and ".join(str(i) for i in at)
+        said = "  \n" + "  \n".join(f"*{esc(events[i])}*" for i in at if i < len(events))
+    else:
+        i, n = int(np.searchsorted(st, th)), len(st)
+        where = (f"between stations {i - 1} and {i}" if 0 < i < n
+                 else f"between stations {n - 1} and 0")
+    faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
+    seg = SEGMENT_NAMES[int(a.prog.segment[k])]
+    if a.prog.index[k] != a.prog.index[k - 1]:  # a boundary: say both (k - 1 wraps)
+        seg = f"{SEGMENT_NAMES[int(a.prog.segment[k - 1])]} ends, {seg} begins"
+    return (f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
+            f"In contact: **{', '.join(faces) if faces else 'none'}** · "
+            f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N{said}")
+
+
+# --- the segment table ---------------------------------------------------------------
+
+def segment_sums_markdown(segs: list[dict]) -> str:
+    """The two sums a program must meet, under the segment table (segments as dicts
+    of the table: kind, angle_deg, lift_mm)."""
+    total = sum(float(g["angle_deg"]) for g in segs)
+    sign = {"rise": 1, "fall": -1}
+    net = sum(sign.get(g["kind"], 0) * float(g.get("lift_mm") or 0) for g in segs)
+    ok = abs(total - 360) <= 1e-6 and abs(net) <= 1e-9
+    return (f"Σ angles = **{total:g}°** (must be 360) · rises − falls = "
+            f"**{net:g} mm** (must be 0){'' if ok else ' ⚠'}")
+
+
+# --- download names ------------------------------------------------------------------
+
+def slug(name: str) -> str:
+    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
+    return (s or "cam")[:40].rstrip("_")
+
+
+def file_stem(design: Design) -> str:
+    """A download's name: the design, its follower, and a short fingerprint of the
+    whole design, so two files of different (edited) designs never share a name and a
+    file says which design it holds."""
+    digest = hashlib.sha256(design_to_json(design).encode()).hexdigest()[:6]
+    return f"{slug(design.name)}-{design.follower.kind.value}-{digest}"

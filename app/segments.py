@@ -1,0 +1,139 @@
+"""The motion program as a table of segments (issue 10): one row per segment (kind,
+angle, lift, law, and ↑ ↓ ✕), an add button and the two sums a program must meet.
+
+The table holds only its widgets. It reports every user edit as the whole list of
+segments (dicts as in a design file) to ``on_change``; the session decides whether
+that makes a valid design. Values the session writes in (``show``) fire no edit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from camcore.model import MAX_SEGMENTS, MotionLaw
+
+from .panels import segment_sums_markdown
+
+KINDS = ("rise", "fall", "dwell")
+LAWS = tuple(law.value for law in MotionLaw)
+
+
+@dataclass(frozen=True)
+class Row:
+    """One segment as the table shows it, from a MotionSegment or a table dict."""
+
+    kind: str
+    angle_deg: float
+    lift_mm: float | None
+    law: str | None
+
+    @classmethod
+    def of(cls, g) -> Row:
+        if isinstance(g, dict):
+            kind, law = str(g.get("kind")), g.get("law")
+            return cls(kind if kind in KINDS else "dwell", float(g.get("angle_deg", 0.0)),
+                       g.get("lift_mm"), law if law in LAWS else None)
+        return cls(g.kind.value, float(g.angle_deg), g.lift_mm,
+                   g.law.value if g.law else None)
+
+    def as_dict(self) -> dict:
+        g: dict = {"kind": self.kind, "angle_deg": self.angle_deg}
+        if self.kind != "dwell":
+            g.update(lift_mm=self.lift_mm, law=self.law)
+        return g
+
+
+def moved(segs: list[dict], i: int, action: str) -> list[dict] | None:
+    """The list after a row action: ↑ / ↓ move segment i, ✕ removes it, + appends a
+    0° dwell. None where the action does nothing (or is not one of these: a client
+    may send anything)."""
+    segs = list(segs)
+    if action == "+" and len(segs) < MAX_SEGMENTS:
+        segs.append({"kind": "dwell", "angle_deg": 0.0})
+    elif action == "✕" and len(segs) > 1 and 0 <= i < len(segs):
+        segs.pop(i)
+    elif action == "↑" and 0 < i < len(segs):
+        segs[i - 1], segs[i] = segs[i], segs[i - 1]
+    elif action == "↓" and 0 <= i < len(segs) - 1:
+        segs[i], segs[i + 1] = segs[i + 1], segs[i]
+    else:
+        return None
+    return segs
+
+
+class SegmentTable:
+    """The rows live in ``folder`` (a viser GUI folder of ``gui``)."""
+
+    def __init__(self, gui, folder, on_change: Callable[[list[dict]], None]):
+        self.gui, self.folder, self.on_change = gui, folder, on_change
+        self.rows: list[dict] = []  # widget handles by key, one dict per segment
+        self._extra: list = []
+        self.sums = None
+        self._quiet = False  # True while the session writes values in
+
+    def kinds(self) -> list[str]:
+        return [r["kind"].value for r in self.rows]
+
+    def as_dicts(self) -> list[dict]:
+        """The table's segments as the user sees them."""
+        return [Row(r["kind"].value, float(r["angle"].value), float(r["lift"].value),
+                    r["law"].value).as_dict() for r in self.rows]
+
+    def show(self, segs) -> None:
+        """Show segments (MotionSegments or dicts): values in place when the rows match
+        in kind, rows rebuilt when segments were added, removed or changed kind."""
+        rows = [Row.of(g) for g in segs]
+        typed = [str(g["kind"]) if isinstance(g, dict) else g.kind.value for g in segs]
+        if self.kinds() != typed:  # (as typed: a refused kind stays on screen as it is)
+            self._build(rows)
+        self._quiet = True
+        try:
+            for r, g in zip(self.rows, rows, strict=True):
+                r["angle"].value = g.angle_deg
+                if g.lift_mm is not None:
+                    r["lift"].value = float(g.lift_mm)
+                if g.law is not None:
+                    r["law"].value = g.law
+        finally:
+            self._quiet = False
+        self.sums.content = segment_sums_markdown([g.as_dict() for g in rows])
+
+    def _edited(self) -> None:
+        if not self._quiet:
+            self.on_change(self.as_dicts())
+
+    def act(self, i: int, action: str) -> None:
+        """A row's button (or the add button, i = len(rows), action "+")."""
+        segs = moved(self.as_dicts(), i, action)
+        if segs is not None:
+            self.on_change(segs)
+
+    def _build(self, rows: list[Row]) -> None:
+        for h in [h for r in self.rows for h in r.values()] + self._extra:
+            h.remove()
+        gui, self.rows = self.gui, []
+        with self.folder:
+            for i, g in enumerate(rows):
+                self.rows.append(self._row(gui, i, g))
+            add = gui.add_button("Add a segment (a 0° dwell at the end)")
+            add.on_click(lambda _e: self.act(len(self.rows), "+"))
+            self.sums = gui.add_markdown("")
+            self._extra = [add, self.sums]
+
+    def _row(self, gui, i: int, g: Row) -> dict:
+        dwell, n = g.kind == "dwell", f"{i + 1}."
+        row = {
+            "kind": gui.add_dropdown(f"{n} kind", KINDS, initial_value=g.kind),
+            "angle": gui.add_number(f"{n} angle [°]", g.angle_deg, min=0.0, max=360.0,
+                                    step=0.5),
+            "lift": gui.add_number(f"{n} lift [mm]", g.lift_mm or 5.0, min=0.001,
+                                   max=1000.0, step=0.5, disabled=dwell),
+            "law": gui.add_dropdown(f"{n} law", LAWS, disabled=dwell,
+                                    initial_value=g.law or LAWS[0]),
+            "move": gui.add_button_group(n, ("↑", "↓", "✕")),
+        }
+        for key in ("kind", "angle", "lift", "law"):
+            row[key].on_update(lambda _e: self._edited())
+        row["move"].on_click(lambda e, j=i: self.act(j, e.target.value))
+        return row

@@ -1,0 +1,122 @@
+"""The app's pure parts, without a server: the words it shows (app.panels), the
+program table's row actions (app.segments), the controls' design rebuild
+(app.controls) and the background loops (app.ticker)."""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import numpy as np
+from conftest import wait_for
+
+from app import controls, panels
+from app.segments import Row, moved
+from app.ticker import Debouncer, Ticker
+
+
+def test_nearest_index_rounds_to_the_closest_sample_and_wraps():
+    th = np.radians(np.arange(0.0, 360.0, 0.5))
+    assert panels.nearest_index(th, 107.4) == 215  # 107.5 is nearer than 107.0
+    assert panels.nearest_index(th, 107.2) == 214
+    assert panels.nearest_index(th, 360.0 + 1.0) == 2
+    assert panels.nearest_index(th, -0.5) == th.size - 1
+
+
+def test_where_says_station_event_faces_and_segment_boundary(paper_analysis):
+    a = paper_analysis
+    k = panels.nearest_index(a.theta, math.degrees(a.stations[2]))
+    text = panels.where_markdown(a, k, ["e0", "e1", "the second face <b>touches</b>"])
+    assert "at station 2" in text and "In contact:" in text
+    assert "&lt;b&gt;" in text  # event text escaped (viser renders raw HTML)
+    assert "low dwell ends, rise begins" in panels.where_markdown(a, 0, [])
+    mid = panels.nearest_index(a.theta, 30.0)
+    assert "between stations" in panels.where_markdown(a, mid, [])
+
+
+def test_status_panel_states():
+    ok = panels.status_html(None, [], 1e-7, True)
+    assert "All design limits met" in ok and "0.0001 mm" in ok
+    assert "running" in panels.status_html(None, [], None, False)
+    bad = panels.status_html("cam.base_radius_mm: <script>", [], None, False)
+    assert "Invalid input" in bad and "<script>" not in bad and "All design" not in bad
+    assert "No solid" in panels.status_html(None, [], None, True, "self-intersecting")
+
+
+def test_segment_sums_flag_a_program_that_does_not_close():
+    good = [{"kind": "rise", "angle_deg": 180, "lift_mm": 5}, {"kind": "fall",
+            "angle_deg": 180, "lift_mm": 5}]
+    assert "⚠" not in panels.segment_sums_markdown(good)
+    assert "**340°**" in panels.segment_sums_markdown(
+        [dict(good[0], angle_deg=160), good[1]])
+    assert "**1 mm**" in panels.segment_sums_markdown([dict(good[0], lift_mm=6), good[1]])
+
+
+def test_file_stem_names_design_and_follower(paper):
+    stem = panels.file_stem(paper)
+    assert stem.startswith("chuang_hsu_chang") and "-double_concave-" in stem
+    assert panels.file_stem(paper.model_copy(update={"name": "x"})) != stem
+    assert panels.slug("../../etc/passwd") == "etc_passwd"
+
+
+def test_row_actions():
+    segs = [{"kind": k, "angle_deg": 90.0} for k in ("rise", "dwell", "fall", "dwell")]
+    assert moved(segs, 0, "↑") is None and moved(segs, 3, "↓") is None
+    assert [g["kind"] for g in moved(segs, 2, "↑")] == ["rise", "fall", "dwell", "dwell"]
+    assert len(moved(segs, 1, "✕")) == 3 and moved(segs[:1], 0, "✕") is None
+    assert moved(segs, 4, "+")[-1] == {"kind": "dwell", "angle_deg": 0.0}
+    assert moved(segs, 1, "rm -rf") is None  # a client may send anything
+    assert Row.of({"kind": "spin", "law": "x"}) == Row("dwell", 0.0, None, None)
+    assert Row("dwell", 5.0, 3.0, "cycloidal").as_dict() == {"kind": "dwell", "angle_deg": 5.0}
+
+
+def test_controls_rebuild_the_design_or_say_why(paper):
+    d, err = controls.try_design(paper, {"motion.lift_mm": 12.0})
+    assert err is None and d.motion.lift_mm == 12.0 and d.cam == paper.cam
+    d, err = controls.try_design(paper, {"motion.rise_deg": 300.0})
+    assert d is None and "360" in err
+    assert controls.get_path(paper, "follower.kind") == "double_concave"
+
+
+def test_ticker_steps_only_while_running():
+    steps: list[tuple[float, int]] = []
+    t = Ticker(lambda dt, n: steps.append((dt, n)), fps=100.0).start()
+    time.sleep(0.1)
+    assert steps == []
+    t.run(True)
+    assert wait_for(lambda: len(steps) >= 5, 5.0)
+    t.run(False)
+    time.sleep(0.05)
+    n = len(steps)
+    time.sleep(0.1)
+    assert len(steps) == n and t.ticks == n
+    assert [s[1] for s in steps] == list(range(n)) and max(s[0] for s in steps) <= 0.2
+    t.close()
+    t.thread.join(2.0)
+    assert not t.thread.is_alive()
+
+
+def test_debouncer_runs_once_after_quiet_and_one_at_a_time():
+    gate = threading.BoundedSemaphore(1)
+    runs, active, most = [], [0], [0]
+
+    def work():
+        active[0] += 1
+        most[0] = max(most[0], active[0])
+        time.sleep(0.05)
+        runs.append(time.perf_counter())
+        active[0] -= 1
+
+    ds = [Debouncer(work, 0.1, gate).start() for _ in range(3)]
+    for _ in range(5):  # a burst: one run, after it
+        ds[0].poke()
+        time.sleep(0.02)
+    assert wait_for(lambda: len(runs) == 1, 3.0)
+    time.sleep(0.3)
+    assert len(runs) == 1
+    for d in ds:
+        d.poke()
+    assert wait_for(lambda: len(runs) == 4, 3.0) and most[0] == 1
+    for d in ds:
+        d.close()
