@@ -33,8 +33,9 @@ def table_markdown(results: dict) -> str:
     notes = []
     for k, a in results.items():
         if isinstance(a, str):
-            lines.append(f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | – "
-                         "| not computable |")
+            lines.append(
+                f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | – | not computable |"
+            )
             notes.append(f"- *{k.label}*: {esc(a)}")
             continue
         s = summary(a)
@@ -45,18 +46,21 @@ def table_markdown(results: dict) -> str:
             f"| {k.label} | {f(dwell, 3)} | "
             f"{PAPER_TABLE1_N[k]:.3f} | {f(s['contact_force_max_N']['cycle'], 2)} | "
             f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | "
-            f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |")
+            f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |"
+        )
     text = "\n".join(lines)
-    text += ("\n\n**F_N high dwell**: the largest contact force per face in the high dwell; "
-             "for double followers while both faces touch (the load is shared; in the first "
-             "and last 2ψ_h one face carries it all, see Key numbers). **Table 1** is the "
-             "paper's value for its own example (the `paper_example` preset), and ours "
-             "differs from it: in the dwell Eqs. 29-38 give F_N = F_t = Mg + k(h + s_p) = "
-             "136.509 N for a single follower and F_t / (2 cos ψ_h) for a double one "
-             "(68.397 N concave, 68.579 N rollers); the paper's 133.5 / 129.2 N lie below "
-             "F_t and its 67.297 N for both doubles ignores cos ψ_h (README, *Reproducing "
-             "the paper*). Wear: Archard's law along the profile (rollers roll and do not "
-             "slide; README for the model).")
+    text += (
+        "\n\n**F_N high dwell**: the largest contact force per face in the high dwell; "
+        "for double followers while both faces touch (the load is shared; in the first "
+        "and last 2ψ_h one face carries it all, see Key numbers). **Table 1** is the "
+        "paper's value for its own example (the `paper_example` preset), and ours "
+        "differs from it: in the dwell Eqs. 29-38 give F_N = F_t = Mg + k(h + s_p) = "
+        "136.509 N for a single follower and F_t / (2 cos ψ_h) for a double one "
+        "(68.397 N concave, 68.579 N rollers); the paper's 133.5 / 129.2 N lie below "
+        "F_t and its 67.297 N for both doubles ignores cos ψ_h (README, *Reproducing "
+        "the paper*). Wear: Archard's law along the profile (rollers roll and do not "
+        "slide; README for the model)."
+    )
     if notes:
         text += "\n\n" + "\n".join(notes)
     return text
@@ -68,19 +72,28 @@ class CompareView:
         self.md = gui.add_markdown("*Computing the four followers…*")
         ser = ({"label": "θ [°]"},) + tuple(
             {"label": k.label, "stroke": COLORS[i], "width": 1.5, "scale": "y"}
-            for i, k in enumerate(KINDS))
-        common = dict(scales={"x": {"time": False, "range": (0.0, 360.0)}, "y": {"auto": True}},
-                      height=210, legend={"show": True, "live": False})
+            for i, k in enumerate(KINDS)
+        )
+        common = dict(
+            scales={"x": {"time": False, "range": (0.0, 360.0)}, "y": {"auto": True}},
+            height=210,
+            legend={"show": True, "live": False},
+        )
         zeros = tuple(np.zeros(2) for _ in ser)
         self.fn = gui.add_uplot(
-            zeros, ser, title="Contact force F_N of the four followers (Fig. 11)",
+            zeros,
+            ser,
+            title="Contact force F_N of the four followers (Fig. 11)",
             axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "F_N [N]", "size": 52}),
-            **common)
+            **common,
+        )
         self.stress = gui.add_uplot(
-            zeros, ser, title="Contact stress σ_H of the four followers (Fig. 13)",
-            axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "σ_H [MPa]",
-                                                  "size": 52}),
-            **common)
+            zeros,
+            ser,
+            title="Contact stress σ_H of the four followers (Fig. 13)",
+            axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "σ_H [MPa]", "size": 52}),
+            **common,
+        )
         self.results: dict = {}
 
     def update(self, results: dict) -> None:

@@ -27,10 +27,16 @@ OVERLAY_LABELS = {
     "arcs": "Base circle and dwell arcs",
     "wear": "Wear along the profile (Archard; pale none → dark red most)",
 }
-DOWNLOADS = (("json", "Design JSON"), ("stl", "Cam STL (mm)"), ("dxf", "Profile DXF (mm)"),
-             ("csv", "Profile CSV"), ("series", "Per-angle CSV"),
-             ("toolpath", "G-code (cutter path)"), ("html", "Printable report"),
-             ("pdf", "Report PDF"))
+DOWNLOADS = (
+    ("json", "Design JSON"),
+    ("stl", "Cam STL (mm)"),
+    ("dxf", "Profile DXF (mm)"),
+    ("csv", "Profile CSV"),
+    ("series", "Per-angle CSV"),
+    ("toolpath", "G-code (cutter path)"),
+    ("html", "Printable report"),
+    ("pdf", "Report PDF"),
+)
 STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session adapts them
 
 
@@ -107,8 +113,7 @@ def _design_tab(gui, base: Design, h: dict) -> None:
                 h["controls"][spec.path] = _control(gui, spec, base)
             if title == "Motion program":
                 h["low_dwell_md"] = gui.add_markdown("")
-                folder = gui.add_folder("Program segments (any program)",
-                                        expand_by_default=False)
+                folder = gui.add_folder("Program segments (any program)", expand_by_default=False)
                 h["segments"] = SegmentTable(gui, folder, on_change=lambda segs: None)
     with gui.add_folder("Key numbers", expand_by_default=True):
         h["summary_md"] = gui.add_markdown("")
@@ -129,8 +134,10 @@ def _control(gui, spec: controls.Spec, base: Design):
 
 
 def _view_tab(gui, h: dict) -> None:
-    h["overlay_boxes"] = {name: gui.add_checkbox(OVERLAY_LABELS[name], name not in
-                                                 OFF_BY_DEFAULT) for name in OVERLAYS}
+    h["overlay_boxes"] = {
+        name: gui.add_checkbox(OVERLAY_LABELS[name], name not in OFF_BY_DEFAULT)
+        for name in OVERLAYS
+    }
     h["view_btns"] = gui.add_button_group("Camera", CAMERA_VIEWS)
     h["camera_btn"] = gui.add_button("Reset camera")
     h["stations_fig_btn"] = gui.add_button("Stations diagram (the paper's Fig. 4)")
@@ -139,7 +146,8 @@ def _view_tab(gui, h: dict) -> None:
 def _files_tab(gui, h: dict) -> None:
     names = preset_names()
     h["preset_dd"] = gui.add_dropdown(
-        "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names else names[0])
+        "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names else names[0]
+    )
     h["preset_btn"] = gui.add_button("Load preset")
     h["upload_btn"] = gui.add_upload_button("Open design JSON…", mime_type="application/json")
     gui.add_markdown("**Kept in this browser** (only you see them)")

@@ -65,14 +65,17 @@ def _trim_heap() -> None:
 class App:
     """The server and the live sessions, by client id."""
 
-    def __init__(self, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False,
-                 animate: bool = True):
+    def __init__(
+        self, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False, animate: bool = True
+    ):
         _tune_malloc()  # before the server's threads create their arenas
         uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
-        self.server = viser.ViserServer(host=host, port=port, label="Disk-cam designer",
-                                        verbose=verbose)
-        self.server.gui.configure_theme(control_width="large", show_share_button=False,
-                                        brand_color=(40, 90, 160))
+        self.server = viser.ViserServer(
+            host=host, port=port, label="Disk-cam designer", verbose=verbose
+        )
+        self.server.gui.configure_theme(
+            control_width="large", show_share_button=False, brand_color=(40, 90, 160)
+        )
         self.server.scene.set_up_direction("+y")  # the follower moves along +Y
         self.sessions: dict[int, Session] = {}
         self._gone: set[int] = set()  # left while their Session was still being built
@@ -146,26 +149,35 @@ def _interrupt(signum, frame) -> None:
 
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(prog="camdesigner", description=__doc__.splitlines()[0])
-    p.add_argument("--host", default="127.0.0.1",
-                   help="address to bind (default 127.0.0.1, this machine only); "
-                   "0.0.0.0 serves every network interface: see the README")
-    p.add_argument("--port", type=int, default=8080,
-                   help="port (default 8080); a busy port is an error")
+    p.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address to bind (default 127.0.0.1, this machine only); "
+        "0.0.0.0 serves every network interface: see the README",
+    )
+    p.add_argument(
+        "--port", type=int, default=8080, help="port (default 8080); a busy port is an error"
+    )
     args = p.parse_args(argv)
     if not _port_free(args.host, args.port):
-        p.exit(2, f"camdesigner: error: port {args.port} on {args.host} is busy (another "
-                  "program, or camdesigner already running?); choose one with --port N\n")
+        p.exit(
+            2,
+            f"camdesigner: error: port {args.port} on {args.host} is busy (another "
+            "program, or camdesigner already running?); choose one with --port N\n",
+        )
     # Ctrl-C and SIGTERM stop cleanly, even when started with SIGINT ignored (a
     # background job of a non-interactive shell inherits that).
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _interrupt)
     app = App(args.host, args.port)
     if not args.host.startswith("127.") and args.host not in ("localhost", "::1"):
-        print(f"warning: serving on {args.host}: anyone who can reach this address can use "
-              "the app (no login, no TLS); every visitor gets their own session", flush=True)
+        print(
+            f"warning: serving on {args.host}: anyone who can reach this address can use "
+            "the app (no login, no TLS); every visitor gets their own session",
+            flush=True,
+        )
     host = "localhost" if args.host in ("127.0.0.1", "0.0.0.0") else args.host
-    print(f"Disk-cam designer running at http://{host}:{app.port}  (Ctrl-C to stop)",
-          flush=True)
+    print(f"Disk-cam designer running at http://{host}:{app.port}  (Ctrl-C to stop)", flush=True)
     try:
         while True:
             time.sleep(1.0)

@@ -12,6 +12,7 @@ import hashlib
 import html
 import math
 import re
+from typing import Any
 
 import numpy as np
 
@@ -25,18 +26,26 @@ def program_text(design: Design) -> str:
     """One line describing a program the classic sliders cannot edit."""
     parts = []
     for g in design.motion.segments:
-        lift = f" {g.lift_mm:g} mm {g.law.value}" if g.lift_mm else ""
+        lift = f" {g.lift_mm:g} mm {g.law.value}" if g.lift_mm and g.law else ""
         parts.append(f"{g.kind.value} {g.angle_deg:g}°{lift}")
-    return ("Program of " + str(len(parts)) + " segments (edit it in the design file): "
-            + "; ".join(parts))
+    return (
+        "Program of "
+        + str(len(parts))
+        + " segments (edit them in the segment table): "
+        + "; ".join(parts)
+    )
 
 
-def low_dwell_text(values: dict[str, object], design: Design | None = None) -> str:
+def low_dwell_text(values: dict[str, Any], design: Design | None = None) -> str:
     if design is not None and design.motion.classic is None:
         return program_text(design)
     try:
-        bl = 360.0 - float(values["motion.rise_deg"]) - float(values["motion.high_dwell_deg"]) \
+        bl = (
+            360.0
+            - float(values["motion.rise_deg"])
+            - float(values["motion.high_dwell_deg"])
             - float(values["motion.fall_deg"])
+        )
     except (KeyError, TypeError, ValueError):
         return "Low dwell β_l: -"
     flag = "  ⚠ negative" if bl < 0 else ""
@@ -45,8 +54,10 @@ def low_dwell_text(values: dict[str, object], design: Design | None = None) -> s
 
 # --- status panel --------------------------------------------------------------------
 
-_BOX = ("<div style='border-radius:6px;padding:6px 10px;margin:2px 0;font-size:0.85em;"
-        "line-height:1.35;background:{bg};border:2px solid {fg};color:#222'>{body}</div>")
+_BOX = (
+    "<div style='border-radius:6px;padding:6px 10px;margin:2px 0;font-size:0.85em;"
+    "line-height:1.35;background:{bg};border:2px solid {fg};color:#222'>{body}</div>"
+)
 
 
 _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
@@ -60,8 +71,13 @@ def esc(text: object) -> str:
     return _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
 
 
-def status_html(error: str | None, violations, lift_error: float | None,
-                verified: bool, mesh_error: str | None = None) -> str:
+def status_html(
+    error: str | None,
+    violations,
+    lift_error: float | None,
+    verified: bool,
+    mesh_error: str | None = None,
+) -> str:
     """The always-visible panel: input errors (red), limit violations (amber), or OK.
 
     With an input error the panel says so and nothing green: the limits shown below it
@@ -69,27 +85,44 @@ def status_html(error: str | None, violations, lift_error: float | None,
     refusal) until the input is fixed."""
     parts = []
     if error:
-        items = "".join(f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
-                        f"{html.escape(p.split(': ', 1)[-1])}</li>" for p in error.split("; "))
-        parts.append(_BOX.format(
-            bg="#fde2e2", fg="#d62728",
-            body="<b>✖ Invalid input — the last valid design stays on screen</b>"
-                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+        items = "".join(
+            f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
+            f"{html.escape(p.split(': ', 1)[-1])}</li>"
+            for p in error.split("; ")
+        )
+        parts.append(
+            _BOX.format(
+                bg="#fde2e2",
+                fg="#d62728",
+                body="<b>✖ Invalid input — the last valid design stays on screen</b>"
+                f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>",
+            )
+        )
     if violations:
         items = "".join(
             f"<li><b>{html.escape(v.equation)}</b> <code>{html.escape(v.code)}</code>: "
-            f"{html.escape(v.message)}</li>" for v in violations)
-        parts.append(_BOX.format(
-            bg="#fff3d6", fg="#e08a00",
-            body=f"<b>⚠ {len(violations)} design-limit violation"
-                 f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
-                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>"))
+            f"{html.escape(v.message)}</li>"
+            for v in violations
+        )
+        parts.append(
+            _BOX.format(
+                bg="#fff3d6",
+                fg="#e08a00",
+                body=f"<b>⚠ {len(violations)} design-limit violation"
+                f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
+                f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>",
+            )
+        )
     if error:
-        parts.append(_BOX.format(
-            bg="#eeeeee", fg="#555555",
-            body=f"Last valid design: {len(violations) or 'no'} limit violation"
-                 f"{'' if len(violations) == 1 else 's'}. Downloads are refused until the "
-                 "input is valid."))
+        parts.append(
+            _BOX.format(
+                bg="#eeeeee",
+                fg="#555555",
+                body=f"Last valid design: {len(violations) or 'no'} limit violation"
+                f"{'' if len(violations) == 1 else 's'}. Downloads are refused until the "
+                "input is valid.",
+            )
+        )
         return "".join(parts) + _mesh_box(mesh_error)
     if not violations:
         check = ""
@@ -97,8 +130,9 @@ def status_html(error: str | None, violations, lift_error: float | None,
             check = f"; geometric check max |lift − S| = {to_mm(lift_error):.2g} mm"
         elif not verified:
             check = "; geometric check running…"
-        parts.append(_BOX.format(bg="#e3f5e1", fg="#2ca02c",
-                                 body=f"<b>✔ All design limits met</b>{check}"))
+        parts.append(
+            _BOX.format(bg="#e3f5e1", fg="#2ca02c", body=f"<b>✔ All design limits met</b>{check}")
+        )
     return "".join(parts) + _mesh_box(mesh_error)
 
 
@@ -106,8 +140,9 @@ def _mesh_box(mesh_error: str | None) -> str:
     """The cam has no solid to draw or export (e.g. a self-intersecting profile)."""
     if not mesh_error:
         return ""
-    return _BOX.format(bg="#fde2e2", fg="#d62728",
-                       body=f"<b>No solid:</b> {html.escape(mesh_error)}")
+    return _BOX.format(
+        bg="#fde2e2", fg="#d62728", body=f"<b>No solid:</b> {html.escape(mesh_error)}"
+    )
 
 
 def summary_markdown(s: dict) -> str:
@@ -128,24 +163,35 @@ def summary_markdown(s: dict) -> str:
         ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
         ("ρ rise", f"{f(rho['rise'], 1)} mm"),
         ("ρ fall", f"{f(rho['fall'], 1)} mm"),
-        ("Max F_N per contact: whole cycle / high dwell (one-face windows included)",
-         f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N"),
-        ("Max F_N per face while both faces touch the high dwell (Table 1's figure)",
-         f"{f(fn['high_dwell_two_contact'])} N" if fn["high_dwell_two_contact"] is not None
-         else "– (one face only)"),
-        ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / "
-                        f"{f(s['guide_force_max_N']['F2'])} N"),
+        (
+            "Max F_N per contact: whole cycle / high dwell (one-face windows included)",
+            f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N",
+        ),
+        (
+            "Max F_N per face while both faces touch the high dwell (Table 1's figure)",
+            f"{f(fn['high_dwell_two_contact'])} N"
+            if fn["high_dwell_two_contact"] is not None
+            else "– (one face only)",
+        ),
+        ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / {f(s['guide_force_max_N']['F2'])} N"),
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
         *machine_rows(s),
-        ("Contact half-width max", f"{f(s['contact_half_width_max_mm'], 4)} mm"
-         + (" (Hertz beyond validity: conservative stress)"
-            if s["hertz_beyond_validity_deg"] else "")),
+        (
+            "Contact half-width max",
+            f"{f(s['contact_half_width_max_mm'], 4)} mm"
+            + (
+                " (Hertz beyond validity: conservative stress)"
+                if s["hertz_beyond_validity_deg"]
+                else ""
+            ),
+        ),
         ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
     ]
     return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
 
 
 # --- where the cam is ----------------------------------------------------------------
+
 
 def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
     """Index of the grid angle (rad, increasing over one turn) nearest theta_deg."""
@@ -168,18 +214,22 @@ def where_markdown(a, k: int, events: list[str]) -> str:
         said = "  \n" + "  \n".join(f"*{esc(events[i])}*" for i in at if i < len(events))
     else:
         i, n = int(np.searchsorted(st, th)), len(st)
-        where = (f"between stations {i - 1} and {i}" if 0 < i < n
-                 else f"between stations {n - 1} and 0")
+        where = (
+            f"between stations {i - 1} and {i}" if 0 < i < n else f"between stations {n - 1} and 0"
+        )
     faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
     seg = SEGMENT_NAMES[int(a.prog.segment[k])]
     if a.prog.index[k] != a.prog.index[k - 1]:  # a boundary: say both (k - 1 wraps)
         seg = f"{SEGMENT_NAMES[int(a.prog.segment[k - 1])]} ends, {seg} begins"
-    return (f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
-            f"In contact: **{', '.join(faces) if faces else 'none'}** · "
-            f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N{said}")
+    return (
+        f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
+        f"In contact: **{', '.join(faces) if faces else 'none'}** · "
+        f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N{said}"
+    )
 
 
 # --- the segment table ---------------------------------------------------------------
+
 
 def segment_sums_markdown(segs: list[dict]) -> str:
     """The two sums a program must meet, under the segment table (segments as dicts
@@ -188,11 +238,14 @@ def segment_sums_markdown(segs: list[dict]) -> str:
     sign = {"rise": 1, "fall": -1}
     net = sum(sign.get(g["kind"], 0) * float(g.get("lift_mm") or 0) for g in segs)
     ok = abs(total - 360) <= 1e-6 and abs(net) <= 1e-9
-    return (f"Σ angles = **{total:g}°** (must be 360) · rises − falls = "
-            f"**{net:g} mm** (must be 0){'' if ok else ' ⚠'}")
+    return (
+        f"Σ angles = **{total:g}°** (must be 360) · rises − falls = "
+        f"**{net:g} mm** (must be 0){'' if ok else ' ⚠'}"
+    )
 
 
 # --- download names ------------------------------------------------------------------
+
 
 def slug(name: str) -> str:
     s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()

@@ -7,6 +7,8 @@ series) and, where a design limit is broken, red shading over those angles.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from camcore import machine, motion, train, wear
@@ -31,38 +33,72 @@ def stride_index(n: int, max_points: int = MAX_POINTS) -> np.ndarray:
 class Curve:
     """One uPlot: series (label, unit-scale, colour, y-array function), marker, shading."""
 
-    def __init__(self, gui, title: str, axes: list[tuple[str, str]], series: list[dict],
-                 codes: set[str] | None = None, height: int = 190):
+    def __init__(
+        self,
+        gui,
+        title: str,
+        axes: list[tuple[str, str]],
+        series: list[dict],
+        codes: set[str] | None = None,
+        height: int = 190,
+    ):
         self.gui, self.title, self.codes = gui, title, codes
         self.series_cfg = series  # dicts: label, scale, stroke, dash?, fn(a)->y
         self.scale0 = axes[0][0]
-        ser = [{"label": "θ [°]"}]
+        ser: list[dict[str, Any]] = [{"label": "θ [°]"}]
         for s in series:
-            cfg = {"label": s["label"], "scale": s["scale"], "stroke": s["stroke"],
-                   "width": s.get("width", 1.5)}
+            cfg: dict[str, Any] = {
+                "label": s["label"],
+                "scale": s["scale"],
+                "stroke": s["stroke"],
+                "width": s.get("width", 1.5),
+            }
             if "dash" in s:
                 cfg["dash"] = s["dash"]
             ser.append(cfg)
         # shading and marker live on their own fixed [0, 1] scales (no axis): they never
         # disturb the auto-range of the curves
-        ser.append({"label": "limit broken", "scale": "shade", "stroke": NONE,
-                    "fill": RED_FILL, "width": 0, "points": {"show": False}})
-        ser.append({"label": "θ now", "scale": "marker", "stroke": MARK, "width": 1.5,
-                    "points": {"show": False}})
+        ser.append(
+            {
+                "label": "limit broken",
+                "scale": "shade",
+                "stroke": NONE,
+                "fill": RED_FILL,
+                "width": 0,
+                "points": {"show": False},
+            }
+        )
+        ser.append(
+            {
+                "label": "θ now",
+                "scale": "marker",
+                "stroke": MARK,
+                "width": 1.5,
+                "points": {"show": False},
+            }
+        )
         ax = [X_AXIS]
         for j, (scale, label) in enumerate(axes):
             ax.append({"scale": scale, "label": label, "side": 3 if j == 0 else 1, "size": 52})
-        scales = {"x": {"time": False, "range": (0.0, 360.0)},
-                  "shade": {"auto": False, "range": (0.0, 1.0)},
-                  "marker": {"auto": False, "range": (0.0, 1.0)}}
+        scales = {
+            "x": {"time": False, "range": (0.0, 360.0)},
+            "shade": {"auto": False, "range": (0.0, 1.0)},
+            "marker": {"auto": False, "range": (0.0, 1.0)},
+        }
         for scale, _ in axes:
             scales[scale] = {"auto": True}
         self.nser = len(ser)
         self.handle = gui.add_uplot(
-            tuple(np.zeros(2) for _ in ser), tuple(ser), title=title, scales=scales,
-            axes=tuple(ax), height=height, legend={"show": True, "live": False},
-            cursor={"drag": {"x": False, "y": False}})
-        self.x = None
+            tuple(np.zeros(2) for _ in ser),
+            tuple(ser),
+            title=title,
+            scales=scales,
+            axes=tuple(ax),
+            height=height,
+            legend={"show": True, "live": False},
+            cursor={"drag": {"x": False, "y": False}},
+        )
+        self.x: np.ndarray | None = None
         self.ys: list[np.ndarray] = []
 
     def update(self, a, k: int) -> None:
@@ -119,74 +155,202 @@ def build_curves(gui, a) -> list[Curve]:
         return np.full(a.theta.size, v if which == "rho" else 0.0)
 
     curves = [
-        Curve(gui, "Displacement S", [("mm", "S [mm]")], [
-            {"label": "S [mm]", "scale": "mm", "stroke": COLORS[0],
-             "fn": lambda a: to_mm(a.prog.S)},
-        ], codes=None),
-        Curve(gui, "Velocity V and acceleration A (per radian of cam angle)",
-              [("V", "V [mm/rad]"), ("A", "A [mm/rad²]")], [
-            {"label": "V [mm/rad]", "scale": "V", "stroke": COLORS[1],
-             "fn": lambda a: to_mm(a.prog.V)},
-            {"label": "A [mm/rad²]", "scale": "A", "stroke": COLORS[2],
-             "fn": lambda a: to_mm(a.prog.A)},
-        ], codes=set()),
-        Curve(gui, "Velocity, acceleration and jerk per second at the design speed",
-              [("ms", "V [m/s]"), ("ms2", "A [m/s²]"), ("ms3", "J [m/s³]")], [
-            {"label": "V [m/s]", "scale": "ms", "stroke": COLORS[1],
-             "fn": lambda a: _per_second(a)[0]},
-            {"label": "A [m/s²]", "scale": "ms2", "stroke": COLORS[2],
-             "fn": lambda a: _per_second(a)[1]},
-            {"label": "J [m/s³]", "scale": "ms3", "stroke": COLORS[3],
-             "fn": lambda a: _per_second(a)[2]},
-        ], codes={"velocity_jump", "acceleration_jump"}),
-        Curve(gui, "Pressure angle φ", [("deg", "φ [°]")], [
-            {"label": "φ [°]", "scale": "deg", "stroke": COLORS[0], "fn": _primary_deg},
-            {"label": f"+limit {lim:g}°", "scale": "deg", "stroke": "#d62728", "dash": [6, 4],
-             "width": 1, "fn": lambda a: np.full(a.theta.size,
-                                                 a.design.limits.max_pressure_angle_deg)},
-            {"label": "−limit", "scale": "deg", "stroke": "#d62728", "dash": [6, 4], "width": 1,
-             "fn": lambda a: np.full(a.theta.size, -a.design.limits.max_pressure_angle_deg)},
-        ], codes={"pressure_angle"}),
-        Curve(gui, "Radius of curvature ρ of the cam at the contact", [("mm", "ρ [mm]")], [
-            {"label": "ρ [mm]", "scale": "mm", "stroke": COLORS[3], "fn": rho_mm},
-            {"label": f"{ref_label} = {ref:g} mm (limit)", "scale": "mm", "stroke": "#d62728",
-             "dash": [6, 4], "width": 1, "fn": lambda a: limit(a, "rho")},
-        ], codes={"curvature_convex", "curvature_face", "roller_undercut"}),
-        Curve(gui, "Contact force F_N and guide forces F1, F2", [("N", "force [N]")], [
-            {"label": "F_N [N]", "scale": "N", "stroke": COLORS[0], "fn": lambda a: a.guide.FN},
-            {"label": "F1 [N]", "scale": "N", "stroke": COLORS[1], "fn": lambda a: a.guide.F1},
-            {"label": "F2 [N]", "scale": "N", "stroke": COLORS[2], "fn": lambda a: a.guide.F2},
-        ], codes={"jump", "guide_jam", "contact_lost"}),
-        Curve(gui, "Contact (Hertz) stress σ_H", [("MPa", "σ_H [MPa]")], [
-            {"label": "σ_H [MPa]", "scale": "MPa", "stroke": COLORS[4],
-             "fn": lambda a: to_mpa(a.stress.max(axis=0))},
-        ], codes={"jump"}),
-        Curve(gui, "Spring force and the force that keeps contact (jump where it wins)",
-              [("N", "force [N]")], [
-            {"label": "spring k(S+s_p) [N]", "scale": "N", "stroke": COLORS[2],
-             "fn": lambda a: machine.spring_force(a.design, a.prog)},
-            {"label": "needed −M(g+Aω²) [N]", "scale": "N", "stroke": "#d62728",
-             "dash": [6, 4], "fn": lambda a: -machine.spring_free_load(a.design, a.prog)},
-        ], codes={"jump"}),
-        Curve(gui, "Axial load: rigid F_t (Eq. 29) and elastic train F_c (set its "
-              "stiffness in Dynamics)", [("N", "force [N]")], [
-            {"label": "rigid F_t [N]", "scale": "N", "stroke": COLORS[0],
-             "fn": lambda a: a.Ft},
-            {"label": "elastic F_c [N]", "scale": "N", "stroke": COLORS[1],
-             "fn": _train_force},
-        ], codes={"dynamic_jump"}),
-        Curve(gui, "Shaft torque T (positive: the shaft drives)", [("Nm", "T [N·m]")], [
-            {"label": "T [N·m]", "scale": "Nm", "stroke": COLORS[0],
-             "fn": lambda a: a.torque.sum(axis=0)},
-        ], codes=set()),
-        Curve(gui, "Cam wear per 10⁶ cycles (Archard), at the point each face touches",
-              [("um", "wear [µm]")], [
-            {"label": "face 1 [µm]", "scale": "um", "stroke": COLORS[3],
-             "fn": lambda a: to_um_per_mcycle(wear.depth_per_pass(a)[0])},
-            {"label": "face 2 (double followers) [µm]", "scale": "um", "stroke": COLORS[4],
-             "fn": lambda a: (to_um_per_mcycle(wear.depth_per_pass(a)[1]) if a.FN.shape[0] == 2
-                              else np.zeros(a.theta.size))},
-        ], codes=set()),
+        Curve(
+            gui,
+            "Displacement S",
+            [("mm", "S [mm]")],
+            [
+                {
+                    "label": "S [mm]",
+                    "scale": "mm",
+                    "stroke": COLORS[0],
+                    "fn": lambda a: to_mm(a.prog.S),
+                },
+            ],
+            codes=None,
+        ),
+        Curve(
+            gui,
+            "Velocity V and acceleration A (per radian of cam angle)",
+            [("V", "V [mm/rad]"), ("A", "A [mm/rad²]")],
+            [
+                {
+                    "label": "V [mm/rad]",
+                    "scale": "V",
+                    "stroke": COLORS[1],
+                    "fn": lambda a: to_mm(a.prog.V),
+                },
+                {
+                    "label": "A [mm/rad²]",
+                    "scale": "A",
+                    "stroke": COLORS[2],
+                    "fn": lambda a: to_mm(a.prog.A),
+                },
+            ],
+            codes=set(),
+        ),
+        Curve(
+            gui,
+            "Velocity, acceleration and jerk per second at the design speed",
+            [("ms", "V [m/s]"), ("ms2", "A [m/s²]"), ("ms3", "J [m/s³]")],
+            [
+                {
+                    "label": "V [m/s]",
+                    "scale": "ms",
+                    "stroke": COLORS[1],
+                    "fn": lambda a: _per_second(a)[0],
+                },
+                {
+                    "label": "A [m/s²]",
+                    "scale": "ms2",
+                    "stroke": COLORS[2],
+                    "fn": lambda a: _per_second(a)[1],
+                },
+                {
+                    "label": "J [m/s³]",
+                    "scale": "ms3",
+                    "stroke": COLORS[3],
+                    "fn": lambda a: _per_second(a)[2],
+                },
+            ],
+            codes={"velocity_jump", "acceleration_jump"},
+        ),
+        Curve(
+            gui,
+            "Pressure angle φ",
+            [("deg", "φ [°]")],
+            [
+                {"label": "φ [°]", "scale": "deg", "stroke": COLORS[0], "fn": _primary_deg},
+                {
+                    "label": f"+limit {lim:g}°",
+                    "scale": "deg",
+                    "stroke": "#d62728",
+                    "dash": [6, 4],
+                    "width": 1,
+                    "fn": lambda a: np.full(a.theta.size, a.design.limits.max_pressure_angle_deg),
+                },
+                {
+                    "label": "−limit",
+                    "scale": "deg",
+                    "stroke": "#d62728",
+                    "dash": [6, 4],
+                    "width": 1,
+                    "fn": lambda a: np.full(a.theta.size, -a.design.limits.max_pressure_angle_deg),
+                },
+            ],
+            codes={"pressure_angle"},
+        ),
+        Curve(
+            gui,
+            "Radius of curvature ρ of the cam at the contact",
+            [("mm", "ρ [mm]")],
+            [
+                {"label": "ρ [mm]", "scale": "mm", "stroke": COLORS[3], "fn": rho_mm},
+                {
+                    "label": f"{ref_label} = {ref:g} mm (limit)",
+                    "scale": "mm",
+                    "stroke": "#d62728",
+                    "dash": [6, 4],
+                    "width": 1,
+                    "fn": lambda a: limit(a, "rho"),
+                },
+            ],
+            codes={"curvature_convex", "curvature_face", "roller_undercut"},
+        ),
+        Curve(
+            gui,
+            "Contact force F_N and guide forces F1, F2",
+            [("N", "force [N]")],
+            [
+                {"label": "F_N [N]", "scale": "N", "stroke": COLORS[0], "fn": lambda a: a.guide.FN},
+                {"label": "F1 [N]", "scale": "N", "stroke": COLORS[1], "fn": lambda a: a.guide.F1},
+                {"label": "F2 [N]", "scale": "N", "stroke": COLORS[2], "fn": lambda a: a.guide.F2},
+            ],
+            codes={"jump", "guide_jam", "contact_lost"},
+        ),
+        Curve(
+            gui,
+            "Contact (Hertz) stress σ_H",
+            [("MPa", "σ_H [MPa]")],
+            [
+                {
+                    "label": "σ_H [MPa]",
+                    "scale": "MPa",
+                    "stroke": COLORS[4],
+                    "fn": lambda a: to_mpa(a.stress.max(axis=0)),
+                },
+            ],
+            codes={"jump"},
+        ),
+        Curve(
+            gui,
+            "Spring force and the force that keeps contact (jump where it wins)",
+            [("N", "force [N]")],
+            [
+                {
+                    "label": "spring k(S+s_p) [N]",
+                    "scale": "N",
+                    "stroke": COLORS[2],
+                    "fn": lambda a: machine.spring_force(a.design, a.prog),
+                },
+                {
+                    "label": "needed −M(g+Aω²) [N]",
+                    "scale": "N",
+                    "stroke": "#d62728",
+                    "dash": [6, 4],
+                    "fn": lambda a: -machine.spring_free_load(a.design, a.prog),
+                },
+            ],
+            codes={"jump"},
+        ),
+        Curve(
+            gui,
+            "Axial load: rigid F_t (Eq. 29) and elastic train F_c (set its stiffness in Dynamics)",
+            [("N", "force [N]")],
+            [
+                {"label": "rigid F_t [N]", "scale": "N", "stroke": COLORS[0], "fn": lambda a: a.Ft},
+                {"label": "elastic F_c [N]", "scale": "N", "stroke": COLORS[1], "fn": _train_force},
+            ],
+            codes={"dynamic_jump"},
+        ),
+        Curve(
+            gui,
+            "Shaft torque T (positive: the shaft drives)",
+            [("Nm", "T [N·m]")],
+            [
+                {
+                    "label": "T [N·m]",
+                    "scale": "Nm",
+                    "stroke": COLORS[0],
+                    "fn": lambda a: a.torque.sum(axis=0),
+                },
+            ],
+            codes=set(),
+        ),
+        Curve(
+            gui,
+            "Cam wear per 10⁶ cycles (Archard), at the point each face touches",
+            [("um", "wear [µm]")],
+            [
+                {
+                    "label": "face 1 [µm]",
+                    "scale": "um",
+                    "stroke": COLORS[3],
+                    "fn": lambda a: to_um_per_mcycle(wear.depth_per_pass(a)[0]),
+                },
+                {
+                    "label": "face 2 (double followers) [µm]",
+                    "scale": "um",
+                    "stroke": COLORS[4],
+                    "fn": lambda a: (
+                        to_um_per_mcycle(wear.depth_per_pass(a)[1])
+                        if a.FN.shape[0] == 2
+                        else np.zeros(a.theta.size)
+                    ),
+                },
+            ],
+            codes=set(),
+        ),
     ]
     return curves
 
@@ -195,8 +359,10 @@ def relabel_limits(curves: list[Curve], a) -> None:
     """Legend labels that carry the current limit values."""
     ref_label, ref = rho_reference_mm(a.design)
     lim = a.design.limits.max_pressure_angle_deg
-    labels = {"Pressure angle": (2, f"+limit {lim:g}°"),
-              "Radius of curvature": (2, f"{ref_label} = {ref:g} mm (limit)")}
+    labels = {
+        "Pressure angle": (2, f"+limit {lim:g}°"),
+        "Radius of curvature": (2, f"{ref_label} = {ref:g} mm (limit)"),
+    }
     for title, (si, text) in labels.items():
         h = next(c for c in curves if c.title.startswith(title)).handle
         ser = list(h.series)

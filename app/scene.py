@@ -9,6 +9,7 @@ follower frame translation) and updates the small overlay lines.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import trimesh
@@ -51,8 +52,9 @@ def _sector(cx, cy, r_in, r_out, a0, a1, z0, z1, n=48) -> trimesh.Trimesh:
     outer = np.column_stack([cx + r_out * np.sin(a), cy + r_out * np.cos(a)])
     ring = np.vstack([inner, outer[::-1]])  # closed polygon, 2n vertices
     m = ring.shape[0]
-    verts = np.vstack([np.column_stack([ring, np.full(m, z0)]),
-                       np.column_stack([ring, np.full(m, z1)])])
+    verts = np.vstack(
+        [np.column_stack([ring, np.full(m, z0)]), np.column_stack([ring, np.full(m, z1)])]
+    )
     faces = []
     for i in range(n - 1):  # caps as quad strip between inner i and outer i
         o_i, o_j = m - 1 - i, m - 2 - i
@@ -75,11 +77,14 @@ def _box(x0, x1, y0, y1, z0, z1) -> trimesh.Trimesh:
 def _prism(poly: np.ndarray, z0: float, z1: float) -> trimesh.Trimesh:
     """A convex polygon (n, 2), counter-clockwise, extruded from z0 to z1."""
     n = poly.shape[0]
-    verts = np.vstack([np.column_stack([poly, np.full(n, z0)]),
-                       np.column_stack([poly, np.full(n, z1)])])
+    verts = np.vstack(
+        [np.column_stack([poly, np.full(n, z0)]), np.column_stack([poly, np.full(n, z1)])]
+    )
     i = np.arange(1, n - 1)
-    caps = [np.column_stack([np.zeros_like(i), i + 1, i]),
-            np.column_stack([np.full_like(i, n), n + i, n + i + 1])]
+    caps = [
+        np.column_stack([np.zeros_like(i), i + 1, i]),
+        np.column_stack([np.full_like(i, n), n + i, n + i + 1]),
+    ]
     j, k = np.arange(n), (np.arange(n) + 1) % n
     walls = [np.column_stack([j, k, n + k]), np.column_stack([j, n + k, n + j])]
     return trimesh.Trimesh(verts, np.vstack(caps + walls), process=True)
@@ -123,8 +128,9 @@ def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]
             pin.apply_translation((f.x_c, geo.y0, 0.0))
             parts[f"pin{i}"] = (pin, GUIDE_RGB)
             top = geo.y0 + f.r + 0.002
-            plate = _box(f.x_c - f.r * 0.3, f.x_c + f.r * 0.3, geo.y0, top + 1e-4,
-                         z0 - 0.004, z0 - 0.001)
+            plate = _box(
+                f.x_c - f.r * 0.3, f.x_c + f.r * 0.3, geo.y0, top + 1e-4, z0 - 0.004, z0 - 0.001
+            )
             parts[f"plate{i}"] = (plate, STEM_RGB)
             tops.append(top)
             xs += [f.x_c - f.r, f.x_c + f.r]
@@ -150,13 +156,24 @@ def follower_parts(a) -> dict[str, tuple[trimesh.Trimesh, tuple[int, int, int]]]
     l1, l2 = from_mm(d.dynamics.overhang_mm), from_mm(d.dynamics.guide_length_mm)
     g0 = y_yoke + YOKE_T + l1
     stem_top = g0 + l2 + max(0.02, 1.2 * geo.h)
-    parts["stem"] = (_box(sx - sw / 2, sx + sw / 2, y_yoke + YOKE_T - 1e-4, stem_top,
-                          -min(sw, w) / 2, min(sw, w) / 2), STEM_RGB)
+    parts["stem"] = (
+        _box(
+            sx - sw / 2,
+            sx + sw / 2,
+            y_yoke + YOKE_T - 1e-4,
+            stem_top,
+            -min(sw, w) / 2,
+            min(sw, w) / 2,
+        ),
+        STEM_RGB,
+    )
     gw = max(0.006, sw * 0.8)
-    guide = trimesh.util.concatenate([
-        _box(sx - sw / 2 - gw, sx - sw / 2 - 2e-4, g0, g0 + l2, z0, z1),
-        _box(sx + sw / 2 + 2e-4, sx + sw / 2 + gw, g0, g0 + l2, z0, z1),
-    ])
+    guide: Any = trimesh.util.concatenate(
+        [
+            _box(sx - sw / 2 - gw, sx - sw / 2 - 2e-4, g0, g0 + l2, z0, z1),
+            _box(sx + sw / 2 + 2e-4, sx + sw / 2 + gw, g0, g0 + l2, z0, z1),
+        ]
+    )
     parts["guide"] = (guide, GUIDE_RGB)
     return parts
 
@@ -188,11 +205,15 @@ def _label_size(a) -> dict:
 
 def geometry_key(design) -> str:
     """Everything the drawn geometry depends on (not speed, spring, mass, material)."""
-    return design.model_dump_json(include={
-        "motion": True, "follower": True, "limits": {"resolution_deg"},
-        "cam": {"base_radius_mm", "width_mm", "bore_diameter_mm"},
-        "dynamics": {"guide_width_mm", "guide_length_mm", "overhang_mm"},
-    })
+    return design.model_dump_json(
+        include={
+            "motion": True,
+            "follower": True,
+            "limits": {"resolution_deg"},
+            "cam": {"base_radius_mm", "width_mm", "bore_diameter_mm"},
+            "dynamics": {"guide_width_mm", "guide_length_mm", "overhang_mm"},
+        }
+    )
 
 
 class SceneView:
@@ -202,12 +223,15 @@ class SceneView:
         self.scene = scene
         self.a = None
         self.k = 0
-        self.show = ({name: name not in OFF_BY_DEFAULT for name in OVERLAYS}
-                     if overlays is None else overlays)
+        self.show = (
+            {name: name not in OFF_BY_DEFAULT for name in OVERLAYS}
+            if overlays is None
+            else overlays
+        )
         self.mesh_error: str | None = None
         self.cam_frame = scene.add_frame("/cam", show_axes=False)
         self.follower_frame = scene.add_frame("/follower", show_axes=False)
-        self.nodes: dict[str, object] = {}
+        self.nodes: dict[str, Any] = {}
         self.builds = 0  # geometry rebuilds
         self._face_rgb: dict[int, tuple] = {}
         self._geometry: str | None = None
@@ -236,8 +260,12 @@ class SceneView:
             m = cam_mesh(a, max_points=DISPLAY_POINTS)
             verts = from_mm(np.asarray(m.vertices)) - np.array([0.0, 0.0, w / 2])
             self.nodes["cam"] = s.add_mesh_simple(
-                "/cam/solid", verts.astype(np.float32), np.asarray(m.faces, dtype=np.uint32),
-                color=CAM_RGB, flat_shading=True)
+                "/cam/solid",
+                verts.astype(np.float32),
+                np.asarray(m.faces, dtype=np.uint32),
+                color=CAM_RGB,
+                flat_shading=True,
+            )
             self.mesh_error = None
         except ExportError as exc:  # an undercut profile: draw its outline only
             self.mesh_error = str(exc)
@@ -245,21 +273,31 @@ class SceneView:
                 self.nodes.pop("cam").remove()
         pts = _display_points(a)
         self.nodes["outline"] = s.add_line_segments(
-            "/cam/outline", _polyline_segments(_flat(pts, zt), closed=True), EDGE_RGB,
-            thickness=thick * 0.6)
+            "/cam/outline",
+            _polyline_segments(_flat(pts, zt), closed=True),
+            EDGE_RGB,
+            thickness=thick * 0.6,
+        )
         self.nodes["hub"] = s.add_line_segments(
-            "/cam/hub", _polyline_segments(_flat(_circle(0.1 * a.geo.r_b, 48), zt), True),
-            EDGE_RGB, thickness=thick * 0.6)
+            "/cam/hub",
+            _polyline_segments(_flat(_circle(0.1 * a.geo.r_b, 48), zt), True),
+            EDGE_RGB,
+            thickness=thick * 0.6,
+        )
         self._build_arcs(a, zt + 2e-4, thick * 1.5)
         parts = follower_parts(a)
         self._face_meshes = [parts[f"face{i}"][0] for i in range(len(a.geo.faces))]
-        self._face_rgb: dict[int, tuple] = {}  # new nodes: the colour is set on the next pose
+        self._face_rgb = {}  # new nodes: the colour is set on the next pose
         for name, (mesh, rgb) in parts.items():
             parent = "" if name == "guide" else "/follower"
             self.nodes[name] = s.add_mesh_simple(
-                f"{parent}/{name}", np.asarray(mesh.vertices, np.float32),
-                np.asarray(mesh.faces, np.uint32), color=rgb, flat_shading=False,
-                opacity=0.55 if name == "guide" else None)
+                f"{parent}/{name}",
+                np.asarray(mesh.vertices, np.float32),
+                np.asarray(mesh.faces, np.uint32),
+                color=rgb,
+                flat_shading=False,
+                opacity=0.55 if name == "guide" else None,
+            )
         for name in [n for n in self.nodes if n.startswith(("face", "pin", "plate"))]:
             if name not in parts:  # e.g. the roller pins after a switch to concave faces
                 self.nodes.pop(name).remove()
@@ -288,8 +326,12 @@ class SceneView:
         rgb = WEAR_LOW_RGB + np.clip(level, 0, 1)[:, None] * (WEAR_HIGH_RGB - WEAR_LOW_RGB)
         colors = np.stack([rgb, np.roll(rgb, -1, axis=0)], axis=1).astype(np.uint8)
         self.nodes["wear"] = self.scene.add_line_segments(
-            "/cam/wear", _polyline_segments(_flat(pts, z), closed=True), colors,
-            thickness=thick, visible=self.show["wear"])
+            "/cam/wear",
+            _polyline_segments(_flat(pts, z), closed=True),
+            colors,
+            thickness=thick,
+            visible=self.show["wear"],
+        )
 
     def _build_arcs(self, a, z, thick) -> None:
         """Base circle (thin, dashed) and the dwell arcs of the profile (coloured)."""
@@ -300,11 +342,17 @@ class SceneView:
         part = a.profile.part
         same = part == np.roll(part, -1)
         high, low = segs[same & (part == HIGH)], segs[same & (part == LOW)]
-        cols = [np.broadcast_to(np.array(c, np.uint8), (len(x), 2, 3))
-                for c, x in ((GUIDE_RGB, base), (HIGH_RGB, high), (LOW_RGB, low))]
+        cols = [
+            np.broadcast_to(np.array(c, np.uint8), (len(x), 2, 3))
+            for c, x in ((GUIDE_RGB, base), (HIGH_RGB, high), (LOW_RGB, low))
+        ]
         self.nodes["arcs"] = self.scene.add_line_segments(
-            "/cam/arcs", np.concatenate([base, high, low]), np.concatenate(cols),
-            thickness=thick, visible=self.show["arcs"])
+            "/cam/arcs",
+            np.concatenate([base, high, low]),
+            np.concatenate(cols),
+            thickness=thick,
+            visible=self.show["arcs"],
+        )
 
     def _build_face_labels(self, a) -> None:
         for i in range(2):
@@ -320,8 +368,12 @@ class SceneView:
             name = f.name.split(" ")[0] if len(a.geo.faces) == 2 else f.name
             left = i == 0 and len(a.geo.faces) == 2
             self.nodes[key] = self.scene.add_label(
-                f"/follower/{key}", name, position=(lo if left else hi, y, 0.0),
-                **_label_size(a), anchor="bottom-right" if left else "bottom-left")
+                f"/follower/{key}",
+                name,
+                position=(lo if left else hi, y, 0.0),
+                **_label_size(a),
+                anchor="bottom-right" if left else "bottom-left",
+            )
 
     def _build_overlays(self, a, zt) -> None:
         s = self.scene
@@ -329,23 +381,28 @@ class SceneView:
         for i in range(2):
             key = f"contact{i}"
             if i < len(a.geo.faces):
-                self.nodes[key] = s.add_icosphere(f"/ov/{key}", radius=r, color=BAD_RGB,
-                                                  position=(0, 0, zt + r))
+                self.nodes[key] = s.add_icosphere(
+                    f"/ov/{key}", radius=r, color=BAD_RGB, position=(0, 0, zt + r)
+                )
             elif key in self.nodes:
                 self.nodes.pop(key).remove()
         self.zt = zt + r
         self.thin = max(3e-4, 0.006 * a.geo.r_b)
         one = np.zeros((1, 2, 3))
-        self.nodes["forces"] = s.add_line_segments("/ov/forces", one, FORCE_RGB,
-                                                   thickness=self.thin * 1.4)
+        self.nodes["forces"] = s.add_line_segments(
+            "/ov/forces", one, FORCE_RGB, thickness=self.thin * 1.4
+        )
         self.nodes["q"] = s.add_icosphere("/ov/q", radius=r * 1.2, color=Q_RGB)
-        self.nodes["q_label"] = s.add_label("/ov/q/label", "I23 = Q", position=(0, -2 * r, 0),
-                                            **_label_size(a), anchor="top-center")
-        self.nodes["q_lines"] = s.add_line_segments("/ov/q_lines", one, Q_RGB,
-                                                    thickness=self.thin * 0.5)
+        self.nodes["q_label"] = s.add_label(
+            "/ov/q/label", "I23 = Q", position=(0, -2 * r, 0), **_label_size(a), anchor="top-center"
+        )
+        self.nodes["q_lines"] = s.add_line_segments(
+            "/ov/q_lines", one, Q_RGB, thickness=self.thin * 0.5
+        )
         self.nodes["phi"] = s.add_line_segments("/ov/phi", one, PHI_RGB, thickness=self.thin * 0.6)
-        self.nodes["phi_label"] = s.add_label("/ov/phi_label", "φ", **_label_size(a),
-                                              anchor="center-center")
+        self.nodes["phi_label"] = s.add_label(
+            "/ov/phi_label", "φ", **_label_size(a), anchor="center-center"
+        )
 
     # --- per frame -----------------------------------------------------------------
     def pose(self, k: int) -> None:
@@ -385,11 +442,11 @@ class SceneView:
             fz.points = arr
         fz.visible = bool(segs) and self.show["forces"]
         # instant centre Q = I23 on the X axis, with the common normals through it
-        q = tuple(float(x) for x in profile.instant_centre(a.prog.V[k:k + 1])[0])
+        q = tuple(float(x) for x in profile.instant_centre(a.prog.V[k : k + 1])[0])
         self.nodes["q"].position = (q[0], q[1], z)
         self.nodes["q"].visible = self.show["instant_centre"]
         lines = []
-        centres = profile.face_centres(a.geo, a.prog.S[k:k + 1])[:, 0]
+        centres = profile.face_centres(a.geo, a.prog.S[k : k + 1])[:, 0]
         for i in np.flatnonzero(on):
             f, c = a.geo.faces[i], centres[i]
             lines.append(((q[0], q[1], z), (float(pw[i, 0]), float(pw[i, 1]), z)))
@@ -402,13 +459,22 @@ class SceneView:
         p, n = pw[i], a.normal[i, k]
         L = 0.45 * a.geo.r_b
         phi = float(a.pressure_angle[i, k])
-        pts = [((p[0], p[1], z), (p[0], p[1] + L, z)),
-               ((p[0], p[1], z), (p[0] + n[0] * L, p[1] + n[1] * L, z))]
+        pts = [
+            ((p[0], p[1], z), (p[0], p[1] + L, z)),
+            ((p[0], p[1], z), (p[0] + n[0] * L, p[1] + n[1] * L, z)),
+        ]
         t = np.linspace(0, 1, 12)
         ang0 = math.atan2(n[1], n[0])
-        arc = np.array([(p[0] + 0.6 * L * math.cos(ang0 + (math.pi / 2 - ang0) * u),
-                         p[1] + 0.6 * L * math.sin(ang0 + (math.pi / 2 - ang0) * u), z)
-                        for u in t])
+        arc = np.array(
+            [
+                (
+                    p[0] + 0.6 * L * math.cos(ang0 + (math.pi / 2 - ang0) * u),
+                    p[1] + 0.6 * L * math.sin(ang0 + (math.pi / 2 - ang0) * u),
+                    z,
+                )
+                for u in t
+            ]
+        )
         pts += [(tuple(arc[j]), tuple(arc[j + 1])) for j in range(len(arc) - 1)]
         self.nodes["phi"].points = np.array(pts, np.float32)
         # no construction where nothing touches (a broken dwell): it would show a lie

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from camcore.model import MAX_SEGMENTS, MotionLaw
 
@@ -32,10 +33,13 @@ class Row:
     def of(cls, g) -> Row:
         if isinstance(g, dict):
             kind, law = str(g.get("kind")), g.get("law")
-            return cls(kind if kind in KINDS else "dwell", float(g.get("angle_deg", 0.0)),
-                       g.get("lift_mm"), law if law in LAWS else None)
-        return cls(g.kind.value, float(g.angle_deg), g.lift_mm,
-                   g.law.value if g.law else None)
+            return cls(
+                kind if kind in KINDS else "dwell",
+                float(g.get("angle_deg", 0.0)),
+                g.get("lift_mm"),
+                law if law in LAWS else None,
+            )
+        return cls(g.kind.value, float(g.angle_deg), g.lift_mm, g.law.value if g.law else None)
 
     def as_dict(self) -> dict:
         g: dict = {"kind": self.kind, "angle_deg": self.angle_deg}
@@ -69,7 +73,7 @@ class SegmentTable:
         self.gui, self.folder, self.on_change = gui, folder, on_change
         self.rows: list[dict] = []  # widget handles by key, one dict per segment
         self._extra: list = []
-        self.sums = None
+        self.sums: Any = None  # the sums' markdown handle, built with the rows
         self._quiet = False  # True while the session writes values in
 
     def kinds(self) -> list[str]:
@@ -77,8 +81,12 @@ class SegmentTable:
 
     def as_dicts(self) -> list[dict]:
         """The table's segments as the user sees them."""
-        return [Row(r["kind"].value, float(r["angle"].value), float(r["lift"].value),
-                    r["law"].value).as_dict() for r in self.rows]
+        return [
+            Row(
+                r["kind"].value, float(r["angle"].value), float(r["lift"].value), r["law"].value
+            ).as_dict()
+            for r in self.rows
+        ]
 
     def show(self, segs) -> None:
         """Show segments (MotionSegments or dicts): values in place when the rows match
@@ -125,12 +133,13 @@ class SegmentTable:
         dwell, n = g.kind == "dwell", f"{i + 1}."
         row = {
             "kind": gui.add_dropdown(f"{n} kind", KINDS, initial_value=g.kind),
-            "angle": gui.add_number(f"{n} angle [°]", g.angle_deg, min=0.0, max=360.0,
-                                    step=0.5),
-            "lift": gui.add_number(f"{n} lift [mm]", g.lift_mm or 5.0, min=0.001,
-                                   max=1000.0, step=0.5, disabled=dwell),
-            "law": gui.add_dropdown(f"{n} law", LAWS, disabled=dwell,
-                                    initial_value=g.law or LAWS[0]),
+            "angle": gui.add_number(f"{n} angle [°]", g.angle_deg, min=0.0, max=360.0, step=0.5),
+            "lift": gui.add_number(
+                f"{n} lift [mm]", g.lift_mm or 5.0, min=0.001, max=1000.0, step=0.5, disabled=dwell
+            ),
+            "law": gui.add_dropdown(
+                f"{n} law", LAWS, disabled=dwell, initial_value=g.law or LAWS[0]
+            ),
             "move": gui.add_button_group(n, ("↑", "↓", "✕")),
         }
         for key in ("kind", "angle", "lift", "law"):

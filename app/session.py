@@ -68,16 +68,16 @@ class Session:
         self._syncing = False  # True while the session writes into its own widgets
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self.frame, FPS, name=f"cam-animate-{id(self)}")
-        self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND,
-                                 name=f"cam-refine-{id(self)}")
+        self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
         with self.lock:
             self.ui: Layout = build_layout(client.gui, self.base, self.analysis, self.speed)
             self._wire(self.ui)
             self.view = SceneView(client.scene)
             client.scene.set_up_direction("+y")
             self._apply(self.base, self.analysis, reset_camera=True)
-        self._restorer = threading.Thread(target=self._restore, daemon=True,
-                                          name=f"cam-restore-{id(self)}")
+        self._restorer = threading.Thread(
+            target=self._restore, daemon=True, name=f"cam-restore-{id(self)}"
+        )
         self._restorer.start()
         if animate:
             self.ticker.start()
@@ -99,8 +99,7 @@ class Session:
         ui.camera_btn.on_click(lambda _: self.reset_camera())
         ui.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
         ui.preset_btn.on_click(lambda _: self.load_preset(ui.preset_dd.value))
-        ui.upload_btn.on_upload(lambda e: self.upload(e.target.value.name,
-                                                      e.target.value.content))
+        ui.upload_btn.on_upload(lambda e: self.upload(e.target.value.name, e.target.value.content))
         ui.save_btn.on_click(lambda _: self.save_named(ui.save_name.value))
         ui.open_saved_btn.on_click(lambda _: self.open_saved(ui.saved_dd.value))
         ui.delete_saved_btn.on_click(lambda _: self.delete_saved(ui.saved_dd.value))
@@ -172,8 +171,7 @@ class Session:
         finally:
             self._syncing = False
 
-    def _apply(self, design: Design, a: Analysis | None = None,
-               reset_camera: bool = False) -> None:
+    def _apply(self, design: Design, a: Analysis | None = None, reset_camera: bool = False) -> None:
         """Analyse (fast path, no verification) and redraw everything. Lock held."""
         a = analyze(design, verify=False) if a is None else a
         self.design, self.analysis = design, a
@@ -212,8 +210,9 @@ class Session:
 
     def _show_status(self) -> None:
         a = self.analysis
-        self.ui.status.content = status_html(self.error, list(a.violations), a.lift_error,
-                                             self.verified, self.view.mesh_error)
+        self.ui.status.content = status_html(
+            self.error, list(a.violations), a.lift_error, self.verified, self.view.mesh_error
+        )
 
     def _show_summary(self, s: dict) -> None:
         """Key numbers, and what happens at each station in words (for where_md)."""
@@ -278,23 +277,29 @@ class Session:
 
     def upload_refused(self, name: str, size: int) -> None:
         """The upload guard (app.uploads) dropped a transfer larger than its cap."""
-        self._say(f"✖ **{esc(name)}** refused: {size:,} bytes, more than the "
-                  f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB).")
+        self._say(
+            f"✖ **{esc(name)}** refused: {size:,} bytes, more than the "
+            f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB)."
+        )
 
     def download(self, kind: str) -> None:
         with self.lock:
             a, d = self.analysis, self.design
             if self.error is not None:  # the controls no longer describe d: say so
-                return self._say("✖ Download refused: the input is invalid (see the red "
-                                 "panel). Fix it, or load a design, and the files will hold "
-                                 "what you see.")
+                return self._say(
+                    "✖ Download refused: the input is invalid (see the red "
+                    "panel). Fix it, or load a design, and the files will hold "
+                    "what you see."
+                )
             try:
                 spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
                 name, data = f"{file_stem(d)}{spec.suffix}", spec.write(a)
             except (KeyError, export.ExportError) as exc:
                 return self._say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
-            self._say(f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
-                      f"{d.follower.kind.label}.")
+            self._say(
+                f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
+                f"{d.follower.kind.label}."
+            )
         self.client.send_file_download(name, data, save_immediately=True)
 
     def _say(self, markdown: str) -> None:
@@ -316,7 +321,7 @@ class Session:
             self._show_saved(saved)
             restore = working is not None and self.gen == gen0 and working != self.design
             self._persist = True
-            if not restore:
+            if working is None or not restore:
                 return self._save_working()
         self.set_design(working)
         self._say(f"Restored your last design from this browser: *{esc(working.name)}*.")

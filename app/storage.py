@@ -47,8 +47,12 @@ def parse_saved(text: str | None) -> dict[str, str]:
         return {}
     out = {}
     for name, value in list(raw.items())[:MAX_SAVED]:
-        if (isinstance(name, str) and 0 < len(name) <= MAX_NAME and isinstance(value, str)
-                and len(value) <= MAX_DESIGN_BYTES):
+        if (
+            isinstance(name, str)
+            and 0 < len(name) <= MAX_NAME
+            and isinstance(value, str)
+            and len(value) <= MAX_DESIGN_BYTES
+        ):
             out[name] = value
     return out
 

@@ -20,8 +20,13 @@ class Ticker:
     machine does not jump the animation), n counts steps since start. ``ticks`` is
     the number of steps taken (read by the bench)."""
 
-    def __init__(self, step: Callable[[float, int], None], fps: float = 30.0,
-                 max_dt: float = 0.2, name: str = "ticker"):
+    def __init__(
+        self,
+        step: Callable[[float, int], None],
+        fps: float = 30.0,
+        max_dt: float = 0.2,
+        name: str = "ticker",
+    ):
         self.step, self.period, self.max_dt = step, 1.0 / fps, max_dt
         self.running = False
         self.ticks = 0
@@ -69,8 +74,13 @@ class Debouncer:
     time, so the cheap foreground work of every tab always comes first. ``pending``
     tells a running job that a newer poke makes its result stale."""
 
-    def __init__(self, work: Callable[[], None], quiet_s: float,
-                 gate: threading.Semaphore, name: str = "debouncer"):
+    def __init__(
+        self,
+        work: Callable[[], None],
+        quiet_s: float,
+        gate: threading.Semaphore,
+        name: str = "debouncer",
+    ):
         self.work, self.quiet_s, self.gate = work, quiet_s, gate
         self._poked = threading.Event()
         self._closed = threading.Event()

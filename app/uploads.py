@@ -25,8 +25,9 @@ MAX_UPLOAD_BYTES = 1_000_000  # a design file is a few kB (camcore.model.MAX_DES
 _state: dict = {"max_bytes": MAX_UPLOAD_BYTES, "on_refused": None, "installed": False}
 
 
-def install(max_bytes: int = MAX_UPLOAD_BYTES,
-            on_refused: Callable[[int, str, int], None] | None = None) -> None:
+def install(
+    max_bytes: int = MAX_UPLOAD_BYTES, on_refused: Callable[[int, str, int], None] | None = None
+) -> None:
     """Cap every upload of every viser server created from now on at ``max_bytes``."""
     _state["max_bytes"], _state["on_refused"] = max_bytes, on_refused
     if _state["installed"]:
@@ -45,13 +46,14 @@ def install(max_bytes: int = MAX_UPLOAD_BYTES,
             limit = min(_state["max_bytes"], state["total_bytes"])
             if state["transferred_bytes"] + len(message.content) > limit:
                 self._current_file_upload_states.pop(message.transfer_uuid, None)
-                _refuse(client_id, state["filename"],
-                        state["transferred_bytes"] + len(message.content))
+                _refuse(
+                    client_id, state["filename"], state["transferred_bytes"] + len(message.content)
+                )
                 return
         part(self, client_id, message)
 
-    GuiApi._handle_file_transfer_start = guarded_start
-    GuiApi._handle_file_transfer_part = guarded_part
+    GuiApi._handle_file_transfer_start = guarded_start  # type: ignore[method-assign]
+    GuiApi._handle_file_transfer_part = guarded_part  # type: ignore[method-assign]
     _state["installed"] = True
 
 

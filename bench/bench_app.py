@@ -20,9 +20,14 @@ from camcore.analysis import analyze  # noqa: E402
 
 def _row(name, samples_s, note=""):
     ms = np.asarray(samples_s) * 1e3
-    return {"name": name, "median_ms": float(np.median(ms)),
-            "p10_ms": float(np.percentile(ms, 10)), "p90_ms": float(np.percentile(ms, 90)),
-            "n": int(ms.size), "note": note}
+    return {
+        "name": name,
+        "median_ms": float(np.median(ms)),
+        "p10_ms": float(np.percentile(ms, 10)),
+        "p90_ms": float(np.percentile(ms, 90)),
+        "n": int(ms.size),
+        "note": note,
+    }
 
 
 def _session(app):
@@ -58,9 +63,14 @@ def run(quick: bool = False) -> list[dict]:
                 t0 = time.perf_counter()
                 s.ui.controls["motion.lift_mm"].value = 15.0 + (i % 2) * 0.5  # a slider step
                 t.append(time.perf_counter() - t0)
-            rows.append(_row(f"slider change -> re-analysis + redraw, {kind}", t,
-                             "server side: analyze + cam mesh + follower + overlays + "
-                             "6 plots + panels, queued to the client"))
+            rows.append(
+                _row(
+                    f"slider change -> re-analysis + redraw, {kind}",
+                    t,
+                    "server side: analyze + cam mesh + follower + overlays + "
+                    "6 plots + panels, queued to the client",
+                )
+            )
         s.ui.controls["follower.kind"].value = "double_concave"
         time.sleep(1.0)
         t = []
@@ -68,15 +78,19 @@ def run(quick: bool = False) -> list[dict]:
             t0 = time.perf_counter()
             s.ui.controls["cam.speed_rpm"].value = 1200.0 + (i % 2) * 10  # geometry unchanged
             t.append(time.perf_counter() - t0)
-        rows.append(_row("speed change -> re-analysis + redraw (geometry kept)", t,
-                         "analyze + plots + panels; cam and follower nodes not re-sent"))
+        rows.append(
+            _row(
+                "speed change -> re-analysis + redraw (geometry kept)",
+                t,
+                "analyze + plots + panels; cam and follower nodes not re-sent",
+            )
+        )
         t = []
         for i in range(1, 10 * n):
             t0 = time.perf_counter()
             s.frame(1 / 30, i if i % 3 and i % 15 else i + 1)  # transform-only frames
             t.append(time.perf_counter() - t0)
-        rows.append(_row("animation frame (transforms + overlay lines)", t,
-                         "one of 30 per second"))
+        rows.append(_row("animation frame (transforms + overlay lines)", t, "one of 30 per second"))
         t = []
         for _ in range(n):
             t0 = time.perf_counter()
@@ -97,9 +111,14 @@ def run(quick: bool = False) -> list[dict]:
         dt = time.perf_counter() - t0
         s.toggle_play()
         fps = (s.ticker.ticks - f0) / dt
-        rows.append(_row("slider change while animating", gui,
-                         f"loop drew {fps:.1f} frames/s over {dt:.1f} s "
-                         f"(cam advanced {(s.theta_deg - th0) % 360:.0f} deg at 90 deg/s)"))
+        rows.append(
+            _row(
+                "slider change while animating",
+                gui,
+                f"loop drew {fps:.1f} frames/s over {dt:.1f} s "
+                f"(cam advanced {(s.theta_deg - th0) % 360:.0f} deg at 90 deg/s)",
+            )
+        )
         tab.close()
     finally:
         app.stop()
@@ -108,5 +127,7 @@ def run(quick: bool = False) -> list[dict]:
 
 if __name__ == "__main__":
     for r in run():
-        print(f"{r['name']:<58} median {r['median_ms']:7.2f} ms  p90 {r['p90_ms']:7.2f} ms  "
-              f"n={r['n']:<4} {r['note']}")
+        print(
+            f"{r['name']:<58} median {r['median_ms']:7.2f} ms  p90 {r['p90_ms']:7.2f} ms  "
+            f"n={r['n']:<4} {r['note']}"
+        )

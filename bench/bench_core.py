@@ -64,42 +64,84 @@ def run(quick: bool = False) -> list[dict]:
     rows = []
     a = analyze(design, verify=False)
     M, N = a.profile.points.shape[0], a.theta.size
-    rows.append(_row("analyze 1 follower (verify off)", _time(lambda: analyze(design, False),
-                                                               10 * k),
-                     f"paper_example, double concave, N={N} angles"))
+    rows.append(
+        _row(
+            "analyze 1 follower (verify off)",
+            _time(lambda: analyze(design, False), 10 * k),
+            f"paper_example, double concave, N={N} angles",
+        )
+    )
     for kind in FollowerKind:
         d = design.with_kind(kind)
-        rows.append(_row(f"analyze {kind.value}", _time(lambda d=d: analyze(d, False), 5 * k),
-                         "verify off"))
-    rows.append(_row("compare: 4 followers", _time(lambda: compare(design), 3 * k),
-                     "analysis.compare, verify off"))
-    rows.append(_row("geometric check (max_lift_error)", _time(lambda: max_lift_error(a), 5 * k),
-                     f"pruned, N={N} x M={M} vertices"))
+        rows.append(
+            _row(f"analyze {kind.value}", _time(lambda d=d: analyze(d, False), 5 * k), "verify off")
+        )
+    rows.append(
+        _row(
+            "compare: 4 followers",
+            _time(lambda: compare(design), 3 * k),
+            "analysis.compare, verify off",
+        )
+    )
+    rows.append(
+        _row(
+            "geometric check (max_lift_error)",
+            _time(lambda: max_lift_error(a), 5 * k),
+            f"pruned, N={N} x M={M} vertices",
+        )
+    )
     faces = [(f.r, f.x_c) for f in a.geo.faces]
-    rows.append(_row("geometric check brute force", _time(
-        lambda: follower_lift(a.profile.points, a.theta, faces, a.geo.r_b, prune=False), 2 * k),
-        "follower_lift(prune=False), the O(N M) reference"))
-    rows.append(_row("analyze with verify", _time(lambda: analyze(design, True), 3 * k),
-                     "analysis + geometric check"))
-    rows.append(_row("STL export", _time(lambda: stl_bytes(a), 5 * k),
-                     f"{M} profile vertices, binary STL"))
+    rows.append(
+        _row(
+            "geometric check brute force",
+            _time(
+                lambda: follower_lift(a.profile.points, a.theta, faces, a.geo.r_b, prune=False),
+                2 * k,
+            ),
+            "follower_lift(prune=False), the O(N M) reference",
+        )
+    )
+    rows.append(
+        _row(
+            "analyze with verify",
+            _time(lambda: analyze(design, True), 3 * k),
+            "analysis + geometric check",
+        )
+    )
+    rows.append(
+        _row("STL export", _time(lambda: stl_bytes(a), 5 * k), f"{M} profile vertices, binary STL")
+    )
     rows.append(_row("DXF export", _time(lambda: dxf_bytes(a), 5 * k), "R2010 LWPOLYLINE"))
     for res in (0.5, 0.1, 0.01):
         d = _with_resolution(design, res)
         n = max(2, int((3 if res >= 0.1 else 1) * k))
-        rows.append(_row(f"analyze at {res:g} deg", _time(lambda d=d: analyze(d, False), n),
-                         f"N={analyze(d, False).theta.size} angles, verify off"))
+        rows.append(
+            _row(
+                f"analyze at {res:g} deg",
+                _time(lambda d=d: analyze(d, False), n),
+                f"N={analyze(d, False).theta.size} angles, verify off",
+            )
+        )
     if not quick:
         d = _with_resolution(design, 0.01)
-        rows.append(_row("analyze+verify at 0.01 deg", _time(lambda: analyze(d, True), 1,
-                                                              warmup=0),
-                         "36000 angles x ~47000 vertices"))
+        rows.append(
+            _row(
+                "analyze+verify at 0.01 deg",
+                _time(lambda: analyze(d, True), 1, warmup=0),
+                "36000 angles x ~47000 vertices",
+            )
+        )
     for n in (1, 10, 100):
         designs = _batch(n)
         reps = 2 if (quick or n == 100) else 3 * k
         ms = _time(lambda ds=designs: [analyze(x, False) for x in ds], reps)
-        rows.append(_row(f"batch of {n} designs", ms,
-                         f"loop of analyze(verify=False); {np.median(ms) / n:.2f} ms/design"))
+        rows.append(
+            _row(
+                f"batch of {n} designs",
+                ms,
+                f"loop of analyze(verify=False); {np.median(ms) / n:.2f} ms/design",
+            )
+        )
     return rows
 
 

@@ -30,17 +30,27 @@ def _row(name: str, xs_ms, note: str) -> dict:
     a = np.asarray(list(xs_ms), float)
     a = a[np.isfinite(a)]
     if a.size == 0:
-        return {"name": name, "median_ms": None, "p10_ms": None, "p90_ms": None, "n": 0,
-                "note": note}
-    return {"name": name, "median_ms": float(np.median(a)),
-            "p10_ms": float(np.percentile(a, 10)), "p90_ms": float(np.percentile(a, 90)),
-            "n": int(a.size), "note": note}
+        return {
+            "name": name,
+            "median_ms": None,
+            "p10_ms": None,
+            "p90_ms": None,
+            "n": 0,
+            "note": note,
+        }
+    return {
+        "name": name,
+        "median_ms": float(np.median(a)),
+        "p10_ms": float(np.percentile(a, 10)),
+        "p90_ms": float(np.percentile(a, 90)),
+        "n": int(a.size),
+        "note": note,
+    }
 
 
 def _value(name: str, value: float, n: int, note: str) -> dict:
     """A single figure (not a time): in the median column, the unit in the note."""
-    return {"name": name, "median_ms": value, "p10_ms": None, "p90_ms": None, "n": n,
-            "note": note}
+    return {"name": name, "median_ms": value, "p10_ms": None, "p90_ms": None, "n": n, "note": note}
 
 
 def run(quick: bool = True, slow: bool = False) -> list[dict]:
@@ -54,20 +64,40 @@ def run(quick: bool = True, slow: bool = False) -> list[dict]:
     rows: list[dict] = []
     try:
         rt = asyncio.run(round_trips(srv.url, n_rt))
-        rows.append(_row("GUI round trip, 1 tab", (x * 1e3 for x in rt),
-                         "lift change -> redrawn S curve received"))
+        rows.append(
+            _row(
+                "GUI round trip, 1 tab",
+                (x * 1e3 for x in rt),
+                "lift change -> redrawn S curve received",
+            )
+        )
 
         load = asyncio.run(run_load(srv.url, clients, duration, rate))
         s = load.summary()
         bad = f"; {s['foreign']} FOREIGN REDRAWS" if s["foreign"] else ""
-        rows.append(_row(f"GUI round trip, {clients} tabs x {rate:g}/s", load.latencies_ms,
-                         f"{duration:g} s; {s['sent_per_s']:.0f} changes/s sent, "
-                         f"{s['redraws_per_s']:.0f} redraws/s seen{bad}"))
-        rows.append(_value(f"redraws/s sustained, {clients} tabs", s["redraws_per_s"],
-                           s["redraws_seen"], "per second (not ms); newest value wins, "
-                           "the app drops superseded changes"))
-        rows.append(_row("new tab drawn while others drag", (p * 1e3 for p in load.probe_s),
-                         "connect -> lift control and S curve on screen"))
+        rows.append(
+            _row(
+                f"GUI round trip, {clients} tabs x {rate:g}/s",
+                load.latencies_ms,
+                f"{duration:g} s; {s['sent_per_s']:.0f} changes/s sent, "
+                f"{s['redraws_per_s']:.0f} redraws/s seen{bad}",
+            )
+        )
+        rows.append(
+            _value(
+                f"redraws/s sustained, {clients} tabs",
+                s["redraws_per_s"],
+                s["redraws_seen"],
+                "per second (not ms); newest value wins, the app drops superseded changes",
+            )
+        )
+        rows.append(
+            _row(
+                "new tab drawn while others drag",
+                (p * 1e3 for p in load.probe_s),
+                "connect -> lift control and S curve on screen",
+            )
+        )
 
         asyncio.run(connect_disconnect(srv.url, 20))  # warm-up
         time.sleep(2.0)
@@ -76,15 +106,27 @@ def run(quick: bool = True, slow: bool = False) -> list[dict]:
         time.sleep(3.0)
         rss1 = srv.rss_mb()
         per100 = (rss1 - rss0) * 100.0 / max(1, res["sessions"])
-        rows.append(_value("RSS growth per 100 sessions", per100, res["sessions"],
-                           f"MB (not ms); RSS {rss0:.0f} -> {rss1:.0f} MB over "
-                           f"{res['sessions']} open/close ({res['aborted']} aborted)"))
-        rows.append(_row("tab open (connect -> drawn), idle server",
-                         [res["open_median_s"] * 1e3], "median of the polite sessions"))
+        rows.append(
+            _value(
+                "RSS growth per 100 sessions",
+                per100,
+                res["sessions"],
+                f"MB (not ms); RSS {rss0:.0f} -> {rss1:.0f} MB over "
+                f"{res['sessions']} open/close ({res['aborted']} aborted)",
+            )
+        )
+        rows.append(
+            _row(
+                "tab open (connect -> drawn), idle server",
+                [res["open_median_s"] * 1e3],
+                "median of the polite sessions",
+            )
+        )
         time.sleep(1.0)
         cpu = idle_cpu_percent(srv, idle_s)
-        rows.append(_value("idle CPU, no clients", cpu, 1,
-                           f"% of one core (not ms) over {idle_s:g} s"))
+        rows.append(
+            _value("idle CPU, no clients", cpu, 1, f"% of one core (not ms) over {idle_s:g} s")
+        )
     finally:
         srv.stop()
         srv.cleanup()

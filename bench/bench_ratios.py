@@ -59,31 +59,39 @@ def run(quick: bool = False) -> list[dict]:
     t_check = _median_ms(lambda: max_lift_error(a), n)
     rows = [
         _row("floor (closed forms, numpy)", t_floor, f"N = {a.theta.size} angles, 2 faces"),
-        _row("analyze(verify=False)", t_an,
-             f"ratio to floor {t_an / t_floor:.1f}x (goal <= 3x)"),
-        _row("geometric check", t_check,
-             f"ratio to the analysis {t_check / t_an:.2f}x (goal <= 3x)"),
+        _row("analyze(verify=False)", t_an, f"ratio to floor {t_an / t_floor:.1f}x (goal <= 3x)"),
+        _row(
+            "geometric check", t_check, f"ratio to the analysis {t_check / t_an:.2f}x (goal <= 3x)"
+        ),
     ]
     times = {}
     for res in (0.1, 0.02):
         ar = analyze(_res(d, res), verify=False)
-        times[res] = (ar.theta.size, _median_ms(lambda ar=ar: max_lift_error(ar),
-                                                max(2, n // 4)))
+        times[res] = (ar.theta.size, _median_ms(lambda ar=ar: max_lift_error(ar), max(2, n // 4)))
     (n1, t1), (n2, t2) = times[0.1], times[0.02]
     slope = math.log(t2 / t1) / math.log(n2 / n1)
-    rows.append(_row("geometric check at 0.02 deg", t2,
-                     f"N {n1} -> {n2}: grows as N^{slope:.2f} (goal: N^1)"))
+    rows.append(
+        _row(
+            "geometric check at 0.02 deg", t2, f"N {n1} -> {n2}: grows as N^{slope:.2f} (goal: N^1)"
+        )
+    )
     from camcore import sweep
 
     num = 8 if quick else 32
-    spec = sweep.parse_spec(json.dumps(
-        {"grid": {"cam.base_radius_mm": {"from": 70, "to": 90, "num": num}}}))
+    spec = sweep.parse_spec(
+        json.dumps({"grid": {"cam.base_radius_mm": {"from": 70, "to": 90, "num": num}}})
+    )
     points = list(spec.points())
     cpu = _cpu_ms(lambda: sweep.run_chunk(spec.base, points, verify=False))
     rate, floor_rate = len(points) / (cpu / 1e3), 1e3 / t_floor
-    rows.append(_row("sweep (verify off), per design", cpu / len(points),
-                     f"{rate:.0f} designs per CPU-second; floor {floor_rate:.0f}/s: "
-                     f"{rate / floor_rate:.3f} of it (goal >= 0.5)"))
+    rows.append(
+        _row(
+            "sweep (verify off), per design",
+            cpu / len(points),
+            f"{rate:.0f} designs per CPU-second; floor {floor_rate:.0f}/s: "
+            f"{rate / floor_rate:.3f} of it (goal >= 0.5)",
+        )
+    )
     return rows
 
 

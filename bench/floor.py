@@ -27,7 +27,9 @@ def constants(design: Design) -> dict:
         "b1": math.radians(m.rise_deg),
         "t2": math.radians(m.rise_deg + m.high_dwell_deg),
         "b3": math.radians(m.fall_deg),
-        "y0": geo.y0, "sigma": geo.sigma, "r": geo.r,
+        "y0": geo.y0,
+        "sigma": geo.sigma,
+        "r": geo.r,
         "faces": [f.x_c for f in geo.faces],
     }
 
@@ -41,9 +43,11 @@ def floor(theta: np.ndarray, c: dict) -> dict:
     rise, fall = theta < b1, (theta >= t2) & (theta < t2 + b3)
     S = h * (x1 - np.sin(two_pi * x1) / two_pi) - h * (x3 - np.sin(two_pi * x3) / two_pi)
     V = np.where(rise, h / b1 * (1 - np.cos(two_pi * x1)), 0.0) - np.where(
-        fall, h / b3 * (1 - np.cos(two_pi * x3)), 0.0)
+        fall, h / b3 * (1 - np.cos(two_pi * x3)), 0.0
+    )
     A = np.where(rise, two_pi * h / b1**2 * np.sin(two_pi * x1), 0.0) - np.where(
-        fall, two_pi * h / b3**2 * np.sin(two_pi * x3), 0.0)
+        fall, two_pi * h / b3**2 * np.sin(two_pi * x3), 0.0
+    )
     Y = c["y0"] + S
     cs, sn = np.cos(theta), np.sin(theta)
     out = {"S": S, "V": V, "A": A, "phi": [], "rho": [], "body": []}

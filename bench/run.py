@@ -94,9 +94,21 @@ def table(rows: list[dict]) -> list[str]:
     head = ["module", "benchmark", "median ms", "p10 ms", "p90 ms", "n", "note"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
-        lines.append("| " + " | ".join([
-            r["module"].removeprefix("bench_"), str(r["name"]), _f(r["median_ms"]),
-            _f(r["p10_ms"]), _f(r["p90_ms"]), _f(r["n"]), str(r["note"] or "")]) + " |")
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    r["module"].removeprefix("bench_"),
+                    str(r["name"]),
+                    _f(r["median_ms"]),
+                    _f(r["p10_ms"]),
+                    _f(r["p90_ms"]),
+                    _f(r["n"]),
+                    str(r["note"] or ""),
+                ]
+            )
+            + " |"
+        )
     return lines
 
 
@@ -138,8 +150,12 @@ def main(argv: list[str] | None = None) -> int:
     mode = "quick" if args.quick else "full"
     md = [f"# Benchmarks {info['date']} on {info['host']}", ""]
     md += [f"- {k}: {v}" for k, v in info.items()]
-    md += [f"- mode: {mode}{' + slow' if args.slow else ''}",
-           f"- modules: {', '.join(mods) or 'none'}", f"- wall time: {total:.1f} s", ""]
+    md += [
+        f"- mode: {mode}{' + slow' if args.slow else ''}",
+        f"- modules: {', '.join(mods) or 'none'}",
+        f"- wall time: {total:.1f} s",
+        "",
+    ]
     md += lines
     if problems:
         md += ["", "## Problems", ""] + [f"- {pr}" for pr in problems]

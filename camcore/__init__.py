@@ -18,6 +18,13 @@ from .analysis import Analysis, analyze, compare
 from .model import Design, DesignError, FollowerKind, MotionLaw, load_design, load_preset
 
 __all__ = [
-    "Analysis", "Design", "DesignError", "FollowerKind", "MotionLaw",
-    "analyze", "compare", "load_design", "load_preset",
+    "Analysis",
+    "Design",
+    "DesignError",
+    "FollowerKind",
+    "MotionLaw",
+    "analyze",
+    "compare",
+    "load_design",
+    "load_preset",
 ]

@@ -66,8 +66,9 @@ class Contacts:
     point_body: np.ndarray  # (F, N, 2) contact points in the cam frame (Eq. 11)
 
 
-def contacts(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
-             theta: np.ndarray) -> Contacts:
+def contacts(
+    design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...], theta: np.ndarray
+) -> Contacts:
     """The contact geometry (Eqs. 1-19) at the cam angles ``theta`` [rad]."""
     prog = motion.program(design, theta)
     faces = [profile.face_contact(geo, f, prog) for f in geo.faces]
@@ -76,29 +77,39 @@ def contacts(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, 
     return Contacts(prog, faces, windows, part, body)
 
 
-def evaluate(design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...],
-             theta: np.ndarray) -> Local:
+def evaluate(
+    design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...], theta: np.ndarray
+) -> Local:
     """The per-angle results (Eqs. 1-19, 21, 29-42) at the cam angles ``theta`` [rad]."""
     c = contacts(design, geo, segs, theta)
     prog, windows, part, point_body = c.prog, c.in_contact, c.part, c.point_body
     normal = np.stack([f.normal for f in c.faces])
     point_world = np.stack([f.point for f in c.faces])
     kappa = np.stack([profile.pitch_curvature(geo, f, prog) for f in geo.faces])
-    rho = np.stack([profile.curvature_radius(geo, f, k) for f, k in zip(geo.faces, kappa,
-                                                                           strict=True)])
+    rho = np.stack(
+        [profile.curvature_radius(geo, f, k) for f, k in zip(geo.faces, kappa, strict=True)]
+    )
     Ft = forces.total_load(design, prog.S, prog.A)
     lever = np.stack([profile.lever_x(geo, f, prog) for f in geo.faces])
     r_arm = 0.0 if geo.flat else geo.r  # the guide arms are measured to the face centre
     slide = _contact_slide(design, geo, point_world, normal, prog)
-    guide = forces.follower_forces(design, Ft, windows, normal, lever, r_arm, prog.S, prog.V,
-                                   slide)
+    guide = forces.follower_forces(design, Ft, windows, normal, lever, r_arm, prog.S, prog.V, slide)
     FN = np.where(windows, guide.FN[None, :], 0.0)
     direction = normal if slide is None else forces.contact_direction(normal, slide)
     return Local(
-        prog=prog, in_contact=windows, part=part, point_world=point_world,
-        point_body=point_body, normal=normal,
-        pressure_angle=np.stack([f.pressure_angle for f in c.faces]), kappa_pitch=kappa,
-        rho=rho, Ft=Ft, guide=guide, FN=FN, stress=contact_stress(design, FN, rho),
+        prog=prog,
+        in_contact=windows,
+        part=part,
+        point_world=point_world,
+        point_body=point_body,
+        normal=normal,
+        pressure_angle=np.stack([f.pressure_angle for f in c.faces]),
+        kappa_pitch=kappa,
+        rho=rho,
+        Ft=Ft,
+        guide=guide,
+        FN=FN,
+        stress=contact_stress(design, FN, rho),
         torque=forces.cam_torque(point_world, direction, FN),
     )
 
@@ -204,10 +215,22 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     breaks = np.mod([*(g.start for g in segs), *st], 2 * np.pi)
     cuts = np.unique(np.clip(np.searchsorted(th, breaks), 0, th.size - 1))
     made = sampling.sample_profile(
-        loc, geo, segs, lambda x: contacts(design, geo, segs, x), np.union1d(cuts, [0]),
-        design.limits.export_tolerance_mm * MM)
-    result = Analysis(**vars(loc), design=design, geo=geo, segments=segs,
-                      profile=made.polyline, chord_error=made.chord_error, stations=st)
+        loc,
+        geo,
+        segs,
+        lambda x: contacts(design, geo, segs, x),
+        np.union1d(cuts, [0]),
+        design.limits.export_tolerance_mm * MM,
+    )
+    result = Analysis(
+        **vars(loc),
+        design=design,
+        geo=geo,
+        segments=segs,
+        profile=made.polyline,
+        chord_error=made.chord_error,
+        stations=st,
+    )
     result = replace(result, worst=extremes.worst_values(result), train=train.respond(design))
     lift_error = None
     if verify:
@@ -218,9 +241,12 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     return replace(result, violations=violations, lift_error=lift_error)
 
 
-def compare(design: Design, verify: bool = False,
-            kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS,
-            errors: bool = False) -> dict[FollowerKind, Analysis | str]:
+def compare(
+    design: Design,
+    verify: bool = False,
+    kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS,
+    errors: bool = False,
+) -> dict[FollowerKind, Analysis | str]:
     """The same design with each follower in ``kinds`` (default: the paper's four,
     Table 1, Figs. 11-13). ``errors``: a follower for which the design is not valid
     input (e.g. a face radius a roller cannot take) gets the reason as a string instead

@@ -79,14 +79,16 @@ class Violation:
         }
 
 
-def runs_deg(theta: np.ndarray, mask: np.ndarray,
-             extra: tuple[tuple[float, float], ...] = ()) -> tuple[tuple[float, float], ...]:
+def runs_deg(
+    theta: np.ndarray, mask: np.ndarray, extra: tuple[tuple[float, float], ...] = ()
+) -> tuple[tuple[float, float], ...]:
     """Contiguous runs of ``mask`` over the grid, with the brackets ``extra`` [rad] of
     breaks found between the samples, merged, as (start, end) cam angles in degrees."""
     m = mask.astype(np.int8)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], m, [0]])))
-    spans = [(float(theta[a]), float(theta[b - 1]))
-             for a, b in zip(edges[::2], edges[1::2], strict=True)]
+    spans = [
+        (float(theta[a]), float(theta[b - 1])) for a, b in zip(edges[::2], edges[1::2], strict=True)
+    ]
     merged: list[list[float]] = []
     for lo, hi in sorted(spans + list(extra)):
         if merged and lo <= merged[-1][1] + 1e-12:
@@ -118,7 +120,8 @@ def rho_reference_mm(design) -> tuple[str, float]:
 def _curvature_rules(a) -> list[Violation]:
     """Eq. 22 for concave faces, the undercut rule for rollers, in terms of the
     pitch-curve curvature kappa_p (rho = sigma / kappa_p - r, camcore.profile)."""
-    on, k, out = a.on_curve, a.kappa_pitch, []
+    on, k = a.on_curve, a.kappa_pitch
+    out: list[Violation] = []
     if a.geo.r == 0.0:  # knife edge: the pitch curve is the profile, concave flanks are fine
         return out
     if a.geo.flat:  # flat face: rho = r_b + S + S'' > 0, kappa_p its reciprocal
@@ -131,11 +134,17 @@ def _curvature_rules(a) -> list[Violation]:
             rho += [1.0 / v for v, _, _ in cands if v < 0]
             ranges = runs_deg(a.theta, bad.any(0), extra)
             low = min(rho) if rho else 0.0
-            out.append(Violation(
-                "curvature_convex", "flat face: rho = r_b + S + S'' > 0",
-                f"cam not convex under the flat face: rho = r_b + S + S'' falls to "
-                f"{to_mm(low):.4g} mm (a cusp; raise r_b or soften the law) at "
-                f"{_where(ranges)}", ranges, -to_mm(low)))
+            out.append(
+                Violation(
+                    "curvature_convex",
+                    "flat face: rho = r_b + S + S'' > 0",
+                    f"cam not convex under the flat face: rho = r_b + S + S'' falls to "
+                    f"{to_mm(low):.4g} mm (a cusp; raise r_b or soften the law) at "
+                    f"{_where(ranges)}",
+                    ranges,
+                    -to_mm(low),
+                )
+            )
         return out
     if a.geo.r > 0:  # rollers: the pitch radius 1/kappa_p must not lie in (0, r_c]
         rc = a.geo.r
@@ -146,11 +155,17 @@ def _curvature_rules(a) -> list[Violation]:
             kmax = max(float(k[bad].max()) if bad.any() else 0.0, worst.value if worst else 0.0)
             ranges = runs_deg(a.theta, bad.any(0), extra)
             short = to_mm(rc - 1.0 / kmax)
-            out.append(Violation(
-                "roller_undercut", "undercut: pitch radius > r_c",
-                f"the pitch curve's radius falls to {to_mm(1.0 / kmax):.4g} mm, inside "
-                f"(0, r_c = {to_mm(rc):g} mm] (by {short:.3g} mm): the profile undercuts "
-                f"(folds back) at {_where(ranges)}", ranges, short))
+            out.append(
+                Violation(
+                    "roller_undercut",
+                    "undercut: pitch radius > r_c",
+                    f"the pitch curve's radius falls to {to_mm(1.0 / kmax):.4g} mm, inside "
+                    f"(0, r_c = {to_mm(rc):g} mm] (by {short:.3g} mm): the profile undercuts "
+                    f"(folds back) at {_where(ranges)}",
+                    ranges,
+                    short,
+                )
+            )
         return out
     rf = -a.geo.r  # concave faces: 0 < rho < |r_f| (Eq. 22) <=> kappa_p > 1/|r_f|
     worst = a.worst.get("kappa_pitch_min")
@@ -161,23 +176,36 @@ def _curvature_rules(a) -> list[Violation]:
         rho = [float(np.min(a.rho[fold]))] if fold.any() else []
         rho += [rf - 1.0 / v for v, _, _ in cands if 0 < v <= 1.0 / rf]
         ranges = runs_deg(a.theta, fold.any(0), extra)
-        out.append(Violation(
-            "curvature_convex", "Eq. 22",
-            f"cam not convex: the profile folds back (rho down to {to_mm(min(rho)):.4g} mm "
-            f"<= 0; the pitch radius passes |r_f| = {to_mm(rf):g} mm) at {_where(ranges)}",
-            ranges, -to_mm(min(rho))))
+        out.append(
+            Violation(
+                "curvature_convex",
+                "Eq. 22",
+                f"cam not convex: the profile folds back (rho down to {to_mm(min(rho)):.4g} mm "
+                f"<= 0; the pitch radius passes |r_f| = {to_mm(rf):g} mm) at {_where(ranges)}",
+                ranges,
+                -to_mm(min(rho)),
+            )
+        )
     flat = on & (k <= 0)
     extra = tuple((lo, hi) for v, lo, hi in cands if v <= 0)
     if flat.any() or extra:
         finite = a.rho[flat & np.isfinite(a.rho)]
         worst_rho = float(finite.max()) if finite.size else math.inf
         ranges = runs_deg(a.theta, flat.any(0), extra)
-        how = (f"rho reaches {to_mm(worst_rho):.4g} mm" if math.isfinite(worst_rho)
-               else "the cam is straight or concave")
-        out.append(Violation(
-            "curvature_face", "Eq. 22",
-            f"{how}, not below |r_f| = {to_mm(rf):g} mm, at {_where(ranges)}",
-            ranges, to_mm(worst_rho - rf) if math.isfinite(worst_rho) else to_mm(rf)))
+        how = (
+            f"rho reaches {to_mm(worst_rho):.4g} mm"
+            if math.isfinite(worst_rho)
+            else "the cam is straight or concave"
+        )
+        out.append(
+            Violation(
+                "curvature_face",
+                "Eq. 22",
+                f"{how}, not below |r_f| = {to_mm(rf):g} mm, at {_where(ranges)}",
+                ranges,
+                to_mm(worst_rho - rf) if math.isfinite(worst_rho) else to_mm(rf),
+            )
+        )
     return out
 
 
@@ -191,10 +219,16 @@ def _pressure_angle(a) -> list[Violation]:
         return []
     top = max(float(phi[bad].max()) if bad.any() else 0.0, to_deg(worst.value) if worst else 0)
     ranges = runs_deg(a.theta, bad.any(0), extra)
-    return [Violation(
-        "pressure_angle", "Eqs. 5, 13",
-        f"pressure angle {top:.2f} deg exceeds the limit {limit:g} deg "
-        f"by {top - limit:.2f} deg at {_where(ranges)}", ranges, top - limit)]
+    return [
+        Violation(
+            "pressure_angle",
+            "Eqs. 5, 13",
+            f"pressure angle {top:.2f} deg exceeds the limit {limit:g} deg "
+            f"by {top - limit:.2f} deg at {_where(ranges)}",
+            ranges,
+            top - limit,
+        )
+    ]
 
 
 def _contact_stress(a) -> list[Violation]:
@@ -213,11 +247,17 @@ def _contact_stress(a) -> list[Violation]:
         return []
     top = max(float(stress.max()), worst.value if worst else 0.0)
     ranges = runs_deg(a.theta, bad.any(0), extra)
-    return [Violation(
-        "contact_stress", "Eq. 42",
-        f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = {top * sf / 1e6:.1f} MPa "
-        f"exceeds the allowable {allow / 1e6:g} MPa by {(top * sf - allow) / 1e6:.1f} MPa "
-        f"at {_where(ranges)}", ranges, (top * sf - allow) / 1e6)]
+    return [
+        Violation(
+            "contact_stress",
+            "Eq. 42",
+            f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = {top * sf / 1e6:.1f} MPa "
+            f"exceeds the allowable {allow / 1e6:g} MPa by {(top * sf - allow) / 1e6:.1f} MPa "
+            f"at {_where(ranges)}",
+            ranges,
+            (top * sf - allow) / 1e6,
+        )
+    ]
 
 
 def _dwell_arcs(a) -> list[Violation]:
@@ -229,7 +269,7 @@ def _dwell_arcs(a) -> list[Violation]:
     from .motion import FALL, RISE, segments
     from .profile import dwell_psi
 
-    out = []
+    out: list[Violation] = []
     if len(a.geo.faces) != 2:
         return out
     segs = segments(a.design)
@@ -242,13 +282,21 @@ def _dwell_arcs(a) -> list[Violation]:
         need = to_deg(4 * dwell_psi(a.geo, g.S0))
         have = to_deg(g.length)
         if have < need - 1e-9:
-            name = "high dwell beta_h" if a.design.motion.classic else (
-                f"dwell at {to_deg(g.start):.2f} deg")
-            out.append(Violation(
-                "high_dwell_arc", "Eq. 28",
-                f"{name} = {have:g} deg is below 4 psi = {need:.3f} deg "
-                f"(short by {need - have:.3f} deg): both faces cannot rest on the dwell arc",
-                ((to_deg(g.start), to_deg(g.end)),), need - have))
+            name = (
+                "high dwell beta_h"
+                if a.design.motion.classic
+                else (f"dwell at {to_deg(g.start):.2f} deg")
+            )
+            out.append(
+                Violation(
+                    "high_dwell_arc",
+                    "Eq. 28",
+                    f"{name} = {have:g} deg is below 4 psi = {need:.3f} deg "
+                    f"(short by {need - have:.3f} deg): both faces cannot rest on the dwell arc",
+                    ((to_deg(g.start), to_deg(g.end)),),
+                    need - have,
+                )
+            )
     return out
 
 
@@ -273,18 +321,28 @@ def _continuity(a) -> list[Violation]:
             continue
         deg = to_deg(at)
         if what == "V":
-            out.append(Violation(
-                "velocity_jump", "continuity (V)",
-                f"the velocity jumps by {to_mm(jump):.4g} mm/rad at theta = {deg:.3f} deg: "
-                "an infinite acceleration (use laws that meet at the same velocity)",
-                ((deg, deg),), abs(to_mm(jump))))
+            out.append(
+                Violation(
+                    "velocity_jump",
+                    "continuity (V)",
+                    f"the velocity jumps by {to_mm(jump):.4g} mm/rad at theta = {deg:.3f} deg: "
+                    "an infinite acceleration (use laws that meet at the same velocity)",
+                    ((deg, deg),),
+                    abs(to_mm(jump)),
+                )
+            )
         else:
-            out.append(Violation(
-                "acceleration_jump", "continuity (A)",
-                f"the acceleration jumps by {to_mm(jump):.4g} mm/rad^2 at theta = "
-                f"{deg:.3f} deg: an infinite jerk (a law with zero end acceleration, or "
-                "limits.require_continuous_acceleration = false to accept it)",
-                ((deg, deg),), abs(to_mm(jump))))
+            out.append(
+                Violation(
+                    "acceleration_jump",
+                    "continuity (A)",
+                    f"the acceleration jumps by {to_mm(jump):.4g} mm/rad^2 at theta = "
+                    f"{deg:.3f} deg: an infinite jerk (a law with zero end acceleration, or "
+                    "limits.require_continuous_acceleration = false to accept it)",
+                    ((deg, deg),),
+                    abs(to_mm(jump)),
+                )
+            )
     return out
 
 
@@ -294,27 +352,43 @@ def _forces(a) -> list[Violation]:
     worst = a.worst.get("FN_min")
     extra = worst.beyond(0.0, -1.0) if worst else ()
     if bad.any() or extra:
-        low = min(float(a.guide.FN[bad].min()) if bad.any() else 0.0,
-                  worst.value if worst else 0.0)
+        low = min(float(a.guide.FN[bad].min()) if bad.any() else 0.0, worst.value if worst else 0.0)
         ranges = runs_deg(a.theta, bad, extra)
-        out.append(Violation(
-            "jump", "Eqs. 29-41",
-            f"follower jump: contact force F_N = {low:.3g} N <= 0 at {_where(ranges)} "
-            f"(raise the spring rate or preload, or lower the speed)", ranges, -low))
+        out.append(
+            Violation(
+                "jump",
+                "Eqs. 29-41",
+                f"follower jump: contact force F_N = {low:.3g} N <= 0 at {_where(ranges)} "
+                f"(raise the spring rate or preload, or lower the speed)",
+                ranges,
+                -low,
+            )
+        )
     lost = ~touching
     if lost.any():
         ranges = runs_deg(a.theta, lost)
-        out.append(Violation("contact_lost", "Eq. 28",
-                             f"no face rests on the dwell arc at {_where(ranges)}",
-                             ranges, float(lost.sum())))
+        out.append(
+            Violation(
+                "contact_lost",
+                "Eq. 28",
+                f"no face rests on the dwell arc at {_where(ranges)}",
+                ranges,
+                float(lost.sum()),
+            )
+        )
     bad = touching & (a.guide.mode < 0)
     if bad.any():
         ranges = runs_deg(a.theta, bad)
-        out.append(Violation(
-            "guide_jam", "Eqs. 33-41",
-            f"no guide-contact mode of Fig. 6 balances the follower with friction "
-            f"mu = {a.design.dynamics.guide_friction:g} (self-locking) at {_where(ranges)}",
-            ranges, float(bad.sum())))
+        out.append(
+            Violation(
+                "guide_jam",
+                "Eqs. 33-41",
+                f"no guide-contact mode of Fig. 6 balances the follower with friction "
+                f"mu = {a.design.dynamics.guide_friction:g} (self-locking) at {_where(ranges)}",
+                ranges,
+                float(bad.sum()),
+            )
+        )
     return out
 
 
@@ -332,15 +406,22 @@ def _train(a) -> list[Violation]:
         return []
     ranges = runs_deg(theta, bad)
     low = float(Fc.min())
-    return [Violation(
-        "dynamic_jump", "Eqs. 29-41, elastic train",
-        f"the elastic follower train leaves the cam: F_c = {low:.3g} N <= 0 at "
-        f"{_where(ranges)} (natural frequency {r.natural_frequency / (2 * math.pi):.4g} Hz; "
-        "stiffen the train, raise the spring, or slow down)", ranges, -low)]
+    return [
+        Violation(
+            "dynamic_jump",
+            "Eqs. 29-41, elastic train",
+            f"the elastic follower train leaves the cam: F_c = {low:.3g} N <= 0 at "
+            f"{_where(ranges)} (natural frequency {r.natural_frequency / (2 * math.pi):.4g} Hz; "
+            "stiffen the train, raise the spring, or slow down)",
+            ranges,
+            -low,
+        )
+    ]
 
 
-def violation_mask(violations: list[Violation], theta_deg: np.ndarray,
-                   codes: set[str] | None = None) -> np.ndarray:
+def violation_mask(
+    violations: list[Violation], theta_deg: np.ndarray, codes: set[str] | None = None
+) -> np.ndarray:
     """Where on the angles ``theta_deg`` a limit is broken (any of ``codes``, or any
     limit at all): the union of the violations' angle ranges, ends included."""
     m = np.zeros(np.shape(theta_deg), bool)
@@ -354,25 +435,49 @@ def violation_mask(violations: list[Violation], theta_deg: np.ndarray,
 
 def run_all(a, lift_error: float | None) -> list[Violation]:
     """Every violation of ``a`` (a camcore.analysis.Analysis)."""
-    out = (_curvature_rules(a) + _pressure_angle(a) + _contact_stress(a) + _dwell_arcs(a)
-           + _continuity(a) + _forces(a) + _train(a))
+    out = (
+        _curvature_rules(a)
+        + _pressure_angle(a)
+        + _contact_stress(a)
+        + _dwell_arcs(a)
+        + _continuity(a)
+        + _forces(a)
+        + _train(a)
+    )
     if not a.profile.is_star_shaped():
-        out.append(Violation(
-            "profile_crossing", "star-shaped profile",
-            "the synthesized profile crosses itself (it is not star-shaped about the cam "
-            "axis); no cam can be made from it", (), 1.0))
+        out.append(
+            Violation(
+                "profile_crossing",
+                "star-shaped profile",
+                "the synthesized profile crosses itself (it is not star-shaped about the cam "
+                "axis); no cam can be made from it",
+                (),
+                1.0,
+            )
+        )
     tol = a.design.limits.export_tolerance_mm
     if not to_mm(a.chord_error) <= tol:
-        out.append(Violation(
-            "export_tolerance", "export tolerance",
-            f"the profile cannot be sampled within the export tolerance {tol * 1e3:.3g} um "
-            f"with {a.profile.points.shape[0]} vertices: its chords stray up to "
-            f"{to_mm(a.chord_error) * 1e3:.3g} um from the exact cam (cusps or folds)",
-            (), to_mm(a.chord_error) - tol))
+        out.append(
+            Violation(
+                "export_tolerance",
+                "export tolerance",
+                f"the profile cannot be sampled within the export tolerance {tol * 1e3:.3g} um "
+                f"with {a.profile.points.shape[0]} vertices: its chords stray up to "
+                f"{to_mm(a.chord_error) * 1e3:.3g} um from the exact cam (cusps or folds)",
+                (),
+                to_mm(a.chord_error) - tol,
+            )
+        )
     if lift_error is not None and not lift_error <= lift_tolerance(a):
-        out.append(Violation(
-            "geometric_check", "Eqs. 1-20",
-            f"rotating the finished cam gives a follower lift that differs from S(theta) "
-            f"by up to {to_mm(lift_error):.4g} mm (allowed: the chord error over "
-            f"cos(phi), {to_mm(lift_tolerance(a)):.3g} mm)", (), to_mm(lift_error)))
+        out.append(
+            Violation(
+                "geometric_check",
+                "Eqs. 1-20",
+                f"rotating the finished cam gives a follower lift that differs from S(theta) "
+                f"by up to {to_mm(lift_error):.4g} mm (allowed: the chord error over "
+                f"cos(phi), {to_mm(lift_tolerance(a)):.3g} mm)",
+                (),
+                to_mm(lift_error),
+            )
+        )
     return out

@@ -43,8 +43,9 @@ def _apply_set(data: dict, assignment: str) -> None:
     """Apply one ``--set a.b.c=VALUE`` to the design dict (VALUE parsed as JSON if it can be)."""
     path, sep, raw = assignment.partition("=")
     if not sep:
-        raise DesignError(f"--set {assignment!r}: expected FIELD.PATH=VALUE, "
-                          "e.g. cam.base_radius_mm=90")
+        raise DesignError(
+            f"--set {assignment!r}: expected FIELD.PATH=VALUE, e.g. cam.base_radius_mm=90"
+        )
     try:
         value = json.loads(raw)
     except ValueError:
@@ -113,9 +114,10 @@ def _refuse_collisions(outputs: dict[str, str], design_path: str | None) -> None
     paths = list(outputs.items())
     for i, (k1, p1) in enumerate(paths):
         if design_path and same_file(p1, design_path):
-            raise DesignError(f"--{k1} {p1}: that is the input design file; "
-                              "refusing to overwrite it")
-        for k2, p2 in paths[i + 1:]:
+            raise DesignError(
+                f"--{k1} {p1}: that is the input design file; refusing to overwrite it"
+            )
+        for k2, p2 in paths[i + 1 :]:
             if same_file(p1, p2):
                 raise DesignError(f"--{k1} and --{k2} name the same file {p1}; give two paths")
 
@@ -123,13 +125,15 @@ def _refuse_collisions(outputs: dict[str, str], design_path: str | None) -> None
 def _compare(args) -> int:
     from .report import compare_rows, compare_text
 
-    kinds = PAPER_FOLLOWERS
+    kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS
     if args.followers:
         names = [n.strip() for n in args.followers.split(",") if n.strip()]
         bad = [n for n in names if n not in FollowerKind.__members__]
         if bad or not names:
-            raise DesignError(f"--followers: unknown {', '.join(bad) or '(empty)'}; "
-                              f"choose from {', '.join(k.value for k in FollowerKind)}")
+            raise DesignError(
+                f"--followers: unknown {', '.join(bad) or '(empty)'}; "
+                f"choose from {', '.join(k.value for k in FollowerKind)}"
+            )
         kinds = tuple(FollowerKind(n) for n in dict.fromkeys(names))
     rows = compare_rows(_design(args), kinds)
     print(json.dumps(rows, indent=2) if args.json else compare_text(rows))
@@ -155,8 +159,11 @@ def _export(args) -> int:
     _write(a, outputs)
     if a.violations:
         names = ", ".join(sorted({v.code for v in a.violations}))
-        print(f"note: the design breaks {len(a.violations)} limit(s) ({names}); "
-              "run `camcore report` for details", file=sys.stderr)
+        print(
+            f"note: the design breaks {len(a.violations)} limit(s) ({names}); "
+            "run `camcore report` for details",
+            file=sys.stderr,
+        )
         return EXIT_BREAKS_LIMITS
     return EXIT_VALID
 
@@ -168,8 +175,9 @@ def _sweep(args) -> int:
     try:
         import pyarrow  # noqa: F401
     except ImportError:
-        raise DesignError("camcore sweep writes Parquet: pip install 'camdesigner[sweep]'") \
-            from None
+        raise DesignError(
+            "camcore sweep writes Parquet: pip install 'camdesigner[sweep]'"
+        ) from None
     from . import sweep
 
     spec = sweep.load_spec(args.spec)
@@ -178,8 +186,14 @@ def _sweep(args) -> int:
     if args.chunk < 1:
         raise DesignError("--chunk: at least 1")
     _refuse_collisions({"out": args.out}, args.spec)
-    n = sweep.run(spec, args.out, chunk=args.chunk, verify=not args.no_verify,
-                  workers=args.workers, scheduler=args.scheduler)
+    n = sweep.run(
+        spec,
+        args.out,
+        chunk=args.chunk,
+        verify=not args.no_verify,
+        workers=args.workers,
+        scheduler=args.scheduler,
+    )
     print(f"wrote {args.out} ({n} designs)")
     return EXIT_VALID
 
@@ -199,25 +213,39 @@ def _parser() -> argparse.ArgumentParser:
         sp.add_argument("design", nargs="?", help="design JSON file")
         sp.add_argument("--preset", help=f"a preset instead of a file: {', '.join(preset_names())}")
         if follower:
-            sp.add_argument("--follower", choices=[k.value for k in FollowerKind],
-                            help="override the follower kind")
-        sp.add_argument("--set", action="append", metavar="FIELD=VALUE",
-                        help="override one design field, e.g. --set cam.base_radius_mm=90 "
-                             "(repeatable; VALUE is JSON, or a bare word for names)")
+            sp.add_argument(
+                "--follower",
+                choices=[k.value for k in FollowerKind],
+                help="override the follower kind",
+            )
+        sp.add_argument(
+            "--set",
+            action="append",
+            metavar="FIELD=VALUE",
+            help="override one design field, e.g. --set cam.base_radius_mm=90 "
+            "(repeatable; VALUE is JSON, or a bare word for names)",
+        )
 
     r = sub.add_parser("report", help="analyse one design")
     source(r)
     r.add_argument("--json", action="store_true", help="print one JSON object")
-    r.add_argument("--html", dest="out_html", metavar="FILE",
-                   help="also write the printable report as self-contained HTML")
+    r.add_argument(
+        "--html",
+        dest="out_html",
+        metavar="FILE",
+        help="also write the printable report as self-contained HTML",
+    )
     r.add_argument("--pdf", dest="out_pdf", metavar="FILE", help="also write it as PDF")
     r.set_defaults(run=_report)
 
     c = sub.add_parser("compare", help="followers side by side on one design (Table 1)")
     source(c, follower=False)
-    c.add_argument("--followers", metavar="KIND,KIND,...",
-                   help="the followers to compare (default: the paper's four: "
-                        f"{','.join(k.value for k in PAPER_FOLLOWERS)})")
+    c.add_argument(
+        "--followers",
+        metavar="KIND,KIND,...",
+        help="the followers to compare (default: the paper's four: "
+        f"{','.join(k.value for k in PAPER_FOLLOWERS)})",
+    )
     c.add_argument("--json", action="store_true", help="print JSON rows")
     c.set_defaults(run=_compare)
 
@@ -226,25 +254,44 @@ def _parser() -> argparse.ArgumentParser:
     for kind in EXPORT_FLAGS:
         names = (f"--{kind}", "--angles") if kind == "series" else (f"--{kind}",)  # old name
         e.add_argument(*names, dest=f"out_{kind}", metavar="FILE", help=EXPORTS[kind].help)
-    e.add_argument("--tolerance-mm", type=float, metavar="MM",
-                   help="largest distance of the exported polyline from the exact cam "
-                        "(default: the design's limits.export_tolerance_mm, 0.001 mm)")
-    e.add_argument("--cutter-diameter-mm", type=float, metavar="D",
-                   help="end mill for --toolpath (default: cam.cutter_diameter_mm, 10 mm)")
+    e.add_argument(
+        "--tolerance-mm",
+        type=float,
+        metavar="MM",
+        help="largest distance of the exported polyline from the exact cam "
+        "(default: the design's limits.export_tolerance_mm, 0.001 mm)",
+    )
+    e.add_argument(
+        "--cutter-diameter-mm",
+        type=float,
+        metavar="D",
+        help="end mill for --toolpath (default: cam.cutter_diameter_mm, 10 mm)",
+    )
     e.set_defaults(run=_export)
 
     w = sub.add_parser("sweep", help="analyse a grid of designs into one Parquet table")
-    w.add_argument("spec", help='sweep JSON: {"base": {...} | {"preset": NAME}, "grid": '
-                                '{"cam.base_radius_mm": [60, 70] | {"from", "to", "num"}}}')
+    w.add_argument(
+        "spec",
+        help='sweep JSON: {"base": {...} | {"preset": NAME}, "grid": '
+        '{"cam.base_radius_mm": [60, 70] | {"from", "to", "num"}}}',
+    )
     w.add_argument("--out", required=True, metavar="FILE", help="Parquet file to write")
-    w.add_argument("--workers", type=int, metavar="N",
-                   help="run on a local Dask cluster of N worker processes")
-    w.add_argument("--scheduler", metavar="ADDRESS",
-                   help="run on an existing Dask cluster, e.g. tcp://host:8786")
-    w.add_argument("--chunk", type=int, default=32, metavar="N",
-                   help="designs per unit of work (default 32)")
-    w.add_argument("--no-verify", action="store_true",
-                   help="skip the geometric check (faster; its columns are empty)")
+    w.add_argument(
+        "--workers", type=int, metavar="N", help="run on a local Dask cluster of N worker processes"
+    )
+    w.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on an existing Dask cluster, e.g. tcp://host:8786",
+    )
+    w.add_argument(
+        "--chunk", type=int, default=32, metavar="N", help="designs per unit of work (default 32)"
+    )
+    w.add_argument(
+        "--no-verify",
+        action="store_true",
+        help="skip the geometric check (faster; its columns are empty)",
+    )
     w.set_defaults(run=_sweep)
     return p
 

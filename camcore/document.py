@@ -29,8 +29,7 @@ def _decimate(n: int) -> np.ndarray:
 def _face_curves(a: Analysis, values: np.ndarray, scale: float) -> list[tuple[str, np.ndarray]]:
     """One curve per face, NaN where the face does not touch (so gaps show)."""
     names = ["S1 (rise face)", "S2 (fall face)"] if values.shape[0] == 2 else ["contact"]
-    return [(n, np.where(a.in_contact[i], values[i] * scale, np.nan))
-            for i, n in enumerate(names)]
+    return [(n, np.where(a.in_contact[i], values[i] * scale, np.nan)) for i, n in enumerate(names)]
 
 
 def _panels(a: Analysis) -> Iterator[tuple[str, str, list[tuple[str, np.ndarray]]]]:
@@ -40,12 +39,18 @@ def _panels(a: Analysis) -> Iterator[tuple[str, str, list[tuple[str, np.ndarray]
     yield "Velocity", "V [mm/rad]", [("V", to_mm(p.V))]
     yield "Acceleration", "A [mm/rad^2]", [("A", to_mm(p.A))]
     yield "Jerk", "J [mm/rad^3]", [("J", to_mm(p.J))]
-    yield "Pressure angle (Eqs. 5, 13)", "phi [deg]", _face_curves(a, a.pressure_angle,
-                                                                    to_deg(1.0))
+    yield "Pressure angle (Eqs. 5, 13)", "phi [deg]", _face_curves(a, a.pressure_angle, to_deg(1.0))
     yield "Radius of curvature (Eq. 21)", "rho [mm]", _face_curves(a, a.rho, to_mm(1.0))
-    yield "Forces (Eqs. 29-41)", "F [N]", [("F_t total load", a.Ft), ("F1 guide", a.guide.F1),
-                                             ("F2 guide", a.guide.F2),
-                                             *_face_curves(a, a.FN, 1.0)]
+    yield (
+        "Forces (Eqs. 29-41)",
+        "F [N]",
+        [
+            ("F_t total load", a.Ft),
+            ("F1 guide", a.guide.F1),
+            ("F2 guide", a.guide.F2),
+            *_face_curves(a, a.FN, 1.0),
+        ],
+    )
     yield "Hertz contact stress (Eq. 42)", "sigma [MPa]", _face_curves(a, a.stress, 1e-6)
 
 
@@ -70,7 +75,7 @@ def _figure(a: Analysis):
     for ax in axes[-2:]:
         ax.set_xlabel("cam angle theta [deg] (grey: stations)")
         ax.set_xlim(0, 360)
-    for ax in axes[len(panels):]:
+    for ax in axes[len(panels) :]:
         ax.set_visible(False)
     return fig
 
@@ -120,17 +125,26 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
         for i, f in enumerate(a.geo.faces):
             yc = a.geo.y0 + S
             if a.geo.flat:
-                ax.plot(to_mm(np.array([-0.6, 0.6]) * rb), to_mm(np.array([yc, yc])),
-                        color="#cd6e1e", lw=2)
+                ax.plot(
+                    to_mm(np.array([-0.6, 0.6]) * rb),
+                    to_mm(np.array([yc, yc])),
+                    color="#cd6e1e",
+                    lw=2,
+                )
             p = after.point_world[i, k]
             if not a.geo.flat and f.r != 0:  # the face near its contact, not its whole circle
                 near = np.abs(f.x_c + abs(f.r) * np.cos(t) - p[0]) < 0.22 * rb
                 arc = np.where(near & (np.sign(np.sin(t)) == np.sign(p[1] - yc)), 1.0, np.nan)
-                ax.plot(to_mm(f.x_c + abs(f.r) * np.cos(t) * arc),
-                        to_mm(yc + abs(f.r) * np.sin(t) * arc), color="#cd6e1e", lw=2)
+                ax.plot(
+                    to_mm(f.x_c + abs(f.r) * np.cos(t) * arc),
+                    to_mm(yc + abs(f.r) * np.sin(t) * arc),
+                    color="#cd6e1e",
+                    lw=2,
+                )
             on = bool(after.in_contact[i, k])
-            ax.plot(to_mm(p[0]), to_mm(p[1]), "o", ms=6, mfc="#d62728" if on else "white",
-                    mec="#d62728")
+            ax.plot(
+                to_mm(p[0]), to_mm(p[1]), "o", ms=6, mfc="#d62728" if on else "white", mec="#d62728"
+            )
         y = to_mm(rb + S)
         ax.set_xlim(-0.45 * to_mm(rb), 0.45 * to_mm(rb))
         ax.set_ylim(y - 0.25 * to_mm(rb), y + 0.2 * to_mm(rb))
@@ -167,20 +181,26 @@ def _svg(fig) -> str:
     buf = io.StringIO()
     fig.savefig(buf, format="svg")
     text = buf.getvalue()
-    return text[text.index("<svg"):]  # drop the XML prolog and doctype: inline SVG
+    return text[text.index("<svg") :]  # drop the XML prolog and doctype: inline SVG
 
 
 def html_report(a: Analysis) -> str:
     """The report of one analysis as a self-contained HTML document."""
     s = summary(a)
     esc = html.escape
-    verdict = ("<p class=ok>All limits met.</p>" if s["valid"] else
-               "<ul class=bad>" + "".join(
-                   f"<li><b>{esc(v['equation'])}</b> ({esc(v['code'])}): {esc(v['message'])}</li>"
-                   for v in s["violations"]) + "</ul>")
+    verdict = (
+        "<p class=ok>All limits met.</p>"
+        if s["valid"]
+        else "<ul class=bad>"
+        + "".join(
+            f"<li><b>{esc(v['equation'])}</b> ({esc(v['code'])}): {esc(v['message'])}</li>"
+            for v in s["violations"]
+        )
+        + "</ul>"
+    )
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
-<title>Cam design report: {esc(s['design'])}</title>
+<title>Cam design report: {esc(s["design"])}</title>
 <style>
 body {{ font-family: system-ui, sans-serif; margin: 2em auto; max-width: 60em; color: #222; }}
 pre {{ background: #f6f7f9; padding: 1em; overflow-x: auto; font-size: 0.85em; }}
@@ -189,7 +209,7 @@ svg {{ max-width: 100%; height: auto; }}
 @media print {{ body {{ margin: 0; }} }}
 </style></head><body>
 <h1>Cam design report</h1>
-<p><b>Design:</b> {esc(s['design'])} &nbsp; <b>Follower:</b> {esc(s['follower'])}</p>
+<p><b>Design:</b> {esc(s["design"])} &nbsp; <b>Follower:</b> {esc(s["follower"])}</p>
 <h2>Verdict</h2>
 {verdict}
 <h2>Key numbers</h2>
@@ -219,8 +239,9 @@ def pdf_report(a: Analysis) -> bytes:
     page.text(0.06, 0.96, "Cam design report", fontsize=16, va="top")
     page.text(0.06, 0.92, text, family="monospace", fontsize=7, va="top", wrap=True)
     buf = io.BytesIO()
-    with PdfPages(buf, metadata={"Title": f"Cam design report: {s['design']}",
-                                 "Creator": "camcore"}) as pdf:
+    with PdfPages(
+        buf, metadata={"Title": f"Cam design report: {s['design']}", "Creator": "camcore"}
+    ) as pdf:
         for fig in (page, _figure(a), _profile_figure(a), stations_figure(a)):
             pdf.savefig(fig)
     return buf.getvalue()

@@ -14,6 +14,7 @@ import io
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -79,8 +80,10 @@ def bore_outline(cam) -> np.ndarray | None:
 def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
     hole = bore_outline(a.design.cam)
     if hole is not None and np.hypot(*hole.T).max() >= np.hypot(p[:, 0], p[:, 1]).min():
-        raise ExportError(f"the bore (and keyway) reach {np.hypot(*hole.T).max():g} mm from "
-                          "the axis and cut through the profile")
+        raise ExportError(
+            f"the bore (and keyway) reach {np.hypot(*hole.T).max():g} mm from "
+            "the axis and cut through the profile"
+        )
     return hole
 
 
@@ -107,8 +110,9 @@ def extrude(p: np.ndarray, width: float, hole: np.ndarray | None = None):
         cap = np.column_stack([i, (i + 1) % n, np.full(n, n)])
     ring = np.vstack([p, inner])
     k = ring.shape[0]
-    verts = np.vstack([np.column_stack([ring, np.zeros(k)]),
-                       np.column_stack([ring, np.full(k, width)])])
+    verts = np.vstack(
+        [np.column_stack([ring, np.zeros(k)]), np.column_stack([ring, np.full(k, width)])]
+    )
     faces = [cap + k, cap[:, ::-1]]  # top faces +z, bottom faces -z
     faces += _wall(np.arange(n), k)  # outer wall, facing out
     if hole is not None:
@@ -138,8 +142,9 @@ def _zipper(p: np.ndarray, inner: np.ndarray, a0: float) -> np.ndarray:
     j = np.cumsum(~step_outer) - ~step_outer  # inner vertex before each step
     o0, o1 = i % n, (i + 1) % n
     i0, i1 = n + j % m, n + (j + 1) % m
-    return np.where(step_outer[:, None],
-                    np.column_stack([o0, o1, i0]), np.column_stack([o0, i1, i0]))
+    return np.where(
+        step_outer[:, None], np.column_stack([o0, o1, i0]), np.column_stack([o0, i1, i0])
+    )
 
 
 WELD_MM = 1e-3  # a vertex merged away by the weld lies this close to a kept one at most
@@ -167,8 +172,9 @@ def weld_float32(p: np.ndarray) -> np.ndarray:
             raise ExportError("the profile collapses at 32-bit precision")
         gap = np.hypot(*(q - prev)[drop].T).max()
         if gap > WELD_MM:
-            raise ExportError(f"the profile turns back by {gap:.3g} mm about the axis; "
-                              "it is not star-shaped")
+            raise ExportError(
+                f"the profile turns back by {gap:.3g} mm about the axis; it is not star-shaped"
+            )
         q = q[~drop]
 
 
@@ -208,16 +214,18 @@ def dxf_bytes(a) -> bytes:
     msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
     top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
     msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
-    msp.add_text(DATUM_TEXT, height=0.04 * r_min,
-                 dxfattribs={"layer": "DATUM"}).set_placement((0.02 * r_min, 0.35 * r_min))
+    msp.add_text(DATUM_TEXT, height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
+        (0.02 * r_min, 0.35 * r_min)
+    )
     hole = bore_outline(cam)
     if hole is not None:
         doc.layers.add("BORE", color=3)
         if cam.keyway_width_mm > 0:
             msp.add_lwpolyline(hole.tolist(), close=True, dxfattribs={"layer": "BORE"})
         else:
-            msp.add_circle((0.0, 0.0), radius=cam.bore_diameter_mm / 2,
-                           dxfattribs={"layer": "BORE"})
+            msp.add_circle(
+                (0.0, 0.0), radius=cam.bore_diameter_mm / 2, dxfattribs={"layer": "BORE"}
+            )
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue().encode("utf-8")
@@ -301,26 +309,37 @@ class ExportKind:
 
     suffix: str
     help: str
-    write: Callable[[object], bytes]  # Analysis -> file bytes
+    write: Callable[[Any], bytes]  # Analysis -> file bytes
 
 
 # The one dispatch table of exports, used by the CLI and the app alike.
 EXPORTS: dict[str, ExportKind] = {
     "stl": ExportKind(".stl", "STL of the cam solid (mm)", stl_bytes),
     "dxf": ExportKind(".dxf", "DXF of the profile (mm)", dxf_bytes),
-    "csv": ExportKind("_profile.csv", "CSV of the profile vertices",
-                      lambda a: csv_text(a).encode()),
-    "series": ExportKind("_series.csv", "CSV per cam angle: S, V, A, J (per rad and per "
-                         "second), pressure angle, rho, forces, stress, torque",
-                         lambda a: series_csv_text(a).encode()),
-    "toolpath": ExportKind(".nc", "G-code of the cutter-centre path (mm; cutter "
-                           "cam.cutter_diameter_mm, refused where it would gouge)",
-                           lambda a: _toolpath().gcode(a).encode()),
+    "csv": ExportKind(
+        "_profile.csv", "CSV of the profile vertices", lambda a: csv_text(a).encode()
+    ),
+    "series": ExportKind(
+        "_series.csv",
+        "CSV per cam angle: S, V, A, J (per rad and per "
+        "second), pressure angle, rho, forces, stress, torque",
+        lambda a: series_csv_text(a).encode(),
+    ),
+    "toolpath": ExportKind(
+        ".nc",
+        "G-code of the cutter-centre path (mm; cutter "
+        "cam.cutter_diameter_mm, refused where it would gouge)",
+        lambda a: _toolpath().gcode(a).encode(),
+    ),
     "json": ExportKind(".json", "the design as JSON", lambda a: json_text(a.design).encode()),
-    "html": ExportKind("_report.html", "the printable design report (self-contained HTML)",
-                       lambda a: _document().html_report(a).encode()),
-    "pdf": ExportKind("_report.pdf", "the printable design report as PDF",
-                      lambda a: _document().pdf_report(a)),
+    "html": ExportKind(
+        "_report.html",
+        "the printable design report (self-contained HTML)",
+        lambda a: _document().html_report(a).encode(),
+    ),
+    "pdf": ExportKind(
+        "_report.pdf", "the printable design report as PDF", lambda a: _document().pdf_report(a)
+    ),
 }
 
 

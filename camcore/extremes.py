@@ -95,11 +95,11 @@ def worst_values(a) -> dict[str, Worst | None]:
     mask, th, n = a.on_curve, a.theta, a.theta.size
     rows = []  # (quantity number, face, grid index)
     with np.errstate(all="ignore"):
-        for q, (get, sense) in enumerate(QUANTITIES.values()):
-            rows += [(q, i, k) for i, k in _candidates(sense * get(a), mask)]
+        for qi, (get, sense) in enumerate(QUANTITIES.values()):
+            rows += [(qi, i, k) for i, k in _candidates(sense * get(a), mask)]
         if not rows:
             return dict.fromkeys(QUANTITIES)
-        q, face, k = (np.array(c) for c in zip(*rows, strict=True))
+        q, face, k = (np.array(c, dtype=int) for c in zip(*rows, strict=True))
         # the bracket: the grid neighbours where the same face still drives the curve
         has_lo = (k > 0) & mask[face, np.maximum(k - 1, 0)]
         has_hi = (k < n - 1) & mask[face, np.minimum(k + 1, n - 1)]
@@ -112,8 +112,10 @@ def worst_values(a) -> dict[str, Worst | None]:
             loc = a.local(x)
             per = x.size // q.size
             vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, len(x))
-            return np.repeat(sense, per) * vals[np.repeat(q, per), np.repeat(face, per),
-                                                np.arange(x.size)]
+            return (
+                np.repeat(sense, per)
+                * vals[np.repeat(q, per), np.repeat(face, per), np.arange(x.size)]
+            )
 
         grid = sense * np.stack([get(a) for get, _ in getters])[q, face, k]
         best, at = _zoom(f, lo, hi)
@@ -127,8 +129,12 @@ def worst_values(a) -> dict[str, Worst | None]:
             continue
         b = m[np.argmax(best[m])]
         s = sense[b]
-        out[name] = Worst(float(s * best[b]), float(at[b]), int(face[b]), tuple(
-            (float(s * best[i]), float(lo[i]), float(hi[i])) for i in m))
+        out[name] = Worst(
+            float(s * best[b]),
+            float(at[b]),
+            int(face[b]),
+            tuple((float(s * best[i]), float(lo[i]), float(hi[i])) for i in m),
+        )
     return out
 
 

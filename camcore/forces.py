@@ -134,8 +134,9 @@ def two_contacts(Ft, normal) -> GuideSolution:
     return GuideSolution(zero, zero.copy(), FN, mode, zero, zero)
 
 
-def two_contacts_with_friction(design: Design, Ft, normal, x_c, r: float, S, V,
-                               slide) -> GuideSolution:
+def two_contacts_with_friction(
+    design: Design, Ft, normal, x_c, r: float, S, V, slide
+) -> GuideSolution:
     """Both faces on a dwell arc with contact friction: the cam drags both faces the same
     way, so the guide must hold the follower (F1, F2 > 0). The paper's equal sharing of
     the load (Eqs. 36-38) is kept; moments about the axis point between the face
@@ -147,8 +148,9 @@ def two_contacts_with_friction(design: Design, Ft, normal, x_c, r: float, S, V,
     # the one-contact solver with a virtual contact of unit direction u = total / |total|
     # through the axis point: its force F' u is the faces' F_N total, so F_N = F' / |total|
     scale = np.hypot(total[:, 0], total[:, 1])
-    g = _first_mode(design, Ft, total / scale[:, None], np.zeros_like(Ft), r, S, V, 0.0,
-                    moment / scale)
+    g = _first_mode(
+        design, Ft, total / scale[:, None], np.zeros_like(Ft), r, S, V, 0.0, moment / scale
+    )
     mode = np.where(g.mode >= 0, TWO_CONTACTS, -1).astype(np.int8)
     return GuideSolution(g.F1, g.F2, g.FN / scale, mode, g.side1, g.side2)
 
@@ -163,8 +165,9 @@ def tangential_slip(point_world, normal, V) -> np.ndarray:
     return normal[..., 1] * rel_x - normal[..., 0] * rel_y
 
 
-def follower_forces(design: Design, Ft, in_contact, normal, x_c, r: float, S, V,
-                    slide=None) -> GuideSolution:
+def follower_forces(
+    design: Design, Ft, in_contact, normal, x_c, r: float, S, V, slide=None
+) -> GuideSolution:
     """Guide and contact forces at each cam angle for the faces in contact.
 
     in_contact, normal : (n_faces, N) and (n_faces, N, 2); x_c : (n_faces, N) [m], the

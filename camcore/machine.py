@@ -51,10 +51,12 @@ def _over(num: np.ndarray, den: np.ndarray) -> np.ndarray:
         return np.where(num > 0, np.where(den > 0, num / den, np.inf), 0.0)
 
 
-def _sup(design: Design, theta: np.ndarray, per_program,
-         prog: motion.Program | None = None) -> tuple[float, float]:
+def _sup(
+    design: Design, theta: np.ndarray, per_program, prog: motion.Program | None = None
+) -> tuple[float, float]:
     """Sup over the cycle of per_program(program) (>= 0), between samples too; ``prog``
     is the program on ``theta`` if the caller has it already."""
+
     def f(x):
         return per_program(motion.program(design, x))
 
@@ -65,8 +67,9 @@ def _sup(design: Design, theta: np.ndarray, per_program,
     return max(value, 0.0), at
 
 
-def spring_rate_min(design: Design, theta: np.ndarray,
-                    prog: motion.Program | None = None) -> tuple[float, float]:
+def spring_rate_min(
+    design: Design, theta: np.ndarray, prog: motion.Program | None = None
+) -> tuple[float, float]:
     """The smallest spring rate k [N/m] that keeps contact with the design's preload,
     and the cam angle [rad] that sets it; inf if no rate does (the follower must be
     pulled back where the spring is not compressed, S + s_p = 0)."""
@@ -74,8 +77,9 @@ def spring_rate_min(design: Design, theta: np.ndarray,
     return _sup(design, theta, lambda p: _over(-spring_free_load(design, p), p.S + s_p), prog)
 
 
-def preload_min(design: Design, theta: np.ndarray,
-                prog: motion.Program | None = None) -> tuple[float, float]:
+def preload_min(
+    design: Design, theta: np.ndarray, prog: motion.Program | None = None
+) -> tuple[float, float]:
     """The smallest preload s_p [m] that keeps contact with the design's spring rate,
     and the angle [rad] that sets it; inf if none does (k = 0 and D < 0 somewhere)."""
     k = design.dynamics.spring_rate_N_per_m
@@ -89,8 +93,9 @@ def preload_min(design: Design, theta: np.ndarray,
     return _sup(design, theta, need, prog)
 
 
-def jump_speed_rpm(design: Design, theta: np.ndarray,
-                   prog: motion.Program | None = None) -> tuple[float, float]:
+def jump_speed_rpm(
+    design: Design, theta: np.ndarray, prog: motion.Program | None = None
+) -> tuple[float, float]:
     """The cam speed [rpm] at which F_N first reaches zero with the design's spring, and
     the angle [rad] where it does; inf if the follower never leaves the cam (no
     deceleration anywhere).
@@ -99,8 +104,9 @@ def jump_speed_rpm(design: Design, theta: np.ndarray,
     is largest (only A < 0 can pull the follower off)."""
     d = design.dynamics
     M, k, s_p = d.mass_g * GRAM, d.spring_rate_N_per_m, d.preload_mm * MM
-    inv_w2, at = _sup(design, theta,
-                      lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p)), prog)
+    inv_w2, at = _sup(
+        design, theta, lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p)), prog
+    )
     if inv_w2 == 0.0:
         return np.inf, at
     return 1.0 / np.sqrt(inv_w2) / RPM, at

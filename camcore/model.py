@@ -18,13 +18,13 @@ import json
 import math
 from enum import StrEnum
 from pathlib import Path
-from typing import Literal
+from typing import Final, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
 from .units import DEG, MM, RPM  # noqa: F401  (MM, DEG re-exported for older imports)
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION: Final = 2
 # Upgrades of older design files: MIGRATIONS[v] turns a format-v dict into format v + 1.
 # Format 1 -> 2: motion became a list of segments (the classic keys still load, see
 # Motion), so the upgrade only restates the version.
@@ -70,8 +70,12 @@ class FollowerKind(StrEnum):
 
 
 # The paper's four followers (Fig. 9, Table 1): the default set of the comparison.
-PAPER_FOLLOWERS = (FollowerKind.single_roller, FollowerKind.double_roller,
-                   FollowerKind.single_concave, FollowerKind.double_concave)
+PAPER_FOLLOWERS = (
+    FollowerKind.single_roller,
+    FollowerKind.double_roller,
+    FollowerKind.single_concave,
+    FollowerKind.double_concave,
+)
 
 
 class MotionLaw(StrEnum):
@@ -92,8 +96,10 @@ class MotionLaw(StrEnum):
         if self is MotionLaw.constant_velocity:
             return "VDI 2143 G-G: constant velocity (a straight line S(theta))"
         if self is MotionLaw.polynomial:
-            return ("VDI 2143 polynomial of degree 5 fitted to the end conditions "
-                    "(S, V, A of the neighbouring segments): R-G, G-R, G-G or R-R")
+            return (
+                "VDI 2143 polynomial of degree 5 fitted to the end conditions "
+                "(S, V, A of the neighbouring segments): R-G, G-R, G-G or R-R"
+            )
         return "VDI 2143 R-R: rest to rest (zero velocity at both ends)"
 
 
@@ -108,13 +114,9 @@ class ClassicMotion(_Part):
     is (the app's sliders edit it), and turned into segments (``to_segments``)."""
 
     lift_mm: float = Field(15.0, ge=MIN_LENGTH_MM, le=1000, description="total lift h [mm]")
-    rise_deg: float = Field(
-        100.0, ge=MIN_MOTION_DEG, lt=360, description="rise angle beta_r [deg]"
-    )
+    rise_deg: float = Field(100.0, ge=MIN_MOTION_DEG, lt=360, description="rise angle beta_r [deg]")
     high_dwell_deg: float = Field(70.0, ge=0, lt=360, description="high dwell beta_h [deg]")
-    fall_deg: float = Field(
-        130.0, ge=MIN_MOTION_DEG, lt=360, description="fall angle beta_f [deg]"
-    )
+    fall_deg: float = Field(130.0, ge=MIN_MOTION_DEG, lt=360, description="fall angle beta_f [deg]")
     rise_law: MotionLaw = MotionLaw.cycloidal
     fall_law: MotionLaw = MotionLaw.cycloidal
 
@@ -136,11 +138,19 @@ class ClassicMotion(_Part):
     def to_segments(self) -> list[dict]:
         low = max(0.0, self.low_dwell_deg)
         return [
-            {"kind": "rise", "angle_deg": self.rise_deg, "lift_mm": self.lift_mm,
-             "law": self.rise_law.value},
+            {
+                "kind": "rise",
+                "angle_deg": self.rise_deg,
+                "lift_mm": self.lift_mm,
+                "law": self.rise_law.value,
+            },
             {"kind": "dwell", "angle_deg": self.high_dwell_deg},
-            {"kind": "fall", "angle_deg": self.fall_deg, "lift_mm": self.lift_mm,
-             "law": self.fall_law.value},
+            {
+                "kind": "fall",
+                "angle_deg": self.fall_deg,
+                "lift_mm": self.lift_mm,
+                "law": self.fall_law.value,
+            },
             {"kind": "dwell", "angle_deg": low},
         ]
 
@@ -162,7 +172,8 @@ class MotionSegment(_Part):
     kind: SegmentKind
     angle_deg: float = Field(ge=0, le=360, description="cam angle the segment spans [deg]")
     lift_mm: float | None = Field(
-        None, ge=MIN_LENGTH_MM, le=1000, description="rise/fall: its lift [mm] (> 0)")
+        None, ge=MIN_LENGTH_MM, le=1000, description="rise/fall: its lift [mm] (> 0)"
+    )
     law: MotionLaw | None = Field(None, description="rise/fall: the law (default cycloidal)")
 
     @model_validator(mode="after")
@@ -174,8 +185,10 @@ class MotionSegment(_Part):
         if self.lift_mm is None:
             raise ValueError(f"lift_mm: a {self.kind.value} needs its lift (> 0 mm)")
         if self.angle_deg < MIN_MOTION_DEG:
-            raise ValueError(f"angle_deg: a {self.kind.value} spans at least "
-                             f"{MIN_MOTION_DEG} deg, got {self.angle_deg:g}")
+            raise ValueError(
+                f"angle_deg: a {self.kind.value} spans at least "
+                f"{MIN_MOTION_DEG} deg, got {self.angle_deg:g}"
+            )
         if self.law is None:
             self.__dict__["law"] = MotionLaw.cycloidal
         return self
@@ -199,7 +212,8 @@ class Motion(_Part):
     format 1 ``motion``); those keys next to ``segments`` edit a classic program."""
 
     segments: list[MotionSegment] = Field(
-        default_factory=_paper_program, min_length=1, max_length=MAX_SEGMENTS)
+        default_factory=_paper_program, min_length=1, max_length=MAX_SEGMENTS
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -208,8 +222,9 @@ class Motion(_Part):
             return data
         flat = {k: data[k] for k in CLASSIC_KEYS & data.keys()}
         for k, v in flat.items():  # as strict as the rest of a design file: no "15", true
-            if k.endswith(("_mm", "_deg")) and (isinstance(v, bool)
-                                                or not isinstance(v, int | float)):
+            if k.endswith(("_mm", "_deg")) and (
+                isinstance(v, bool) or not isinstance(v, int | float)
+            ):
                 raise ValueError(f"{k}: a number is required, got {v!r}")
         rest = {k: v for k, v in data.items() if k not in CLASSIC_KEYS}
         if "segments" in rest:  # edit the classic program the segments hold
@@ -217,7 +232,8 @@ class Motion(_Part):
             if current is None:
                 raise ValueError(
                     f"{', '.join(sorted(flat))}: these edit a rise-dwell-fall-dwell "
-                    "program; this one has other segments, so edit motion.segments")
+                    "program; this one has other segments, so edit motion.segments"
+                )
             flat = {**current, **flat}
         return {**rest, "segments": ClassicMotion.model_validate(flat).to_segments()}
 
@@ -225,14 +241,18 @@ class Motion(_Part):
     def _closes(self) -> Motion:
         total = sum(g.angle_deg for g in self.segments)
         if abs(total - 360.0) > 1e-6:
-            raise ValueError(f"segments: the angles sum to {total:g} deg, not 360 deg "
-                             f"({'over' if total > 360 else 'short'} by "
-                             f"{abs(total - 360):g} deg)")
+            raise ValueError(
+                f"segments: the angles sum to {total:g} deg, not 360 deg "
+                f"({'over' if total > 360 else 'short'} by "
+                f"{abs(total - 360):g} deg)"
+            )
         net = sum(g.signed_lift_mm for g in self.segments)
         scale = sum(g.lift_mm or 0.0 for g in self.segments)
         if abs(net) > 1e-9 * max(scale, 1.0):
-            raise ValueError(f"segments: the lifts do not close the cycle (rises minus "
-                             f"falls = {net:g} mm, must be 0)")
+            raise ValueError(
+                f"segments: the lifts do not close the cycle (rises minus "
+                f"falls = {net:g} mm, must be 0)"
+            )
         if scale == 0.0:
             raise ValueError("segments: a program needs at least one rise and one fall")
         return self
@@ -259,18 +279,36 @@ class Motion(_Part):
             s_max, low = max(s_max, S), min(low, S)
         return s_max - low
 
-    rise_deg = property(lambda self: self._classic("rise_deg"))
-    high_dwell_deg = property(lambda self: self._classic("high_dwell_deg"))
-    fall_deg = property(lambda self: self._classic("fall_deg"))
-    low_dwell_deg = property(lambda self: self._classic("low_dwell_deg"))
-    rise_law = property(lambda self: self._classic("rise_law"))
-    fall_law = property(lambda self: self._classic("fall_law"))
+    @property
+    def rise_deg(self) -> float:
+        return self._classic("rise_deg")
+
+    @property
+    def high_dwell_deg(self) -> float:
+        return self._classic("high_dwell_deg")
+
+    @property
+    def fall_deg(self) -> float:
+        return self._classic("fall_deg")
+
+    @property
+    def low_dwell_deg(self) -> float:
+        return self._classic("low_dwell_deg")
+
+    @property
+    def rise_law(self) -> MotionLaw:
+        return self._classic("rise_law")
+
+    @property
+    def fall_law(self) -> MotionLaw:
+        return self._classic("fall_law")
 
 
 def classic_of(segments) -> dict | None:
     """The classic keys of a rise-dwell-fall-dwell program (segments as models or
     dicts), or None. A program of rise, fall (no dwells) or with one dwell missing is
     classic too when it starts with the rise."""
+
     def get(g, k):
         return g.get(k) if isinstance(g, dict) else getattr(g, k)
 
@@ -287,12 +325,18 @@ def classic_of(segments) -> dict | None:
     if get(rise, "lift_mm") != get(fall, "lift_mm"):
         return None
     high = sum(float(get(g, "angle_deg")) for g in segments[1:i_fall])
+
     def law(g):
         return get(g, "law") or MotionLaw.cycloidal
 
-    return {"lift_mm": get(rise, "lift_mm"), "rise_deg": float(get(rise, "angle_deg")),
-            "high_dwell_deg": high, "fall_deg": float(get(fall, "angle_deg")),
-            "rise_law": MotionLaw(law(rise)), "fall_law": MotionLaw(law(fall))}
+    return {
+        "lift_mm": get(rise, "lift_mm"),
+        "rise_deg": float(get(rise, "angle_deg")),
+        "high_dwell_deg": high,
+        "fall_deg": float(get(fall, "angle_deg")),
+        "rise_law": MotionLaw(law(rise)),
+        "fall_law": MotionLaw(law(fall)),
+    }
 
 
 class Follower(_Part):
@@ -314,7 +358,9 @@ class Follower(_Part):
     )
 
     single_offset_mm: float = Field(
-        0.0, ge=-1000, le=1000,
+        0.0,
+        ge=-1000,
+        le=1000,
         description="offset e_s of a single follower's axis from the cam centre [mm]: "
         "positive to the left (-X in Fig. 2), the side that lowers the rise's pressure "
         "angle for the clockwise cam (and raises the fall's); 0 = on the centreline, "
@@ -357,21 +403,29 @@ class Cam(_Part):
     )
     speed_rpm: float = Field(1200.0, gt=0, le=100000, description="cam speed [rpm]")
     bore_diameter_mm: float = Field(
-        0.0, ge=0, le=20000,
+        0.0,
+        ge=0,
+        le=20000,
         description="shaft bore of the exported solid [mm]; 0 = a solid blank",
     )
 
     keyway_width_mm: float = Field(
-        0.0, ge=0, le=5000,
+        0.0,
+        ge=0,
+        le=5000,
         description="width b of a keyway in the bore [mm]; 0 = none. It is centred on "
         "the theta = 0 ray (where the follower sits when the rise starts): the phase datum",
     )
     keyway_depth_mm: float = Field(
-        0.0, ge=0, le=5000,
+        0.0,
+        ge=0,
+        le=5000,
         description="depth t2 of the keyway into the hub, beyond the bore radius [mm]",
     )
     cutter_diameter_mm: float = Field(
-        10.0, gt=0, le=500,
+        10.0,
+        gt=0,
+        le=500,
         description="diameter D of the end mill for the toolpath export [mm]",
     )
 
@@ -423,26 +477,42 @@ class Dynamics(_Part):
         True, description="l1 = l1_0 - S (the stem slides further into the guide as it rises)"
     )
     contact_friction: float = Field(
-        0.0, ge=0, le=1.0,
+        0.0,
+        ge=0,
+        le=1.0,
         description="sliding friction mu_c at the cam-face contact (0 as in the paper; "
-                    "rollers roll and ignore it)")
+        "rollers roll and ignore it)",
+    )
     train_stiffness_N_per_m: float | None = Field(
-        None, gt=0, le=1e12,
+        None,
+        gt=0,
+        le=1e12,
         description="stiffness k_1 of the follower train between the cam contact and the "
-                    "follower mass [N/m]; empty = rigid follower (the paper's model)")
+        "follower mass [N/m]; empty = rigid follower (the paper's model)",
+    )
     damping_ratio: float = Field(
-        0.05, ge=0, le=2.0, description="damping ratio zeta of the follower train")
+        0.05, ge=0, le=2.0, description="damping ratio zeta of the follower train"
+    )
     spring_mass_g: float = Field(
-        0.0, ge=0, le=1e7,
-        description="return spring's own mass [g]; a third of it moves with the follower")
+        0.0,
+        ge=0,
+        le=1e7,
+        description="return spring's own mass [g]; a third of it moves with the follower",
+    )
     spring_safety_factor: float = Field(
-        1.5, ge=1.0, le=100.0,
+        1.5,
+        ge=1.0,
+        le=100.0,
         description="proposed spring: its force is this many times the force that just "
-                    "keeps contact, at every angle (1 = on the edge of jump)")
+        "keeps contact, at every angle (1 = on the edge of jump)",
+    )
     speed_fluctuation: float = Field(
-        0.02, gt=0, le=1.0,
+        0.02,
+        gt=0,
+        le=1.0,
         description="allowed speed fluctuation C_s = (w_max - w_min)/w of the shaft, "
-                    "for the flywheel inertia")
+        "for the flywheel inertia",
+    )
 
 
 class MaterialGrade(StrEnum):
@@ -494,17 +564,25 @@ class Wear(_Part):
     measured values for a real pair."""
 
     coefficient_mm3_per_N_m: float = Field(
-        1e-8, ge=0, le=1.0,
+        1e-8,
+        ge=0,
+        le=1.0,
         description="Archard specific wear rate k of the cam surface [mm^3/(N m)] "
-                    "(lubricated hardened steel ~1e-9 to 1e-7, dry steel ~1e-5)")
+        "(lubricated hardened steel ~1e-9 to 1e-7, dry steel ~1e-5)",
+    )
     pitting_reference_cycles: float = Field(
-        1e8, gt=0, le=1e15,
-        description="cycles at which the allowable contact stress is the surface-fatigue "
-                    "strength")
+        1e8,
+        gt=0,
+        le=1e15,
+        description="cycles at which the allowable contact stress is the surface-fatigue strength",
+    )
     pitting_exponent: float = Field(
-        13.2, gt=1, le=100,
+        13.2,
+        gt=1,
+        le=100,
         description="slope m of the contact-stress life curve N = N_ref (sigma_allow / "
-                    "sigma)^m (13.2: ISO 6336-2 for case-hardened steel)")
+        "sigma)^m (13.2: ISO 6336-2 for case-hardened steel)",
+    )
 
 
 class Limits(_Part):
@@ -515,20 +593,27 @@ class Limits(_Part):
         0.1, ge=0.01, le=5.0, description="cam-angle step of the analysis [deg]"
     )
     export_tolerance_mm: float = Field(
-        0.001, ge=1e-5, le=1.0,
+        0.001,
+        ge=1e-5,
+        le=1.0,
         description="largest deviation of the exported profile's chords from the exact "
         "cam [mm] (default 1 um)",
     )
     allowable_contact_stress_MPa: float | None = Field(
-        None, gt=0, le=1e5,
+        None,
+        gt=0,
+        le=1e5,
         description="allowable Hertz stress [MPa]; empty = the default of material.grade",
     )
     require_continuous_acceleration: bool = Field(
-        True, description="report a jump in acceleration (an infinite jerk) where "
+        True,
+        description="report a jump in acceleration (an infinite jerk) where "
         "segments meet as a broken limit; off accepts it (e.g. simple harmonic laws)",
     )
     contact_stress_safety_factor: float = Field(
-        1.25, ge=1.0, le=10.0,
+        1.25,
+        ge=1.0,
+        le=10.0,
         description="the maximum Hertz stress times this must stay within the allowable",
     )
 
@@ -553,8 +638,11 @@ class Design(_Part):
         if f.kind is FollowerKind.flat_face:
             return self  # the face is a line at r_b + S: any offset, any lift
         r = f.radius_mm
-        e, field = ((f.offset_mm, "offset_mm") if f.kind.is_double
-                    else (abs(f.single_offset_mm), "single_offset_mm"))
+        e, field = (
+            (f.offset_mm, "offset_mm")
+            if f.kind.is_double
+            else (abs(f.single_offset_mm), "single_offset_mm")
+        )
         if f.kind.is_concave and -r <= rb:
             raise ValueError(
                 f"follower.face_radius_mm: |r_f| = {-r:g} mm must exceed the base radius "
@@ -591,8 +679,11 @@ class Design(_Part):
             raise ValueError(
                 f"schema_version: the file is format {v}, older than any this program "
                 f"can upgrade (it reads format {SCHEMA_VERSION}"
-                + (f" and upgrades {sorted(MIGRATIONS)})" if MIGRATIONS else "; format 1 is "
-                   "the first published one)")
+                + (
+                    f" and upgrades {sorted(MIGRATIONS)})"
+                    if MIGRATIONS
+                    else "; format 1 is the first published one)"
+                )
             )
         if v > SCHEMA_VERSION:
             raise ValueError(
@@ -627,7 +718,11 @@ class _JsonObject(dict):
 def _object_pairs(pairs: list[tuple[str, object]]) -> _JsonObject:
     obj = _JsonObject(pairs)
     seen: set[str] = set()
-    obj.duplicates = [k for k, _ in pairs if k in seen or seen.add(k)]
+    obj.duplicates = []
+    for k, _ in pairs:
+        if k in seen:
+            obj.duplicates.append(k)
+        seen.add(k)
     return obj
 
 
@@ -644,11 +739,14 @@ def _check_tree(node, path: str = "", depth: int = 1) -> None:
     if depth > MAX_JSON_DEPTH:
         raise DesignError(f"{path or 'the document'}: nested deeper than {MAX_JSON_DEPTH} levels")
     if isinstance(node, _NonFinite):
-        raise DesignError(f"{path or 'the document'}: {node} is not a number a design may hold "
-                          "(it must be finite)")
+        raise DesignError(
+            f"{path or 'the document'}: {node} is not a number a design may hold "
+            "(it must be finite)"
+        )
     if isinstance(node, dict):
-        if getattr(node, "duplicates", None):
-            key = node.duplicates[0]
+        duplicates = getattr(node, "duplicates", None)
+        if duplicates:
+            key = duplicates[0]
             raise DesignError(f"{path + '.' if path else ''}{key}: the key appears twice")
         for key, value in node.items():
             _check_tree(value, f"{path}.{key}" if path else str(key), depth + 1)

@@ -138,8 +138,9 @@ def rise(law: MotionLaw, x: np.ndarray) -> Normalized:
     return _poly(_POLY[law], x) if law in _POLY else _sinusoid(law, x)
 
 
-def fit_quintic(S0: float, V0: float, A0: float, S1: float, V1: float, A1: float,
-                beta: float) -> tuple[float, ...]:
+def fit_quintic(
+    S0: float, V0: float, A0: float, S1: float, V1: float, A1: float, beta: float
+) -> tuple[float, ...]:
     """Coefficients c_0..c_5 of S(x) = sum c_k x^k, x = (theta - start) / beta in [0, 1],
     with S, dS/dtheta, d2S/dtheta2 given at both ends (SI: m, m/rad, m/rad^2).
 
@@ -202,13 +203,16 @@ class Segment:
         beta = self.length
         if self.coeffs is not None:
             c = self.coeffs
-            return (c[1] / beta, 2 * c[2] / beta**2,
-                    (c[1] + 2 * c[2] + 3 * c[3] + 4 * c[4] + 5 * c[5]) / beta,
-                    (2 * c[2] + 6 * c[3] + 12 * c[4] + 20 * c[5]) / beta**2)
+            return (
+                c[1] / beta,
+                2 * c[2] / beta**2,
+                (c[1] + 2 * c[2] + 3 * c[3] + 4 * c[4] + 5 * c[5]) / beta,
+                (2 * c[2] + 6 * c[3] + 12 * c[4] + 20 * c[5]) / beta**2,
+            )
         H = self.S1 - self.S0
+        assert self.law is not None  # a motion segment without coefficients has a law
         n = rise(self.law, np.array([0.0, 1.0]))
-        return (H * n.v[0] / beta, H * n.a[0] / beta**2, H * n.v[1] / beta,
-                H * n.a[1] / beta**2)
+        return (H * n.v[0] / beta, H * n.a[0] / beta**2, H * n.v[1] / beta, H * n.a[1] / beta**2)
 
 
 def segments(design: Design) -> tuple[Segment, ...]:
@@ -222,17 +226,18 @@ def segments(design: Design) -> tuple[Segment, ...]:
     with (0 next to a dwell or another polynomial)."""
     spec = design.motion.segments
     S, low = 0.0, 0.0
-    for g in spec:
-        S += g.signed_lift_mm * MM
+    for m in spec:
+        S += m.signed_lift_mm * MM
         low = min(low, S)
-    S, t, raw = -low, 0.0, []
-    for g in spec:
-        S1 = S + g.signed_lift_mm * MM
-        t1 = t + g.angle_deg * DEG
-        if g.kind.value == "dwell":
+    S, t = -low, 0.0
+    raw: list[Segment] = []
+    for m in spec:
+        S1 = S + m.signed_lift_mm * MM
+        t1 = t + m.angle_deg * DEG
+        if m.kind.value == "dwell":
             raw.append(Segment(LOW if abs(S) <= 1e-15 else HIGH, t, t1, S, S))
         else:
-            raw.append(Segment(RISE if g.kind.value == "rise" else FALL, t, t1, S, S1, g.law))
+            raw.append(Segment(RISE if m.kind.value == "rise" else FALL, t, t1, S, S1, m.law))
         S, t = S1, t1
     raw[-1] = replace(raw[-1], end=2 * math.pi)  # the angles sum to 360 deg to round-off
     kept: list[Segment] = []
@@ -333,6 +338,7 @@ def program(design: Design, theta: np.ndarray) -> Program:
             S[m], V[m], A[m], J[m] = _polynomial(g, th[m])
             continue
         H, beta = g.S1 - g.S0, g.length
+        assert g.law is not None  # a motion segment without coefficients has a law
         n = rise(g.law, (th[m] - g.start) / beta)
         S[m] = g.S0 + H * n.s
         V[m], A[m], J[m] = H * n.v / beta, H * n.a / beta**2, H * n.j / beta**3
@@ -344,12 +350,14 @@ def _polynomial(g: Segment, theta: np.ndarray):
     """S, V, A, J of a fitted polynomial segment at the cam angles ``theta``."""
     beta = g.length
     x = np.clip((theta - g.start) / beta, 0.0, 1.0)
-    c = g.coeffs
-    S = sum(ck * x**k for k, ck in enumerate(c))
-    V = sum(k * ck * x ** (k - 1) for k, ck in enumerate(c) if k >= 1) / beta
-    A = sum(k * (k - 1) * ck * x ** (k - 2) for k, ck in enumerate(c) if k >= 2) / beta**2
-    J = sum(k * (k - 1) * (k - 2) * ck * x ** (k - 3) for k, ck in enumerate(c) if k >= 3)
-    return S, V, A, J / beta**3
+    assert g.coeffs is not None
+    S, V, A, J = (np.zeros_like(x) for _ in range(4))
+    for k, ck in enumerate(g.coeffs):  # c_k x^k and its derivatives in x
+        S += ck * x**k
+        V += k * ck * x ** max(k - 1, 0)
+        A += k * (k - 1) * ck * x ** max(k - 2, 0)
+        J += k * (k - 1) * (k - 2) * ck * x ** max(k - 3, 0)
+    return S, V / beta, A / beta**2, J / beta**3
 
 
 def continuity_jumps(segs: tuple[Segment, ...]) -> list[tuple[float, str, float]]:

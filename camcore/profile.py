@@ -85,6 +85,7 @@ def geometry(design: Design) -> Geometry:
     stem_x = f.stem_x_mm * MM
     sigma = 1.0 if r + r_b > 0 else -1.0
     tag = "roller" if f.kind.is_roller else "face" if f.kind.is_concave else f.kind.label
+    faces: tuple[Face, ...]
     if f.kind.is_double and e > 0:
         faces = (Face(f"S1 (left {tag})", r, -sigma * e), Face(f"S2 (right {tag})", r, sigma * e))
     elif f.kind.is_double:
@@ -98,8 +99,17 @@ def geometry(design: Design) -> Geometry:
         y0 = sigma * math.sqrt((r + r_b) ** 2 - x**2)
         R = dwell_radius(r, r_b, x, h)
     return Geometry(
-        faces=faces, r=r, r_b=r_b, e=e, h=h, sigma=sigma, y0=y0, dwell_radius=R,
-        psi_h=psi(e, R, r), psi_l=psi(e, r_b, r), stem_x=stem_x,
+        faces=faces,
+        r=r,
+        r_b=r_b,
+        e=e,
+        h=h,
+        sigma=sigma,
+        y0=y0,
+        dwell_radius=R,
+        psi_h=psi(e, R, r),
+        psi_l=psi(e, r_b, r),
+        stem_x=stem_x,
     )
 
 
@@ -166,8 +176,7 @@ def face_centres(geo: Geometry, S: np.ndarray) -> np.ndarray:
     """Centre C of each face [m], (F, N, 2) world frame: (x_c, y0 + S) (Eq. 3); for a
     flat face the point of its plane on the face's axis."""
     S = np.asarray(S, dtype=float)
-    return np.stack([np.stack([np.full_like(S, f.x_c), geo.y0 + S], axis=-1)
-                     for f in geo.faces])
+    return np.stack([np.stack([np.full_like(S, f.x_c), geo.y0 + S], axis=-1) for f in geo.faces])
 
 
 def to_body(theta: np.ndarray, world: np.ndarray) -> np.ndarray:
@@ -260,8 +269,9 @@ def arc_span(geo: Geometry, segs: tuple[Segment, ...], j: int) -> tuple[float, f
     return g.start + s_before * psi_j, g.end + s_after * psi_j
 
 
-def contact_windows(geo: Geometry, prog: Program, segs: tuple[Segment, ...]
-                    ) -> tuple[np.ndarray, np.ndarray]:
+def contact_windows(
+    geo: Geometry, prog: Program, segs: tuple[Segment, ...]
+) -> tuple[np.ndarray, np.ndarray]:
     """Which face touches the cam at each cam angle, and on which profile segment.
 
     Returns (windows, part), both (n_faces, N): windows[i, k] is True where face i
@@ -325,8 +335,13 @@ class Polyline:
         return bool(np.all(np.diff(ang) > 0) and ang[-1] - ang[0] < 2 * math.pi)
 
 
-def assemble(prog: Program, segs: tuple[Segment, ...], body_points: np.ndarray,
-             windows: np.ndarray, parts: np.ndarray) -> Polyline:
+def assemble(
+    prog: Program,
+    segs: tuple[Segment, ...],
+    body_points: np.ndarray,
+    windows: np.ndarray,
+    parts: np.ndarray,
+) -> Polyline:
     """The profile as the union of every contact point over the cycle, in traversal order.
 
     ``parts`` holds segment indices (see ``contact_windows``). Order: segment by

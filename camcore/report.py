@@ -62,8 +62,10 @@ def _classic_arcs(a: Analysis) -> dict:
     m = a.design.motion.classic
     if m is None:
         return {"high": None, "low": None}
-    return {"high": m.high_dwell_deg - 2 * a.geo.psi_h * R2D,
-            "low": m.low_dwell_deg + 2 * a.geo.psi_l * R2D}
+    return {
+        "high": m.high_dwell_deg - 2 * a.geo.psi_h * R2D,
+        "low": m.low_dwell_deg + 2 * a.geo.psi_l * R2D,
+    }
 
 
 def _dwells(a: Analysis) -> list[dict]:
@@ -77,9 +79,15 @@ def _dwells(a: Analysis) -> list[dict]:
             continue
         start, end = arc_span(a.geo, a.segments, j)
         psi = dwell_psi(a.geo, g.S0)
-        out.append({"start_deg": g.start * R2D, "angle_deg": g.length * R2D,
-                    "S_mm": g.S0 * 1e3, "psi_deg": psi * R2D,
-                    "arc_deg": (end - start) * R2D})
+        out.append(
+            {
+                "start_deg": g.start * R2D,
+                "angle_deg": g.length * R2D,
+                "S_mm": g.S0 * 1e3,
+                "psi_deg": psi * R2D,
+                "arc_deg": (end - start) * R2D,
+            }
+        )
     return out
 
 
@@ -88,8 +96,9 @@ def _event(k: int, names: list[str], before, after, seg_before: int, seg_after: 
     the faces that start or stop touching, and who carries the load from there."""
     parts = []
     if seg_before != seg_after:
-        parts.append(f"the {SEGMENT_NAMES[seg_before]} ends and the "
-                     f"{SEGMENT_NAMES[seg_after]} begins")
+        parts.append(
+            f"the {SEGMENT_NAMES[seg_before]} ends and the {SEGMENT_NAMES[seg_after]} begins"
+        )
     gained = [names[i] for i in range(len(names)) if after[i] and not before[i]]
     lost = [names[i] for i in range(len(names)) if before[i] and not after[i]]
     parts += [f"{n} touches" for n in gained] + [f"{n} leaves the cam" for n in lost]
@@ -109,13 +118,25 @@ def _station_list(a: Analysis) -> list[dict]:
     before = a.local(np.mod(a.stations - 1e-7, two_pi))
     after = a.local(np.mod(a.stations + 1e-7, two_pi))
     st = a.stations
-    return [{"theta_deg": float(t * R2D),
-             "contacts": [names[i] for i in range(len(names)) if after.in_contact[i, k]],
-             "event": (f"station {k}: the same angle as station {k - 1} (one face: nothing "
-                       "to hand over)" if k > 0 and abs(t - st[k - 1]) < 1e-12 else
-                       _event(k, names, before.in_contact[:, k], after.in_contact[:, k],
-                              int(before.prog.segment[k]), int(after.prog.segment[k])))}
-            for k, t in enumerate(st)]
+    return [
+        {
+            "theta_deg": float(t * R2D),
+            "contacts": [names[i] for i in range(len(names)) if after.in_contact[i, k]],
+            "event": (
+                f"station {k}: the same angle as station {k - 1} (one face: nothing to hand over)"
+                if k > 0 and abs(t - st[k - 1]) < 1e-12
+                else _event(
+                    k,
+                    names,
+                    before.in_contact[:, k],
+                    after.in_contact[:, k],
+                    int(before.prog.segment[k]),
+                    int(after.prog.segment[k]),
+                )
+            ),
+        }
+        for k, t in enumerate(st)
+    ]
 
 
 def _finite(x: float, factor: float = 1.0) -> float | None:
@@ -148,8 +169,9 @@ def _hertz(a: Analysis) -> dict:
     b, beyond = hertz_validity(a.design, a.FN, a.rho)
     return {
         "contact_half_width_max_mm": _scaled(_max(b), 1e3),
-        "hertz_beyond_validity_deg": [list(r) for r in checks.runs_deg(a.theta,
-                                                                        beyond.any(axis=0))],
+        "hertz_beyond_validity_deg": [
+            list(r) for r in checks.runs_deg(a.theta, np.asarray(beyond.any(axis=0)))
+        ],
     }
 
 
@@ -248,35 +270,61 @@ def _fmt(x, nd=3) -> str:
     return f"{x:.{nd}f}"
 
 
+def _train_text(t: dict | None) -> str:
+    """The elastic train's row of ``machine_rows``."""
+    if t is None:
+        return "rigid (dynamics.train_stiffness_N_per_m not set)"
+    residual = ", ".join(f"{v['amplitude_mm']:.3g}" for v in t["residual_vibration"])
+    return (
+        f"f_n = {t['natural_frequency_Hz']:.4g} Hz ({t['frequency_ratio']:.3g} x cam speed), "
+        f"F_c {t['contact_force_min_N']:.4g} .. {t['contact_force_max_N']:.4g} N, "
+        f"error max {t['error_max_mm']:.3g} mm, residual {residual} mm"
+    )
+
+
 def machine_rows(s: dict) -> list[tuple[str, str]]:
     """The running machine's figures of a summary as (label, value) rows: the text
     report and the app's key numbers show the same lines."""
     return [
-        ("spring rate min / proposed", f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
-         f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
-         f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
-         f"{s['spring_proposal']['safety_factor']:g})"),
+        (
+            "spring rate min / proposed",
+            f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
+            f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
+            f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
+            f"{s['spring_proposal']['safety_factor']:g})",
+        ),
         ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
-        ("jump speed", "never (nothing pulls the follower off)" if s["jump_speed_rpm"] is None
-         else f"{_fmt(s['jump_speed_rpm'], 1)} rpm"),
-        ("shaft torque drive / brake", f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
-         f"{_fmt(s['cam_torque_max_Nm']['brake'])} N m"),
+        (
+            "jump speed",
+            "never (nothing pulls the follower off)"
+            if s["jump_speed_rpm"] is None
+            else f"{_fmt(s['jump_speed_rpm'], 1)} rpm",
+        ),
+        (
+            "shaft torque drive / brake",
+            f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
+            f"{_fmt(s['cam_torque_max_Nm']['brake'])} N m",
+        ),
         ("power max / mean", f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W"),
-        ("flywheel energy / inertia", f"{_fmt(s['flywheel_energy_J'], 4)} J / "
-         f"{_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2"),
-        ("wear depth max (Archard)", f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
-         f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)"),
-        ("pitting life", "endurance (stress within the allowable)"
-         if s["pitting_life_cycles"] is None else
-         f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)"),
-        ("elastic train", "rigid (dynamics.train_stiffness_N_per_m not set)"
-         if s["train"] is None else
-         f"f_n = {s['train']['natural_frequency_Hz']:.4g} Hz ({s['train']['frequency_ratio']:.3g}"
-         f" x cam speed), F_c {s['train']['contact_force_min_N']:.4g} .. "
-         f"{s['train']['contact_force_max_N']:.4g} N, error max "
-         f"{s['train']['error_max_mm']:.3g} mm, residual "
-         + ", ".join(f"{v['amplitude_mm']:.3g}" for v in s["train"]["residual_vibration"])
-         + " mm"),
+        (
+            "flywheel energy / inertia",
+            f"{_fmt(s['flywheel_energy_J'], 4)} J / {_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2",
+        ),
+        (
+            "wear depth max (Archard)",
+            f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
+            f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)",
+        ),
+        (
+            "pitting life",
+            "endurance (stress within the allowable)"
+            if s["pitting_life_cycles"] is None
+            else f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)",
+        ),
+        (
+            "elastic train",
+            _train_text(s["train"]),
+        ),
     ]
 
 
@@ -286,43 +334,81 @@ def report_text(s: dict) -> str:
         ("follower", s["follower"]),
         ("valid", "yes" if s["valid"] else "NO"),
         ("high-dwell radius R (Eq. 20)", f"{_fmt(s['dwell_radius_mm'], 4)} mm"),
-        ("psi_h / psi_l (Eqs. 23, 25)",
-         f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg"),
+        (
+            "psi_h / psi_l (Eqs. 23, 25)",
+            f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg",
+        ),
         ("stations", " ".join(f"{v:.3f}" for v in s["stations_deg"]) + " deg"),
-        ("dwell arcs high / low (Eqs. 24, 26)",
-         f"{_fmt(s['dwell_arc_deg']['high'], 3)} / {_fmt(s['dwell_arc_deg']['low'], 3)} deg"),
-        ("dwells (start: angle, arc)", "; ".join(
-            f"{d['start_deg']:.1f}: {d['angle_deg']:.1f}, {d['arc_deg']:.2f} deg"
-            for d in s["dwells"]) or "-"),
-        ("max pressure angle rise / fall",
-         f"{_fmt(s['pressure_angle_max_deg']['rise'], 2)} / "
-         f"{_fmt(s['pressure_angle_max_deg']['fall'], 2)} deg"),
+        (
+            "dwell arcs high / low (Eqs. 24, 26)",
+            f"{_fmt(s['dwell_arc_deg']['high'], 3)} / {_fmt(s['dwell_arc_deg']['low'], 3)} deg",
+        ),
+        (
+            "dwells (start: angle, arc)",
+            "; ".join(
+                f"{d['start_deg']:.1f}: {d['angle_deg']:.1f}, {d['arc_deg']:.2f} deg"
+                for d in s["dwells"]
+            )
+            or "-",
+        ),
+        (
+            "max pressure angle rise / fall",
+            f"{_fmt(s['pressure_angle_max_deg']['rise'], 2)} / "
+            f"{_fmt(s['pressure_angle_max_deg']['fall'], 2)} deg",
+        ),
         ("rho rise (min .. max)", f"{_fmt(s['curvature_radius_mm']['rise'], 2)} mm"),
         ("rho fall (min .. max)", f"{_fmt(s['curvature_radius_mm']['fall'], 2)} mm"),
-        ("max F_N cycle / high dwell", f"{_fmt(s['contact_force_max_N']['cycle'])} / "
-         f"{_fmt(s['contact_force_max_N']['high_dwell'])} N"),
-        ("max F_N two-contact high dwell",
-         f"{_fmt(s['contact_force_max_N']['high_dwell_two_contact'])} N"),
-        ("max F1 / F2", f"{_fmt(s['guide_force_max_N']['F1'])} / "
-         f"{_fmt(s['guide_force_max_N']['F2'])} N"),
-        ("max stress cycle / high dwell", f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
-         f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa"),
-        ("contact half-width max", f"{_fmt(s['contact_half_width_max_mm'], 4)} mm"
-         + ("" if not s["hertz_beyond_validity_deg"] else "; Hertz beyond validity at "
-            + ", ".join(f"{lo:.1f}-{hi:.1f}" for lo, hi in s["hertz_beyond_validity_deg"])
-            + " deg (conservative stress used)")),
+        (
+            "max F_N cycle / high dwell",
+            f"{_fmt(s['contact_force_max_N']['cycle'])} / "
+            f"{_fmt(s['contact_force_max_N']['high_dwell'])} N",
+        ),
+        (
+            "max F_N two-contact high dwell",
+            f"{_fmt(s['contact_force_max_N']['high_dwell_two_contact'])} N",
+        ),
+        (
+            "max F1 / F2",
+            f"{_fmt(s['guide_force_max_N']['F1'])} / {_fmt(s['guide_force_max_N']['F2'])} N",
+        ),
+        (
+            "max stress cycle / high dwell",
+            f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
+            f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa",
+        ),
+        (
+            "contact half-width max",
+            f"{_fmt(s['contact_half_width_max_mm'], 4)} mm"
+            + (
+                ""
+                if not s["hertz_beyond_validity_deg"]
+                else "; Hertz beyond validity at "
+                + ", ".join(f"{lo:.1f}-{hi:.1f}" for lo, hi in s["hertz_beyond_validity_deg"])
+                + " deg (conservative stress used)"
+            ),
+        ),
         ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),
-        ("allowable stress / safety factor",
-         f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}"),
+        (
+            "allowable stress / safety factor",
+            f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}",
+        ),
         *machine_rows(s),
-        ("profile area / perimeter", f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / "
-         f"{_fmt(s['profile']['perimeter_mm'], 3)} mm"),
-        ("profile chords within", f"{s['verification']['chord_error_mm']:.3g} mm of the "
-         f"exact cam (tolerance {s['verification']['export_tolerance_mm']:g} mm)"),
-        ("geometric check max |lift - S|",
-         f"{s['verification']['max_lift_error_mm']:.3g} mm (allowed "
-         f"{s['verification']['allowed_lift_error_mm']:.3g} mm)"
-         if s["verification"]["max_lift_error_mm"] is not None else "-"),
+        (
+            "profile area / perimeter",
+            f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / {_fmt(s['profile']['perimeter_mm'], 3)} mm",
+        ),
+        (
+            "profile chords within",
+            f"{s['verification']['chord_error_mm']:.3g} mm of the "
+            f"exact cam (tolerance {s['verification']['export_tolerance_mm']:g} mm)",
+        ),
+        (
+            "geometric check max |lift - S|",
+            f"{s['verification']['max_lift_error_mm']:.3g} mm (allowed "
+            f"{s['verification']['allowed_lift_error_mm']:.3g} mm)"
+            if s["verification"]["max_lift_error_mm"] is not None
+            else "-",
+        ),
     ]
     w = max(len(k) for k, _ in rows)
     lines = [f"{s['design']}", ""] + [f"  {k:<{w}}  {v}" for k, v in rows]
@@ -331,53 +417,80 @@ def report_text(s: dict) -> str:
     return "\n".join(lines)
 
 
-def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS
-                 ) -> list[dict]:
+def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS) -> list[dict]:
     """Table 1 quantities and the stress maxima for each follower in ``kinds`` (default
     the paper's four; ``paper_table1_N`` is None for the others)."""
     rows = []
     for kind, a in compare(design, verify=True, kinds=kinds).items():
+        assert not isinstance(a, str)  # compare raises (errors=False) on a bad follower
         s = summary(a)
-        rows.append({
-            "follower": kind.value,
-            "valid": s["valid"],
-            "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
-            "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
-            "paper_table1_N": PAPER_TABLE1_N.get(kind),
-            "FN_cycle_N": s["contact_force_max_N"]["cycle"],
-            "F1_max_N": s["guide_force_max_N"]["F1"],
-            "F2_max_N": s["guide_force_max_N"]["F2"],
-            "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
-            "stress_high_dwell_MPa": s["contact_stress_max_MPa"]["high_dwell"],
-            "max_lift_error_mm": s["verification"]["max_lift_error_mm"],
-            "wear_depth_max_um_per_Mcycle": s["wear_depth_max_um_per_Mcycle"],
-            "pitting_life_cycles": s["pitting_life_cycles"],
-            "spring_rate_min_N_per_m": s["spring_rate_min_N_per_m"],
-            "jump_speed_rpm": s["jump_speed_rpm"],
-            "cam_torque_drive_max_Nm": s["cam_torque_max_Nm"]["drive"],
-        })
+        rows.append(
+            {
+                "follower": kind.value,
+                "valid": s["valid"],
+                "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
+                "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
+                "paper_table1_N": PAPER_TABLE1_N.get(kind),
+                "FN_cycle_N": s["contact_force_max_N"]["cycle"],
+                "F1_max_N": s["guide_force_max_N"]["F1"],
+                "F2_max_N": s["guide_force_max_N"]["F2"],
+                "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
+                "stress_high_dwell_MPa": s["contact_stress_max_MPa"]["high_dwell"],
+                "max_lift_error_mm": s["verification"]["max_lift_error_mm"],
+                "wear_depth_max_um_per_Mcycle": s["wear_depth_max_um_per_Mcycle"],
+                "pitting_life_cycles": s["pitting_life_cycles"],
+                "spring_rate_min_N_per_m": s["spring_rate_min_N_per_m"],
+                "jump_speed_rpm": s["jump_speed_rpm"],
+                "cam_torque_drive_max_Nm": s["cam_torque_max_Nm"]["drive"],
+            }
+        )
     return rows
 
 
 def compare_text(rows: list[dict]) -> str:
-    head = ("follower", "FN dwell", "FN 2-contact", "Table 1", "FN cycle", "|F1|max",
-            "|F2|max", "sigma max", "sigma dwell")
-    keys = ("FN_high_dwell_N", "FN_high_dwell_two_contact_N", "paper_table1_N", "FN_cycle_N",
-            "F1_max_N", "F2_max_N", "stress_max_MPa", "stress_high_dwell_MPa")
-    lines = ["  ".join(f"{h:>14}" for h in head),
-             "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa"))]
+    head = (
+        "follower",
+        "FN dwell",
+        "FN 2-contact",
+        "Table 1",
+        "FN cycle",
+        "|F1|max",
+        "|F2|max",
+        "sigma max",
+        "sigma dwell",
+    )
+    keys = (
+        "FN_high_dwell_N",
+        "FN_high_dwell_two_contact_N",
+        "paper_table1_N",
+        "FN_cycle_N",
+        "F1_max_N",
+        "F2_max_N",
+        "stress_max_MPa",
+        "stress_high_dwell_MPa",
+    )
+    lines = [
+        "  ".join(f"{h:>14}" for h in head),
+        "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa")),
+    ]
     for r in rows:
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 3):>14}" for k in keys))
     # the running machine: wear (the paper's claim, made measurable), life, spring, shaft
-    head = ("follower", "wear max", "pitting life", "k min", "jump speed", "T drive")
-    lines += ["", "  ".join(f"{h:>14}" for h in head),
-              "  ".join(f"{u:>14}" for u in ("", "um/Mcycle", "cycles", "N/m", "rpm", "N m"))]
+    head2 = ("follower", "wear max", "pitting life", "k min", "jump speed", "T drive")
+    lines += [
+        "",
+        "  ".join(f"{h:>14}" for h in head2),
+        "  ".join(f"{u:>14}" for u in ("", "um/Mcycle", "cycles", "N/m", "rpm", "N m")),
+    ]
     for r in rows:
         life = r["pitting_life_cycles"]
-        cells = (_fmt(r["wear_depth_max_um_per_Mcycle"], 4),
-                 "endurance" if life is None else f"{life:.3g}",
-                 _fmt(r["spring_rate_min_N_per_m"], 1), _fmt(r["jump_speed_rpm"], 1),
-                 _fmt(r["cam_torque_drive_max_Nm"], 3))
+        cells = (
+            _fmt(r["wear_depth_max_um_per_Mcycle"], 4),
+            "endurance" if life is None else f"{life:.3g}",
+            _fmt(r["spring_rate_min_N_per_m"], 1),
+            _fmt(r["jump_speed_rpm"], 1),
+            _fmt(r["cam_torque_drive_max_Nm"], 3),
+        )
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in cells))
     return "\n".join(lines)
 

@@ -54,8 +54,7 @@ def contact_travel(a, geo: profile.Geometry) -> np.ndarray:
         if geo.flat:
             rows.append(np.abs(a.rho[i]))
         else:
-            rows.append(np.hypot(Y, f.x_c + a.prog.V) * np.abs(geo.sigma - f.r
-                                                                * a.kappa_pitch[i]))
+            rows.append(np.hypot(Y, f.x_c + a.prog.V) * np.abs(geo.sigma - f.r * a.kappa_pitch[i]))
     return np.stack(rows)
 
 
@@ -74,8 +73,9 @@ def density(a, geo: profile.Geometry, tol: float) -> np.ndarray:
     return g
 
 
-def _angles(theta: np.ndarray, g: np.ndarray, cuts: np.ndarray, motion: np.ndarray,
-            boost: np.ndarray) -> np.ndarray:
+def _angles(
+    theta: np.ndarray, g: np.ndarray, cuts: np.ndarray, motion: np.ndarray, boost: np.ndarray
+) -> np.ndarray:
     """Cam angles [rad] at density g (samples/rad on the grid ``theta``) between each
     pair of consecutive ``cuts`` (grid indices), times ``boost`` per piece."""
     ends = np.append(theta, 2 * math.pi)
@@ -90,7 +90,7 @@ def _angles(theta: np.ndarray, g: np.ndarray, cuts: np.ndarray, motion: np.ndarr
     for p, (i, j) in enumerate(zip(cuts[:-1], cuts[1:], strict=True)):
         n = int(counts[p])
         levels = np.linspace(G[i], G[j], n, endpoint=False)
-        seg_G, seg_th = G[i:j + 1], ends[i:j + 1]
+        seg_G, seg_th = G[i : j + 1], ends[i : j + 1]
         if seg_G[-1] > seg_G[0]:
             out.append(np.interp(levels, seg_G, seg_th))
         else:  # nothing to resolve (a straight piece): evenly in angle
@@ -111,8 +111,9 @@ def chord_errors(poly: profile.Polyline, local) -> np.ndarray:
     err = np.zeros(P.shape[0])
     arc = ~np.isin(part, MOTIONS) | ~np.isin(np.roll(part, -1), MOTIONS)
     R = np.hypot(*P.T)
-    delta = np.abs(np.angle(np.exp(1j * (np.arctan2(Q[:, 1], Q[:, 0])
-                                         - np.arctan2(P[:, 1], P[:, 0])))))
+    delta = np.abs(
+        np.angle(np.exp(1j * (np.arctan2(Q[:, 1], Q[:, 0]) - np.arctan2(P[:, 1], P[:, 0]))))
+    )
     err[arc] = (R * (1 - np.cos(delta / 2)))[arc]
     curve = np.flatnonzero(~arc & (part == np.roll(part, -1)))
     if curve.size:
@@ -155,15 +156,15 @@ def fill_arcs(poly: profile.Polyline, tol: float) -> profile.Polyline:
     k = np.arange(src.size) - np.repeat(np.cumsum(extra + 1) - (extra + 1), extra + 1)
     f = k / (extra[src] + 1.0)  # 0 for the original vertex
     ang = a0[src] + f * delta[src]
-    pts = np.where((k == 0)[:, None], P[src],
-                   R[src, None] * np.column_stack([np.cos(ang), np.sin(ang)]))
+    pts = np.where(
+        (k == 0)[:, None], P[src], R[src, None] * np.column_stack([np.cos(ang), np.sin(ang)])
+    )
     th_next = np.roll(th, -1)
     dth = np.mod(th_next - th, 2 * math.pi)
     return profile.Polyline(pts, part[src], np.mod(th[src] + f * dth[src], 2 * math.pi))
 
 
-def sample_profile(a, geo: profile.Geometry, segs, local, cuts: np.ndarray,
-                   tol: float) -> Sampled:
+def sample_profile(a, geo: profile.Geometry, segs, local, cuts: np.ndarray, tol: float) -> Sampled:
     """The profile sampled to the chordal tolerance ``tol`` [m].
 
     a : camcore.analysis.Local on the analysis grid; geo, segs : its geometry and
@@ -186,8 +187,9 @@ def sample_profile(a, geo: profile.Geometry, segs, local, cuts: np.ndarray,
         if worst <= tol or th.size >= MAX_VERTICES - boost.size * MIN_PIECE_STEPS:
             break
         # pieces with a chord over the tolerance: sqrt(err/tol) more samples, plus margin
-        piece = np.clip(np.searchsorted(theta[cuts[:-1]], poly.theta, "right") - 1,
-                        0, boost.size - 1)
+        piece = np.clip(
+            np.searchsorted(theta[cuts[:-1]], poly.theta, "right") - 1, 0, boost.size - 1
+        )
         over = np.zeros(boost.size)
         np.maximum.at(over, piece, err / tol)
         boost = np.where(over > 1, boost * np.sqrt(over) * 1.2, boost)

@@ -86,7 +86,7 @@ def _axis(path: str, raw) -> tuple:
     """A grid axis from a list of values or {"from", "to", "num"} (inclusive, linear)."""
     if isinstance(raw, dict):
         if set(raw) != {"from", "to", "num"}:
-            raise DesignError(f"grid.{path}: a range is {{\"from\", \"to\", \"num\"}}")
+            raise DesignError(f'grid.{path}: a range is {{"from", "to", "num"}}')
         lo, hi, num = raw["from"], raw["to"], raw["num"]
         if not all(isinstance(x, int | float) and not isinstance(x, bool) for x in (lo, hi)):
             raise DesignError(f"grid.{path}: from and to must be numbers")
@@ -116,7 +116,7 @@ def parse_spec(text: str | bytes) -> Spec:
     elif isinstance(base, dict):
         design = design_from_json(json.dumps(base))
     else:
-        raise DesignError("base: a design object or {\"preset\": NAME}")
+        raise DesignError('base: a design object or {"preset": NAME}')
     grid = data["grid"]
     if not isinstance(grid, dict) or not grid:
         raise DesignError("grid: an object of field paths to values")
@@ -155,8 +155,10 @@ def row(base: dict, point: dict, verify: bool = True) -> dict:
     """One design's row: the grid values, valid, error and the flattened summary."""
     from .report import analyze_summary, summary
 
-    out = {f"grid.{k}": v if isinstance(v, int | float | str | bool) or v is None
-           else json.dumps(v) for k, v in point.items()}  # a list or object as JSON text
+    out = {
+        f"grid.{k}": v if isinstance(v, int | float | str | bool) or v is None else json.dumps(v)
+        for k, v in point.items()
+    }  # a list or object as JSON text
     try:
         design = design_at(base, point)
     except DesignError as exc:
@@ -191,14 +193,20 @@ def _progress(done: int, total: int, t0: float, stream=sys.stderr) -> None:
     width = 30
     fill = int(width * done / max(total, 1))
     rate = done / max(time.perf_counter() - t0, 1e-9)
-    stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} designs, "
-                 f"{rate:.1f}/s")
+    stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} designs, {rate:.1f}/s")
     stream.flush()
 
 
-def run(spec: Spec, out: str | Path, *, chunk: int = DEFAULT_CHUNK, verify: bool = True,
-        workers: int | None = None, scheduler: str | None = None,
-        progress: Callable[[int, int, float], None] | None = _progress) -> int:
+def run(
+    spec: Spec,
+    out: str | Path,
+    *,
+    chunk: int = DEFAULT_CHUNK,
+    verify: bool = True,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: Callable[[int, int, float], None] | None = _progress,
+) -> int:
     """Run the sweep into the Parquet file ``out``; returns the number of rows.
 
     Finished chunks are kept in ``out.parts/`` (with the spec's fingerprint) until the
@@ -252,15 +260,18 @@ def _run_dask(spec, chunk, todo, verify, workers, scheduler, keep) -> None:
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
+        cluster = LocalCluster(
+            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+        )
         client = Client(cluster)
     else:
         client = Client(scheduler)
     try:
         base = client.scatter(spec.base, broadcast=True)
-        futures = {client.submit(run_chunk, base, spec.chunk(i, chunk), verify, pure=False): i
-                   for i in todo}
+        futures = {
+            client.submit(run_chunk, base, spec.chunk(i, chunk), verify, pure=False): i
+            for i in todo
+        }
         for fut in as_completed(futures):
             keep(futures[fut], fut.result())
     finally:

@@ -115,7 +115,8 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
         raise GougeError(
             f"a {to_mm(D):g} mm cutter would gouge the cam (a concave stretch tighter than "
             f"its radius) at cam angles {where} deg; the tightest concave radius is "
-            f"{to_mm(_tightest_concave(pts)):.3g} mm: use a cutter of at most twice that")
+            f"{to_mm(_tightest_concave(pts)):.3g} mm: use a cutter of at most twice that"
+        )
     kappa = max(float(discrete_curvature(pts).max()), 0.0)
     return path, a.chord_error * (1.0 + d * kappa)
 
@@ -149,8 +150,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         "%",
         _comment(f"cam contour: {a.design.name}"),
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
-        _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, "
-                 "theta = 0 on +Y"),
+        _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {to_mm(bound):.3g} mm of the exact offset, climb, clockwise"),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
@@ -160,7 +160,12 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         f"G1 X{start[0]:.4f} Y{start[1]:.4f} F{FEED_MM_PER_MIN:g}",
     ]
     lines += [f"X{x:.4f} Y{y:.4f}" for x, y in path[1:]]
-    lines += [f"X{start[0]:.4f} Y{start[1]:.4f}",
-              f"X{lead[0]:.4f} Y{lead[1]:.4f}",
-              f"G0 Z{SAFE_Z_MM:.3f}", "M5", "M30", "%"]
+    lines += [
+        f"X{start[0]:.4f} Y{start[1]:.4f}",
+        f"X{lead[0]:.4f} Y{lead[1]:.4f}",
+        f"G0 Z{SAFE_Z_MM:.3f}",
+        "M5",
+        "M30",
+        "%",
+    ]
     return "\n".join(lines) + "\n"

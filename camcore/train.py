@@ -122,6 +122,10 @@ def residual_vibration(design: Design, resp: Response) -> list[dict]:
         m = (th >= g.start) & (th < g.end)
         if m.any():
             e = resp.x[m] - resp.s[m]
-            out.append({"start_deg": math.degrees(g.start),
-                        "amplitude_mm": 0.5 * float(e.max() - e.min()) / MM})
+            out.append(
+                {
+                    "start_deg": math.degrees(g.start),
+                    "amplitude_mm": 0.5 * float(e.max() - e.min()) / MM,
+                }
+            )
     return out

@@ -67,9 +67,8 @@ def _face_full(pts, nxt, c, s, r, x_c) -> np.ndarray:
     (x, y) of the vertices and of the next vertex of each; c, s: (n, 1)."""
     out = np.empty(c.shape[0])
     for start in range(0, c.shape[0], CHUNK):
-        cc, ss = c[start:start + CHUNK], s[start:start + CHUNK]
-        out[start:start + CHUNK] = _face_max(_rotate(cc, ss, *pts), _rotate(cc, ss, *nxt),
-                                             r, x_c)
+        cc, ss = c[start : start + CHUNK], s[start : start + CHUNK]
+        out[start : start + CHUNK] = _face_max(_rotate(cc, ss, *pts), _rotate(cc, ss, *nxt), r, x_c)
     return out
 
 
@@ -146,7 +145,7 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
         p3 = (px[idx3], py[idx3])
         n3 = (nxt[0][idx3], nxt[1][idx3])
         for i in range(0, part.size, BLOCK):
-            rows = part[i:i + BLOCK]
+            rows = part[i : i + BLOCK]
             lo_r = lo[rows]
             lo_r = lo_r - 2 * math.pi * math.floor((lo_r.min() + math.pi) / (2 * math.pi))
             s0 = int(np.searchsorted(phi3, lo_r.min(), "left")) - 1
@@ -155,8 +154,12 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
                 full[rows] = True
                 continue
             cc, ss = c[rows], s[rows]
-            m = _face_max(_rotate(cc, ss, p3[0][s0:e0], p3[1][s0:e0]),
-                          _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]), r, x_c)
+            m = _face_max(
+                _rotate(cc, ss, p3[0][s0:e0], p3[1][s0:e0]),
+                _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]),
+                r,
+                x_c,
+            )
             best[rows] = np.maximum(best[rows], m)
     if full.any():
         best[full] = np.maximum(best[full], _face_full(pts, nxt, c[full], s[full], r, x_c))
@@ -200,7 +203,10 @@ def _vertex_max(P, r, x_c) -> np.ndarray:
 
 
 def follower_lift(
-    points: np.ndarray, theta: np.ndarray, faces: list[tuple[float, float]], r_b: float,
+    points: np.ndarray,
+    theta: np.ndarray,
+    faces: list[tuple[float, float]],
+    r_b: float,
     prune: bool = True,
 ) -> np.ndarray:
     """Lift [m] at which a follower with ``faces`` [(r, x_c), ...] just touches the cam.
@@ -234,8 +240,11 @@ def follower_lift(
         rho_max = float(np.hypot(*pts).max())
     best = np.full(theta.size, -np.inf)
     for r, x_c in faces:
-        face = (_face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) if prune
-                else _face_full(pts, nxt, c, s, r, x_c))
+        face = (
+            _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max)
+            if prune
+            else _face_full(pts, nxt, c, s, r, x_c)
+        )
         best = np.maximum(best, face)
     return best - rest
 

@@ -12,13 +12,25 @@ import websockets.sync.client as wsc
 
 class FakeTab:
     def __init__(self, port: int, host: str = "127.0.0.1"):
-        self.ws = wsc.connect(f"ws://{host}:{port}",
-                              subprotocols=[f"viser-v{viser.__version__}"], max_size=None)
-        self.ws.send(msgspec.msgpack.encode({
-            "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0],
-            "position": [0.0, 0.0, 1.0], "fov": 1.0, "near": 0.01, "far": 100.0,
-            "image_height": 700, "image_width": 1000, "look_at": [0.0, 0.0, 0.0],
-            "up_direction": [0.0, 1.0, 0.0]}))
+        self.ws = wsc.connect(
+            f"ws://{host}:{port}", subprotocols=[f"viser-v{viser.__version__}"], max_size=None
+        )
+        self.ws.send(
+            msgspec.msgpack.encode(
+                {
+                    "type": "ViewerCameraMessage",
+                    "wxyz": [1.0, 0.0, 0.0, 0.0],
+                    "position": [0.0, 0.0, 1.0],
+                    "fov": 1.0,
+                    "near": 0.01,
+                    "far": 100.0,
+                    "image_height": 700,
+                    "image_width": 1000,
+                    "look_at": [0.0, 0.0, 0.0],
+                    "up_direction": [0.0, 1.0, 0.0],
+                }
+            )
+        )
         self.bytes = 0
         threading.Thread(target=self._drain, daemon=True).start()
 

@@ -37,19 +37,33 @@ class ServerProcess:
     """``python -m app.main --port 0`` (or a stand-in command) with its log in a file."""
 
     def __init__(self, cmd: list[str] | None = None, ready_timeout: float = 60.0):
-        self.cmd = cmd or [sys.executable, "-u", "-m", "app.main", "--host", "127.0.0.1",
-                           "--port", "0"]
+        self.cmd = cmd or [
+            sys.executable,
+            "-u",
+            "-m",
+            "app.main",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            "0",
+        ]
         self.ready_timeout = ready_timeout
         self.log_file = tempfile.NamedTemporaryFile(  # noqa: SIM115 (closed in stop)
-            "w+", prefix="camdesigner-load-", suffix=".log", delete=False)
+            "w+", prefix="camdesigner-load-", suffix=".log", delete=False
+        )
         self.proc: subprocess.Popen | None = None
         self.port: int | None = None
 
     def start(self) -> ServerProcess:
         env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen(self.cmd, cwd=ROOT, stdout=self.log_file,
-                                     stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                     env=env)
+        self.proc = subprocess.Popen(
+            self.cmd,
+            cwd=ROOT,
+            stdout=self.log_file,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            env=env,
+        )
         deadline = time.monotonic() + self.ready_timeout
         while time.monotonic() < deadline:
             m = READY_RE.search(self.log())
@@ -115,7 +129,7 @@ class ServerProcess:
     def cpu_s(self) -> float:
         """utime + stime of the whole process [s]."""
         stat = Path(f"/proc/{self.pid}/stat").read_text()
-        fields = stat[stat.rindex(")") + 2:].split()
+        fields = stat[stat.rindex(")") + 2 :].split()
         return (int(fields[11]) + int(fields[12])) / CLK_TCK
 
 
@@ -143,8 +157,13 @@ async def open_tab(url: str, name: str = "tab", timeout: float = 30.0) -> ViserC
     """Connect and wait until the tab is fully drawn (lift control, S plot with data)."""
     c = await ViserClient(url, name).connect(timeout=timeout)
     try:
-        await c.wait_for(lambda: _plot(c) is not None and lift_shown(_plot(c)) is not None
-                         and c.find_all(label=LIFT), timeout, what="the design view")
+        await c.wait_for(
+            lambda: (
+                _plot(c) is not None and lift_shown(_plot(c)) is not None and c.find_all(label=LIFT)
+            ),
+            timeout,
+            what="the design view",
+        )
     except BaseException:
         await c.close()
         raise
@@ -240,8 +259,9 @@ class Tab:
         want = self.stats.last_sent
         if want is not None:
             try:
-                await self.c.wait_for(lambda: lift_shown(self.plot) == want, timeout,
-                                      what=f"lift {want} on screen")
+                await self.c.wait_for(
+                    lambda: lift_shown(self.plot) == want, timeout, what=f"lift {want} on screen"
+                )
             except TimeoutError:
                 pass
         self.stats.final_shown = lift_shown(self.plot)
@@ -279,11 +299,16 @@ class LoadResult:
         lat = self.latencies_ms
         q = _quantiles(lat)
         return {
-            "clients": self.n_clients, "duration_s": self.duration, "rate_hz": self.rate_hz,
-            "sent": self.sent, "sent_per_s": self.sent / self.duration,
-            "redraws_seen": self.shown, "redraws_per_s": self.shown / self.duration,
+            "clients": self.n_clients,
+            "duration_s": self.duration,
+            "rate_hz": self.rate_hz,
+            "sent": self.sent,
+            "sent_per_s": self.sent / self.duration,
+            "redraws_seen": self.shown,
+            "redraws_per_s": self.shown / self.duration,
             "plot_updates_per_s": sum(t.plot_updates for t in self.tabs) / self.duration,
-            "latency_ms": q, "n_latency": len(lat),
+            "latency_ms": q,
+            "n_latency": len(lat),
             "probe_s": [round(p, 3) for p in self.probe_s],
             "foreign": sum(len(t.foreign) for t in self.tabs),
             "errors": self.errors,
@@ -292,15 +317,24 @@ class LoadResult:
 
 def _quantiles(xs: list[float]) -> dict:
     if not xs:
-        return {"median": float("nan"), "p10": float("nan"), "p90": float("nan"),
-                "max": float("nan")}
+        return {
+            "median": float("nan"),
+            "p10": float("nan"),
+            "p90": float("nan"),
+            "max": float("nan"),
+        }
     a = np.asarray(xs)
-    return {"median": float(np.median(a)), "p10": float(np.percentile(a, 10)),
-            "p90": float(np.percentile(a, 90)), "max": float(a.max())}
+    return {
+        "median": float(np.median(a)),
+        "p10": float(np.percentile(a, 10)),
+        "p90": float(np.percentile(a, 90)),
+        "max": float(a.max()),
+    }
 
 
-async def run_load(url: str, n_clients: int, duration: float, rate_hz: float,
-                   seed: int = 0, probe: bool = True) -> LoadResult:
+async def run_load(
+    url: str, n_clients: int, duration: float, rate_hz: float, seed: int = 0, probe: bool = True
+) -> LoadResult:
     """``n_clients`` tabs drag their own lift values at ``rate_hz`` for ``duration`` s."""
     t0 = time.perf_counter()
     rng = random.Random(seed)
@@ -333,8 +367,15 @@ async def run_load(url: str, n_clients: int, duration: float, rate_hz: float,
                 errors.append(f"{c.name}: {c.closed_reason}")
     finally:
         await asyncio.gather(*(c.close() for c in clients), return_exceptions=True)
-    return LoadResult(n_clients, duration, rate_hz, [t.stats for t in tabs], probes,
-                      time.perf_counter() - t0, errors)
+    return LoadResult(
+        n_clients,
+        duration,
+        rate_hz,
+        [t.stats for t in tabs],
+        probes,
+        time.perf_counter() - t0,
+        errors,
+    )
 
 
 async def round_trips(url: str, n: int = 30, seed: int = 1) -> list[float]:
@@ -357,8 +398,9 @@ async def round_trips(url: str, n: int = 30, seed: int = 1) -> list[float]:
         await c.close()
 
 
-async def connect_disconnect(url: str, sessions: int, polite_every: int = 2,
-                             time_limit: float = 300.0) -> dict:
+async def connect_disconnect(
+    url: str, sessions: int, polite_every: int = 2, time_limit: float = 300.0
+) -> dict:
     """Open and close ``sessions`` tabs one after the other (bounded by ``time_limit``).
 
     Every ``polite_every``-th tab waits for the full view before closing; the others
@@ -384,5 +426,8 @@ async def connect_disconnect(url: str, sessions: int, polite_every: int = 2,
                     aborted += 1
                 await c.close()
         done += 1
-    return {"sessions": done, "aborted": aborted,
-            "open_median_s": statistics.median(t_open) if t_open else float("nan")}
+    return {
+        "sessions": done,
+        "aborted": aborted,
+        "open_median_s": statistics.median(t_open) if t_open else float("nan"),
+    }

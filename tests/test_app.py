@@ -130,13 +130,16 @@ def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     assert s.ui.controls["follower.kind"].value == other.follower.kind.value
 
 
-@pytest.mark.parametrize("name, content, message", [
-    ("huge.json", b'{"name": "' + b"x" * 30_000_000 + b'"}', "the limit is"),
-    ("deep.json", b"[" * 100_000 + b"]" * 100_000, "not a JSON document"),
-    ("photo.png", bytes(range(256)) * 64, "not a JSON document"),
-    ("future.json", b'{"schema_version": 7}', "written by a newer program"),
-    ("list.json", b"[1, 2]", "a design is a JSON object"),
-])
+@pytest.mark.parametrize(
+    "name, content, message",
+    [
+        ("huge.json", b'{"name": "' + b"x" * 30_000_000 + b'"}', "the limit is"),
+        ("deep.json", b"[" * 100_000 + b"]" * 100_000, "not a JSON document"),
+        ("photo.png", bytes(range(256)) * 64, "not a JSON document"),
+        ("future.json", b'{"schema_version": 7}', "written by a newer program"),
+        ("list.json", b"[1, 2]", "a design is a JSON object"),
+    ],
+)
 def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content, message):
     s = tab
     good = s.design
@@ -163,8 +166,12 @@ def test_preset_and_downloads(tab, downloads):
     assert downloads[-1] == (name, data)
     s.ui.download_btns["json"].value = True
     assert downloads[-1][1].decode().startswith("{")
-    for kind, ext in (("dxf", ".dxf"), ("csv", "_profile.csv"), ("series", "_series.csv"),
-                      ("toolpath", ".nc")):
+    for kind, ext in (
+        ("dxf", ".dxf"),
+        ("csv", "_profile.csv"),
+        ("series", "_series.csv"),
+        ("toolpath", ".nc"),
+    ):
         s.ui.download_btns[kind].value = True
         assert downloads[-1][0].endswith(ext) and len(downloads[-1][1]) > 1000
 
@@ -311,18 +318,29 @@ def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
     button = s.ui.upload_btn._impl.uuid
     cid = s.client.client_id
     big = _messages.FileTransferStartUpload(
-        source_component_uuid=button, transfer_uuid="t-big", filename="<i>big</i>.json",
-        mime_type="application/json", part_count=50, size_bytes=45_000_000)
+        source_component_uuid=button,
+        transfer_uuid="t-big",
+        filename="<i>big</i>.json",
+        mime_type="application/json",
+        part_count=50,
+        size_bytes=45_000_000,
+    )
     gui_api._handle_file_transfer_start(cid, big)
     assert "t-big" not in gui_api._current_file_upload_states
     assert "refused" in s.ui.files_md.content and "<i>" not in s.ui.files_md.content
     liar = _messages.FileTransferStartUpload(
-        source_component_uuid=button, transfer_uuid="t-liar", filename="liar.json",
-        mime_type="application/json", part_count=3, size_bytes=10)
+        source_component_uuid=button,
+        transfer_uuid="t-liar",
+        filename="liar.json",
+        mime_type="application/json",
+        part_count=3,
+        size_bytes=10,
+    )
     gui_api._handle_file_transfer_start(cid, liar)
     assert "t-liar" in gui_api._current_file_upload_states
-    part = _messages.FileTransferPart(source_component_uuid=button, transfer_uuid="t-liar",
-                                      part_index=0, content=b"x" * 600_000)
+    part = _messages.FileTransferPart(
+        source_component_uuid=button, transfer_uuid="t-liar", part_index=0, content=b"x" * 600_000
+    )
     gui_api._handle_file_transfer_part(cid, part)
     assert "t-liar" not in gui_api._current_file_upload_states  # dropped, not buffered
     assert uploads.MAX_UPLOAD_BYTES == 1_000_000
@@ -370,8 +388,12 @@ def test_busy_port_is_an_error_that_says_so():
         sock.bind(("127.0.0.1", 0))
         sock.listen()
         port = sock.getsockname()[1]
-        proc = subprocess.run([sys.executable, "-m", "app.main", "--port", str(port)],
-                              capture_output=True, text=True, timeout=60)
+        proc = subprocess.run(
+            [sys.executable, "-m", "app.main", "--port", str(port)],
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
     assert proc.returncode == 2 and f"port {port}" in proc.stderr and "busy" in proc.stderr
 
 

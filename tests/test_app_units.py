@@ -45,11 +45,12 @@ def test_status_panel_states():
 
 
 def test_segment_sums_flag_a_program_that_does_not_close():
-    good = [{"kind": "rise", "angle_deg": 180, "lift_mm": 5}, {"kind": "fall",
-            "angle_deg": 180, "lift_mm": 5}]
+    good = [
+        {"kind": "rise", "angle_deg": 180, "lift_mm": 5},
+        {"kind": "fall", "angle_deg": 180, "lift_mm": 5},
+    ]
     assert "⚠" not in panels.segment_sums_markdown(good)
-    assert "**340°**" in panels.segment_sums_markdown(
-        [dict(good[0], angle_deg=160), good[1]])
+    assert "**340°**" in panels.segment_sums_markdown([dict(good[0], angle_deg=160), good[1]])
     assert "**1 mm**" in panels.segment_sums_markdown([dict(good[0], lift_mm=6), good[1]])
 
 

@@ -10,9 +10,18 @@ import numpy as np
 import pytest
 
 CHROMIUM = "/usr/bin/chromium"
-FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-         "--disable-background-networking", "--disable-component-update", "--disable-sync",
-         "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--use-angle=swiftshader",
+    "--enable-unsafe-swiftshader",
+]
 T = 90_000  # ms: software rendering on 2 cores
 
 
@@ -38,8 +47,7 @@ def test_app_in_headless_chromium(tmp_path):
     try:
         with sync_playwright() as p:
             browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
-            page = browser.new_page(viewport={"width": 1000, "height": 700},
-                                    accept_downloads=True)
+            page = browser.new_page(viewport={"width": 1000, "height": 700}, accept_downloads=True)
             page.set_default_timeout(T)
             page.goto(f"http://127.0.0.1:{app.port}/")
             # the session is built and its panels reached the page
@@ -54,15 +62,21 @@ def test_app_in_headless_chromium(tmp_path):
             page.wait_for_timeout(3000)
             box = canvas.bounding_box()
             assert box and box["width"] > 200
-            shot = page.screenshot(clip={"x": box["x"], "y": box["y"],
-                                         "width": min(box["width"], 560),
-                                         "height": box["height"]})
+            shot = page.screenshot(
+                clip={
+                    "x": box["x"],
+                    "y": box["y"],
+                    "width": min(box["width"], 560),
+                    "height": box["height"],
+                }
+            )
             assert drawn_fraction(shot) > 0.02
 
             # change a control: follower kind -> single roller, and see the change
             kind_input = page.evaluate_handle(
                 "() => [...document.querySelectorAll('input')]"
-                ".find(e => e.value === 'double_concave')").as_element()
+                ".find(e => e.value === 'double_concave')"
+            ).as_element()
             assert kind_input is not None
             kind_input.click()
             page.get_by_role("option", name="single_roller").click()
@@ -115,9 +129,13 @@ def test_trust_in_the_browser(tmp_path):
             page.goto(f"http://127.0.0.1:{app.port}/")
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("tab", name="Files").click()
-            page.locator("input[type=file]").first.set_input_files({
-                "name": "<i id=inj2>evil</i>.json", "mimeType": "application/json",
-                "buffer": json.dumps(design).encode()})
+            page.locator("input[type=file]").first.set_input_files(
+                {
+                    "name": "<i id=inj2>evil</i>.json",
+                    "mimeType": "application/json",
+                    "buffer": json.dumps(design).encode(),
+                }
+            )
             page.get_by_text("<b id=inj>x</b> & co").first.wait_for()  # shown as text
             assert page.locator("#inj").count() == 0 and page.locator("#inj2").count() == 0
             page.get_by_text("<i id=inj2>evil</i>.json").first.wait_for()
@@ -130,7 +148,8 @@ def test_trust_in_the_browser(tmp_path):
             # the storage write is its own message: wait until the browser applied it
             page.wait_for_function(
                 "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.saved')"
-                " && localStorage.getItem(k).includes('my cam'))")
+                " && localStorage.getItem(k).includes('my cam'))"
+            )
             page.reload()
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("tab", name="Files").click()

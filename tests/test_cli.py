@@ -15,9 +15,20 @@ from camcore.cli import main
 from camcore.model import PAPER_FOLLOWERS, FollowerKind, load_preset, preset_names
 
 KEYS = {
-    "follower", "valid", "violations", "dwell_radius_mm", "psi_h_deg", "psi_l_deg",
-    "stations_deg", "pressure_angle_max_deg", "curvature_radius_mm", "contact_force_max_N",
-    "guide_force_max_N", "contact_stress_max_MPa", "profile", "verification",
+    "follower",
+    "valid",
+    "violations",
+    "dwell_radius_mm",
+    "psi_h_deg",
+    "psi_l_deg",
+    "stations_deg",
+    "pressure_angle_max_deg",
+    "curvature_radius_mm",
+    "contact_force_max_N",
+    "guide_force_max_N",
+    "contact_stress_max_MPa",
+    "profile",
+    "verification",
 }
 
 
@@ -74,8 +85,15 @@ def test_compare_table(capsys):
     assert [r["follower"] for r in rows] == [k.value for k in PAPER_FOLLOWERS]
     assert main(["compare", "--preset", "paper_example"]) == 0
     assert "Table 1" in capsys.readouterr().out
-    rows = run_json(capsys, "compare", "--preset", "paper_example", "--json",
-                    "--followers", "flat_face,single_roller,knife_edge")
+    rows = run_json(
+        capsys,
+        "compare",
+        "--preset",
+        "paper_example",
+        "--json",
+        "--followers",
+        "flat_face,single_roller,knife_edge",
+    )
     assert [r["follower"] for r in rows] == ["flat_face", "single_roller", "knife_edge"]
     assert rows[0]["paper_table1_N"] is None and rows[1]["paper_table1_N"] == 133.496
     assert rows[2]["stress_max_MPa"] is None  # a knife edge has no Hertz stress
@@ -84,9 +102,24 @@ def test_compare_table(capsys):
 
 def test_export_files(tmp_path, capsys):
     out = {ext: tmp_path / f"cam.{ext}" for ext in ("stl", "dxf", "csv", "json")}
-    assert main(["export", "--preset", "paper_example", "--stl", str(out["stl"]),
-                 "--dxf", str(out["dxf"]), "--csv", str(out["csv"]),
-                 "--json", str(out["json"])]) == 0
+    assert (
+        main(
+            [
+                "export",
+                "--preset",
+                "paper_example",
+                "--stl",
+                str(out["stl"]),
+                "--dxf",
+                str(out["dxf"]),
+                "--csv",
+                str(out["csv"]),
+                "--json",
+                str(out["json"]),
+            ]
+        )
+        == 0
+    )
     assert capsys.readouterr().err.count("wrote") == 4
     s = run_json(capsys, "report", "--preset", "paper_example", "--json")
     mesh = trimesh.load(out["stl"], file_type="stl")
@@ -105,15 +138,19 @@ def test_export_files(tmp_path, capsys):
     assert design_from_json(out["json"].read_text()) == load_preset("paper_example")
 
 
-@pytest.mark.parametrize("args, message", [
-    (["report", "/no/such/file.json"], "cannot read"),
-    (["report"], "give a design file or --preset"),
-    (["report", "--preset", "nope"], "no preset 'nope'"),
-    (["export", "--preset", "paper_example"], "nothing to export"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["report", "/no/such/file.json"], "cannot read"),
+        (["report"], "give a design file or --preset"),
+        (["report", "--preset", "nope"], "no preset 'nope'"),
+        (["export", "--preset", "paper_example"], "nothing to export"),
+    ],
+)
 def test_errors_are_one_line(args, message):
-    proc = subprocess.run([sys.executable, "-m", "camcore.cli", *args],
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", *args], capture_output=True, text=True
+    )
     assert proc.returncode == 2
     assert message in proc.stderr and "Traceback" not in proc.stderr
     assert len(proc.stderr.strip().splitlines()) == 1
@@ -124,8 +161,9 @@ def test_invalid_value_names_field(tmp_path):
     d["cam"]["base_radius_mm"] = -5
     p = tmp_path / "bad.json"
     p.write_text(json.dumps(d))
-    proc = subprocess.run([sys.executable, "-m", "camcore.cli", "report", str(p)],
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "report", str(p)], capture_output=True, text=True
+    )
     assert proc.returncode == 2 and "cam.base_radius_mm" in proc.stderr
     assert "Traceback" not in proc.stderr
 

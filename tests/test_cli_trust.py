@@ -19,8 +19,12 @@ BREAKS = ["--set", "motion.high_dwell_deg=10"]  # below 4 psi_h: Eq. 28 fails
 
 
 def run(*args, timeout=60):
-    return subprocess.run([sys.executable, "-m", "camcore.cli", *args], capture_output=True,
-                          text=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "camcore.cli", *args],
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+    )
 
 
 # --- reading ----------------------------------------------------------------------------
@@ -74,8 +78,15 @@ def test_disk_full_through_the_cli(tmp_path, monkeypatch, capsys):
 
 def test_same_output_twice_is_refused(tmp_path):
     out = tmp_path / "cam.out"
-    proc = run("export", "--preset", "paper_example", "--stl", str(out), "--dxf",
-               str(tmp_path / "." / "cam.out"))
+    proc = run(
+        "export",
+        "--preset",
+        "paper_example",
+        "--stl",
+        str(out),
+        "--dxf",
+        str(tmp_path / "." / "cam.out"),
+    )
     assert proc.returncode == 2 and "same file" in proc.stderr and not out.exists()
 
 
@@ -117,22 +128,49 @@ def test_version():
 
 
 def test_set_overrides_fields(capsys):
-    assert cli.main(["report", "--preset", "paper_example", "--json", "--set",
-                     "cam.base_radius_mm=90", "--set", "follower.kind=double_roller"]) == 0
+    assert (
+        cli.main(
+            [
+                "report",
+                "--preset",
+                "paper_example",
+                "--json",
+                "--set",
+                "cam.base_radius_mm=90",
+                "--set",
+                "follower.kind=double_roller",
+            ]
+        )
+        == 0
+    )
     s = json.loads(capsys.readouterr().out)
     assert s["follower"] == "double_roller"
-    assert s["dwell_radius_mm"] == pytest.approx(json.loads(
-        run("report", "--preset", "paper_example", "--json", "--follower", "double_roller",
-            "--set", "cam.base_radius_mm=90").stdout)["dwell_radius_mm"])
+    assert s["dwell_radius_mm"] == pytest.approx(
+        json.loads(
+            run(
+                "report",
+                "--preset",
+                "paper_example",
+                "--json",
+                "--follower",
+                "double_roller",
+                "--set",
+                "cam.base_radius_mm=90",
+            ).stdout
+        )["dwell_radius_mm"]
+    )
 
 
-@pytest.mark.parametrize("assignment, message", [
-    ("cam.base_radius=90", "no such field"),
-    ("cam.base_radius_mm=true", "cam.base_radius_mm"),
-    ('cam.base_radius_mm="90"', "cam.base_radius_mm"),
-    ("cam.base_radius_mm.x=1", "not a group"),
-    ("nonsense", "FIELD.PATH=VALUE"),
-])
+@pytest.mark.parametrize(
+    "assignment, message",
+    [
+        ("cam.base_radius=90", "no such field"),
+        ("cam.base_radius_mm=true", "cam.base_radius_mm"),
+        ('cam.base_radius_mm="90"', "cam.base_radius_mm"),
+        ("cam.base_radius_mm.x=1", "not a group"),
+        ("nonsense", "FIELD.PATH=VALUE"),
+    ],
+)
 def test_set_errors_name_the_field(assignment, message):
     proc = run("report", "--preset", "paper_example", "--set", assignment)
     assert proc.returncode == 2 and message in proc.stderr, proc.stderr
@@ -160,14 +198,20 @@ def _paper() -> dict:
     return json.loads(res("camcore.presets").joinpath("paper_example.json").read_text())
 
 
-@pytest.mark.parametrize("edit, field", [
-    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": 15.0, "lift_mm": 99'), "motion.lift_mm"),
-    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": true'), "motion.lift_mm"),
-    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": "15"'), "motion.lift_mm"),
-    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": NaN'), "motion.lift_mm"),
-    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": -Infinity'), "motion.lift_mm"),
-    (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": [[[[[[[[[1]]]]]]]]]'), "nested deeper"),
-])
+@pytest.mark.parametrize(
+    "edit, field",
+    [
+        (
+            lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": 15.0, "lift_mm": 99'),
+            "motion.lift_mm",
+        ),
+        (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": true'), "motion.lift_mm"),
+        (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": "15"'), "motion.lift_mm"),
+        (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": NaN'), "motion.lift_mm"),
+        (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": -Infinity'), "motion.lift_mm"),
+        (lambda t: t.replace('"lift_mm": 15.0', '"lift_mm": [[[[[[[[[1]]]]]]]]]'), "nested deeper"),
+    ],
+)
 def test_loose_json_is_refused_naming_the_field(edit, field):
     text = edit(json.dumps(_paper()))
     with pytest.raises(DesignError, match=field.replace(".", r"(\.|: )")):
@@ -183,8 +227,10 @@ def test_integers_still_count_as_numbers():
 # --- presets by name --------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("name", ["../../x", "/tmp/x", "paper_example.json", "..",
-                                  "paper_example/../paper_example", "", "\x00"])
+@pytest.mark.parametrize(
+    "name",
+    ["../../x", "/tmp/x", "paper_example.json", "..", "paper_example/../paper_example", "", "\x00"],
+)
 def test_preset_names_are_a_fixed_set(name, tmp_path):
     (tmp_path / "x.json").write_text(json.dumps(_paper()))
     with pytest.raises(DesignError, match="no preset"):
@@ -207,8 +253,10 @@ def test_concurrent_reads_do_not_interfere(tmp_path):
         p.write_bytes(bytes([65 + i]) * (1000 + i))
         paths.append(p)
     got = {}
-    threads = [threading.Thread(target=lambda p=p: got.__setitem__(p, files.read_capped(p, 2000)))
-               for p in paths]
+    threads = [
+        threading.Thread(target=lambda p=p: got.__setitem__(p, files.read_capped(p, 2000)))
+        for p in paths
+    ]
     for t in threads:
         t.start()
     for t in threads:

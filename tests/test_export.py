@@ -50,8 +50,9 @@ def test_bore_larger_than_base_circle_is_rejected():
 
 @settings(max_examples=25, deadline=None, derandomize=True)
 @given(
-    preset=st.sampled_from(["paper_example", "indexer_345", "valve_lift_roller",
-                            "classroom_harmonic"]),
+    preset=st.sampled_from(
+        ["paper_example", "indexer_345", "valve_lift_roller", "classroom_harmonic"]
+    ),
     fraction=st.floats(min_value=0.0, max_value=0.999),
 )
 def test_any_bore_inside_the_base_circle_exports_a_solid(preset, fraction):
@@ -132,12 +133,15 @@ def test_keyway_in_dxf_and_datum_layers():
     assert datum.dxf.end[1] == pytest.approx(top, abs=0.5)
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"keyway_width_mm": 8.0}, "give both"),
-    ({"keyway_width_mm": 8.0, "keyway_depth_mm": 3.0, "bore_diameter_mm": 0.0}, "needs a bore"),
-    ({"keyway_width_mm": 29.0, "keyway_depth_mm": 3.0}, "0.9 x the bore"),
-    ({"keyway_width_mm": 8.0, "keyway_depth_mm": 70.0}, "past the base radius"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"keyway_width_mm": 8.0}, "give both"),
+        ({"keyway_width_mm": 8.0, "keyway_depth_mm": 3.0, "bore_diameter_mm": 0.0}, "needs a bore"),
+        ({"keyway_width_mm": 29.0, "keyway_depth_mm": 3.0}, "0.9 x the bore"),
+        ({"keyway_width_mm": 8.0, "keyway_depth_mm": 70.0}, "past the base radius"),
+    ],
+)
 def test_keyway_limits(change, message):
     data = with_bore(30.0).model_dump()
     data["cam"].update(change)

@@ -53,8 +53,10 @@ BAD_FILES: dict[str, tuple[bytes, tuple[str, ...]]] = {
     "string": (b'"a design"', ("JSON object",)),
     "number": (b"42", ("JSON object",)),
     "null": (b"null", ("JSON object",)),
-    "binary_random": (bytes(np.random.default_rng(4).integers(0, 256, 4096, dtype=np.uint8)),
-                      ("JSON",)),
+    "binary_random": (
+        bytes(np.random.default_rng(4).integers(0, 256, 4096, dtype=np.uint8)),
+        ("JSON",),
+    ),
     "binary_png": (b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + b"\x00" * 64, ("JSON",)),
     "utf16_bom": (design_to_json(Design()).encode("utf-16"), ()),  # decodes or says why
     "latin1": ('{"name": "caf\xe9"}'.encode("latin-1"), ("JSON",)),
@@ -62,26 +64,34 @@ BAD_FILES: dict[str, tuple[bytes, tuple[str, ...]]] = {
     "deep_object": (b'{"a":' * 100_000 + b"1" + b"}" * 100_000, ("JSON",)),
     "deep_in_field": (('{"name": ' + "[" * 500 + "]" * 500 + "}").encode(), ("name",)),
     "nan": (_doc(motion={"lift_mm": "NaN"}).replace('"NaN"', "NaN").encode(), ("lift_mm",)),
-    "infinity": (_doc(cam={"base_radius_mm": 1}).replace(": 1}", ": Infinity}").encode(),
-                 ("base_radius_mm",)),
-    "overflow": (_doc(cam={"base_radius_mm": 1}).replace(": 1}", ": 1e999}").encode(),
-                 ("base_radius_mm",)),
-    "huge_int": (_doc(cam={"base_radius_mm": 1}).replace(": 1}", ": 1" + "0" * 5000 + "}")
-                 .encode(), ("JSON",)),
+    "infinity": (
+        _doc(cam={"base_radius_mm": 1}).replace(": 1}", ": Infinity}").encode(),
+        ("base_radius_mm",),
+    ),
+    "overflow": (
+        _doc(cam={"base_radius_mm": 1}).replace(": 1}", ": 1e999}").encode(),
+        ("base_radius_mm",),
+    ),
+    "huge_int": (
+        _doc(cam={"base_radius_mm": 1}).replace(": 1}", ": 1" + "0" * 5000 + "}").encode(),
+        ("JSON",),
+    ),
     "string_number": (_doc(motion={"lift_mm": "fifteen"}).encode(), ("motion.lift_mm",)),
     "negative": (_doc(cam={"base_radius_mm": -80}).encode(), ("cam.base_radius_mm",)),
     "zero_radius": (_doc(cam={"base_radius_mm": 0}).encode(), ("cam.base_radius_mm",)),
-    "subnormal_radius": (_doc(cam={"base_radius_mm": 5e-324}).encode(),
-                         ("cam.base_radius_mm",)),
-    "extra_field": (_doc(cam={"base_radius_mm": 80, "colour": "red"}).encode(),
-                    ("cam.colour", "Extra")),
+    "subnormal_radius": (_doc(cam={"base_radius_mm": 5e-324}).encode(), ("cam.base_radius_mm",)),
+    "extra_field": (
+        _doc(cam={"base_radius_mm": 80, "colour": "red"}).encode(),
+        ("cam.colour", "Extra"),
+    ),
     "extra_part": (_doc(gearbox={}).encode(), ("gearbox",)),
     "wrong_part_type": (_doc(motion=[1, 2]).encode(), ("motion",)),
     "bad_kind": (_doc(follower={"kind": "flat_faced"}).encode(), ("follower.kind",)),
-    "dwell_overflow": (_doc(motion={"rise_deg": 200, "fall_deg": 200}).encode(),
-                       ("360",)),
-    "offset_at_limit": (_doc(follower={"kind": "double_roller", "roller_radius_mm": 10,
-                                       "offset_mm": 90}).encode(), ("follower.offset_mm",)),
+    "dwell_overflow": (_doc(motion={"rise_deg": 200, "fall_deg": 200}).encode(), ("360",)),
+    "offset_at_limit": (
+        _doc(follower={"kind": "double_roller", "roller_radius_mm": 10, "offset_mm": 90}).encode(),
+        ("follower.offset_mm",),
+    ),
     "schema_3": (_doc(schema_version=3).encode(), ("schema_version", "3")),
     "schema_0_older": (_doc(schema_version=0).encode(), ("schema_version", "0")),
     "schema_string": (_doc(schema_version="1.0").encode(), ("schema_version",)),
@@ -165,10 +175,14 @@ def test_subprocess_binary_file_no_traceback(tmp_path):
     """The real entry point, as a user runs it."""
     p = tmp_path / "cam.stl"
     p.write_bytes(BAD_FILES["binary_random"][0])
-    for args in (["report", str(p)], ["compare", str(p)],
-                 ["export", str(p), "--stl", str(tmp_path / "o.stl")]):
-        r = subprocess.run([sys.executable, "-m", "camcore.cli", *args],
-                           capture_output=True, text=True, timeout=60)
+    for args in (
+        ["report", str(p)],
+        ["compare", str(p)],
+        ["export", str(p), "--stl", str(tmp_path / "o.stl")],
+    ):
+        r = subprocess.run(
+            [sys.executable, "-m", "camcore.cli", *args], capture_output=True, text=True, timeout=60
+        )
         assert r.returncode == 2, r
         assert "Traceback" not in r.stderr
         assert r.stderr.startswith("camcore: error: ") and r.stderr.count("\n") == 1
@@ -187,33 +201,57 @@ def test_older_schema_version_says_why(tmp_path):
 
 # --- exports of extreme but valid designs ------------------------------------------------
 
+
 def _extreme_designs():
     """Tiny and huge cams, each follower kind and each law (pairs rotated so every law
     meets every kind on some size)."""
     laws = list(MotionLaw)
     for (i, kind), (scale, res) in itertools.product(
-            enumerate(FollowerKind), [(0.001, 1.0), (1.0, 0.5), (100.0, 1.0)]):
+        enumerate(FollowerKind), [(0.001, 1.0), (1.0, 0.5), (100.0, 1.0)]
+    ):
         rb = 80.0 * scale
         law = laws[(i + int(np.log10(scale))) % len(laws)]
         fall = laws[(i + 3) % len(laws)]
-        yield f"{kind.value}-{law.value}-{fall.value}-rb{rb:g}", {
-            "follower": {"kind": kind.value, "roller_radius_mm": min(8.0 * scale, 1000),
-                         "face_radius_mm": max(-250.0 * scale, -1e5),
-                         "offset_mm": min(10.0 * scale, 1000)},
-            "motion": {"lift_mm": min(15.0 * scale, 1000), "rise_law": law.value,
-                       "fall_law": fall.value},
-            "cam": {"base_radius_mm": rb, "width_mm": 15.0 * scale},
-            "limits": {"resolution_deg": res},
-        }
-    yield "lowest_dwell_edges", {
-        "motion": {"rise_deg": 179.99, "high_dwell_deg": 0.0, "fall_deg": 180.0,
-                   "lift_mm": 5.0},
-        "follower": {"kind": "single_roller"}, "limits": {"resolution_deg": 0.5}}
-    yield "min_lengths", {
-        "cam": {"base_radius_mm": 0.001, "width_mm": 0.001},
-        "motion": {"lift_mm": 0.001},
-        "follower": {"kind": "single_roller", "roller_radius_mm": 0.001},
-        "limits": {"resolution_deg": 1.0}}
+        yield (
+            f"{kind.value}-{law.value}-{fall.value}-rb{rb:g}",
+            {
+                "follower": {
+                    "kind": kind.value,
+                    "roller_radius_mm": min(8.0 * scale, 1000),
+                    "face_radius_mm": max(-250.0 * scale, -1e5),
+                    "offset_mm": min(10.0 * scale, 1000),
+                },
+                "motion": {
+                    "lift_mm": min(15.0 * scale, 1000),
+                    "rise_law": law.value,
+                    "fall_law": fall.value,
+                },
+                "cam": {"base_radius_mm": rb, "width_mm": 15.0 * scale},
+                "limits": {"resolution_deg": res},
+            },
+        )
+    yield (
+        "lowest_dwell_edges",
+        {
+            "motion": {
+                "rise_deg": 179.99,
+                "high_dwell_deg": 0.0,
+                "fall_deg": 180.0,
+                "lift_mm": 5.0,
+            },
+            "follower": {"kind": "single_roller"},
+            "limits": {"resolution_deg": 0.5},
+        },
+    )
+    yield (
+        "min_lengths",
+        {
+            "cam": {"base_radius_mm": 0.001, "width_mm": 0.001},
+            "motion": {"lift_mm": 0.001},
+            "follower": {"kind": "single_roller", "roller_radius_mm": 0.001},
+            "limits": {"resolution_deg": 1.0},
+        },
+    )
 
 
 EXTREME = dict(_extreme_designs())
@@ -246,8 +284,9 @@ def test_extreme_exports_watertight_stl_and_readable_dxf(name):
     assert len(polys) == 1 and polys[0].closed
     pts = np.array([p[:2] for p in polys[0].get_points()])
     assert pts.shape == a.profile.points.shape
-    np.testing.assert_allclose(pts, a.profile.points * 1e3, rtol=1e-9,
-                               atol=1e-9 * max(1.0, np.abs(pts).max()))
+    np.testing.assert_allclose(
+        pts, a.profile.points * 1e3, rtol=1e-9, atol=1e-9 * max(1.0, np.abs(pts).max())
+    )
     auditor = doc.audit()
     assert not auditor.has_errors, [str(e) for e in auditor.errors]
 

@@ -98,8 +98,15 @@ def test_flat_face_cusp_is_a_violation():
 # --- offset single followers ----------------------------------------------------------------
 
 
-@pytest.mark.parametrize("kind, e_s", [("single_roller", 20.0), ("single_roller", -12.0),
-                                       ("single_concave", 30.0), ("knife_edge", 15.0)])
+@pytest.mark.parametrize(
+    "kind, e_s",
+    [
+        ("single_roller", 20.0),
+        ("single_roller", -12.0),
+        ("single_concave", 30.0),
+        ("knife_edge", 15.0),
+    ],
+)
 def test_offset_single_follower_pressure_angle_from_the_made_cam(kind, e_s):
     """The pressure angle measured on the finished polyline: at each cam angle take the
     exported profile near the contact point, its tangent by a chord through the two

@@ -17,21 +17,25 @@ MU, D, L2, L10 = 0.1, 0.008, 0.080, 0.030
 
 def paper_rise_mode_a(Ft, phi, e, rf, l1):
     """Eqs. 33-35 exactly as printed (double concave face, rise, Fig. 6(a))."""
-    A = np.array([
-        [-1.0, 1.0, -math.sin(phi)],
-        [-MU, -MU, math.cos(phi)],
-        [(l1 - rf) + MU * (e - D / 2), -(l1 + L2 - rf) + MU * (e + D / 2), 0.0],
-    ])
+    A = np.array(
+        [
+            [-1.0, 1.0, -math.sin(phi)],
+            [-MU, -MU, math.cos(phi)],
+            [(l1 - rf) + MU * (e - D / 2), -(l1 + L2 - rf) + MU * (e + D / 2), 0.0],
+        ]
+    )
     return np.linalg.solve(A, [0.0, Ft, -Ft * e])
 
 
 def paper_fall_mode_a(Ft, phi, e, rf, l1):
     """Eqs. 39-41 exactly as printed (fall, Fig. 6(a))."""
-    A = np.array([
-        [-1.0, 1.0, math.sin(phi)],
-        [MU, MU, math.cos(phi)],
-        [(l1 - rf) + MU * (e + D / 2), -(l1 + L2 - rf) + MU * (e - D / 2), 0.0],
-    ])
+    A = np.array(
+        [
+            [-1.0, 1.0, math.sin(phi)],
+            [MU, MU, math.cos(phi)],
+            [(l1 - rf) + MU * (e + D / 2), -(l1 + L2 - rf) + MU * (e - D / 2), 0.0],
+        ]
+    )
     return np.linalg.solve(A, [0.0, Ft, Ft * e])
 
 
@@ -55,8 +59,15 @@ def test_mode_a_matches_printed_equations(segment):
     idx = np.flatnonzero((a.prog.segment == segment) & (a.prog.V != 0))[::40]
     l1 = L10 - a.prog.S[idx]
     ours = forces._solve_mode(
-        1.0, -1.0, MU * np.sign(a.prog.V[idx]), a.normal[face, idx], a.Ft[idx],
-        a.geo.faces[face].x_c, l1 - rf, l1 + L2 - rf, D,
+        1.0,
+        -1.0,
+        MU * np.sign(a.prog.V[idx]),
+        a.normal[face, idx],
+        a.Ft[idx],
+        a.geo.faces[face].x_c,
+        l1 - rf,
+        l1 + L2 - rf,
+        D,
     )
     solve = paper_rise_mode_a if segment == RISE else paper_fall_mode_a
     for j, k in enumerate(idx):
@@ -74,8 +85,17 @@ def test_first_valid_mode_is_chosen():
         f = 0 if a.in_contact[0, k] else 1
         l1 = L10 - a.prog.S[k]
         sols = [
-            forces._solve_mode(s1, s2, MU * np.sign(a.prog.V[k:k + 1]), a.normal[f, k:k + 1],
-                               a.Ft[k:k + 1], a.geo.faces[f].x_c, l1 + 0.25, l1 + L2 + 0.25, D)
+            forces._solve_mode(
+                s1,
+                s2,
+                MU * np.sign(a.prog.V[k : k + 1]),
+                a.normal[f, k : k + 1],
+                a.Ft[k : k + 1],
+                a.geo.faces[f].x_c,
+                l1 + 0.25,
+                l1 + L2 + 0.25,
+                D,
+            )
             for s1, s2 in forces.MODES
         ]
         ok = [s[0, 0] >= 0 and s[1, 0] >= 0 for s in sols]
@@ -90,11 +110,16 @@ def _offset(design, e_s_mm: float):
     return type(design).model_validate(data)
 
 
-@pytest.mark.parametrize("kind, e_s", [*((k, 0.0) for k in FollowerKind),
-                                       (FollowerKind.single_roller, 20.0),
-                                       (FollowerKind.single_concave, -15.0),
-                                       (FollowerKind.flat_face, 12.0),
-                                       (FollowerKind.knife_edge, 25.0)])
+@pytest.mark.parametrize(
+    "kind, e_s",
+    [
+        *((k, 0.0) for k in FollowerKind),
+        (FollowerKind.single_roller, 20.0),
+        (FollowerKind.single_concave, -15.0),
+        (FollowerKind.flat_face, 12.0),
+        (FollowerKind.knife_edge, 25.0),
+    ],
+)
 def test_equilibrium_about_the_cam_axis(kind, e_s):
     """Re-derive equilibrium with moments about O2 (not the face centre the solver uses),
     with friction opposing the motion, for every one-contact angle and whatever mode;
@@ -232,8 +257,15 @@ def test_material_grade_sets_the_default_allowable():
     assert "contact_stress" in {v.code for v in a.violations}
 
 
-@pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.single_concave,
-                                  FollowerKind.flat_face, FollowerKind.knife_edge])
+@pytest.mark.parametrize(
+    "kind",
+    [
+        FollowerKind.double_concave,
+        FollowerKind.single_concave,
+        FollowerKind.flat_face,
+        FollowerKind.knife_edge,
+    ],
+)
 def test_equilibrium_with_contact_friction(kind):
     """With sliding friction mu_c at the contact, every touching face receives F_N n plus
     mu_c F_N along the cam surface's sliding past it (derived here from the velocities),
@@ -254,10 +286,11 @@ def test_equilibrium_with_contact_friction(kind):
         l1 = L10 - a.prog.S[k]
         y1 = Y + l1 - (0.0 if kind is FollowerKind.flat_face else a.geo.r)
         fric = -np.sign(a.prog.V[k]) * MU
-        forces = [(np.array([0.0, Y]), np.array([0.0, -a.Ft[k]])),
-                  (np.array([g.side1[k] * D / 2, y1]), np.array([-g.side1[k], fric]) * g.F1[k]),
-                  (np.array([g.side2[k] * D / 2, y1 + L2]),
-                   np.array([-g.side2[k], fric]) * g.F2[k])]
+        forces = [
+            (np.array([0.0, Y]), np.array([0.0, -a.Ft[k]])),
+            (np.array([g.side1[k] * D / 2, y1]), np.array([-g.side1[k], fric]) * g.F1[k]),
+            (np.array([g.side2[k] * D / 2, y1 + L2]), np.array([-g.side2[k], fric]) * g.F2[k]),
+        ]
         for f in np.flatnonzero(a.in_contact[:, k]):
             p, n = a.point_world[f, k], a.normal[f, k]
             rel = np.array([p[1], -p[0] - a.prog.V[k]])  # (v_cam - v_follower) / omega

@@ -91,8 +91,9 @@ BAD_FRAMES = {
     "unknown type": msgspec.msgpack.encode({"type": "NoSuchMessage", "x": 1}),
     "not a dict": msgspec.msgpack.encode([1, 2, 3]),
     "missing fields": msgspec.msgpack.encode({"type": "GuiUpdateMessage"}),
-    "truncated msgpack": msgspec.msgpack.encode({"type": "GuiUpdateMessage", "uuid": "x",
-                                                 "updates": {"value": 1.0}})[:-3],
+    "truncated msgpack": msgspec.msgpack.encode(
+        {"type": "GuiUpdateMessage", "uuid": "x", "updates": {"value": 1.0}}
+    )[:-3],
     "2 MB of zeros": b"\x00" * (2 << 20),
 }
 
@@ -121,8 +122,9 @@ def test_bad_websocket_messages(server):
             await c.close()
             await bystander_ok()
             deadline = time.monotonic() + 5
-            while "connection handler failed" not in server.log()[n0:] and \
-                    time.monotonic() < deadline:
+            while (
+                "connection handler failed" not in server.log()[n0:] and time.monotonic() < deadline
+            ):
                 await asyncio.sleep(0.1)
             assert "connection handler failed" in server.log()[n0:], f"{name}: not logged"
 
@@ -141,10 +143,14 @@ def test_bad_websocket_messages(server):
             ("negative", vm.GuiUpdateMessage(uuid, {"value": -5.0})),
             ("huge", vm.GuiUpdateMessage(uuid, {"value": 1e300})),
             ("unknown prop", vm.GuiUpdateMessage(uuid, {"no_such_prop": 1})),
-            ("station 99", vm.GuiUpdateMessage(c.find(label="Go to station").uuid,
-                                               {"value": "99"})),
-            ("unknown kind", vm.GuiUpdateMessage(c.find(label="Kind").uuid,
-                                                 {"value": "no_such_kind"})),
+            (
+                "station 99",
+                vm.GuiUpdateMessage(c.find(label="Go to station").uuid, {"value": "99"}),
+            ),
+            (
+                "unknown kind",
+                vm.GuiUpdateMessage(c.find(label="Kind").uuid, {"value": "no_such_kind"}),
+            ),
             ("button without value", vm.GuiUpdateMessage(c.find(label="▶ Play").uuid, {})),
             ("scene update, unknown node", vm.SceneNodeUpdateMessage("/nope", {"x": 1})),
         ]
@@ -157,8 +163,9 @@ def test_bad_websocket_messages(server):
             if v == lift_shown(tab.plot):
                 v = tab.own[(i + 1) % len(tab.own)]
             await c.set_value(tab.lift, v)  # the same tab still works afterwards
-            await c.wait_for(lambda v=v: lift_shown(tab.plot) == v, 20.0,
-                             what=f"lift {v} after {name}")
+            await c.wait_for(
+                lambda v=v: lift_shown(tab.plot) == v, 20.0, what=f"lift {v} after {name}"
+            )
             assert lift_shown(gtab.plot) != v
         assert not c.errors and not good.errors
         await c.close()
@@ -235,11 +242,17 @@ def test_slow_memory_and_idle_cpu(server):
     rss1, thr1 = server.rss_mb(), server.threads()
     time.sleep(2.0)
     cpu = idle_cpu_percent(server, 10.0)
-    figures = {"sessions": res["sessions"], "aborted": res["aborted"],
-               "loop_s": round(loop_s, 1), "open_median_s": round(res["open_median_s"], 3),
-               "rss_before_mb": round(rss0, 1), "rss_after_mb": round(rss1, 1),
-               "rss_growth_mb": round(rss1 - rss0, 1), "threads": (thr0, thr1),
-               "idle_cpu_percent": round(cpu, 2)}
+    figures = {
+        "sessions": res["sessions"],
+        "aborted": res["aborted"],
+        "loop_s": round(loop_s, 1),
+        "open_median_s": round(res["open_median_s"], 3),
+        "rss_before_mb": round(rss0, 1),
+        "rss_after_mb": round(rss1, 1),
+        "rss_growth_mb": round(rss1 - rss0, 1),
+        "threads": (thr0, thr1),
+        "idle_cpu_percent": round(cpu, 2),
+    }
     print("\nmemory/idle:", json.dumps(figures))
     assert res["sessions"] >= 200
     assert rss1 - rss0 < 30.0, figures

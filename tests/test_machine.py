@@ -70,9 +70,15 @@ def test_jump_speed_closed_form_and_full_solve():
     deceleration (x = 3/4 of the rise, S* = h (3/4 + 1/(2 pi))); and the full solve
     jumps just above the computed speed, not just below."""
     h, beta = 10.0, 80.0
-    d = tweak(PAPER, dynamics__gravity_m_s2=0.0, dynamics__preload_mm=10000.0,
-              dynamics__spring_rate_N_per_m=50.0, motion__lift_mm=h, motion__rise_deg=beta,
-              motion__fall_deg=120.0)
+    d = tweak(
+        PAPER,
+        dynamics__gravity_m_s2=0.0,
+        dynamics__preload_mm=10000.0,
+        dynamics__spring_rate_N_per_m=50.0,
+        motion__lift_mm=h,
+        motion__rise_deg=beta,
+        motion__fall_deg=120.0,
+    )
     a = analyze(d, verify=False)
     rpm, at = machine.jump_speed_rpm(d, a.theta)
     M, k, hm, b = d.dynamics.mass_g * GRAM, 50.0, h * MM, math.radians(beta)
@@ -93,14 +99,14 @@ def test_jump_speed_closed_form_and_full_solve():
 def test_jump_speed_without_anything_holding_the_follower_is_zero():
     d = tweak(PAPER, cam__speed_rpm=1.0)
     a = analyze(d, verify=False)
-    rpm, _ = machine.jump_speed_rpm(tweak(d, dynamics__spring_rate_N_per_m=0.0,
-                                          dynamics__gravity_m_s2=0.0), a.theta)
+    rpm, _ = machine.jump_speed_rpm(
+        tweak(d, dynamics__spring_rate_N_per_m=0.0, dynamics__gravity_m_s2=0.0), a.theta
+    )
     assert rpm == 0.0  # nothing holds the follower down: it leaves at any speed
     assert machine.jump_speed_rpm(d, a.theta)[0] > 1.0
 
 
-@pytest.mark.parametrize("kind", ["single_roller", "single_concave", "double_concave",
-                                  "flat_face"])
+@pytest.mark.parametrize("kind", ["single_roller", "single_concave", "double_concave", "flat_face"])
 def test_torque_by_moments_equals_the_power_through_the_instant_centre(kind):
     """T from moments of the contact force about the cam centre (contact point and
     normal) equals F_N n_y V, the power given to the follower per unit cam speed (the
@@ -126,8 +132,7 @@ def test_frictionless_torque_integrates_to_zero_and_matches_the_energy_balance()
     p = a.prog
     E = M * dyn.gravity_m_s2 * p.S + M * w**2 * p.V**2 / 2 + k * (p.S + s_p) ** 2 / 2
     assert sh.flywheel_energy == pytest.approx(E.max() - E.min(), rel=1e-3)
-    assert sh.flywheel_inertia == pytest.approx(
-        sh.flywheel_energy / (dyn.speed_fluctuation * w**2))
+    assert sh.flywheel_inertia == pytest.approx(sh.flywheel_energy / (dyn.speed_fluctuation * w**2))
     # guide friction only takes: the mean power is the loss, and positive
     assert machine.shaft(analyze(PAPER, verify=False)).power_mean > 0
 
@@ -152,8 +157,18 @@ def test_series_csv_has_every_quantity_per_angle(tmp_path):
     a = analyze(PAPER, verify=False)
     rows = list(csv.DictReader(io.StringIO(export.series_csv_text(a))))
     assert len(rows) == a.theta.size
-    for key in ("J_mm_per_rad3", "V_m_per_s", "A_m_per_s2", "J_m_per_s3", "rho_mm", "Ft_N",
-                "FN_N_1", "FN_N_2", "stress_MPa_2", "cam_torque_Nm"):
+    for key in (
+        "J_mm_per_rad3",
+        "V_m_per_s",
+        "A_m_per_s2",
+        "J_m_per_s3",
+        "rho_mm",
+        "Ft_N",
+        "FN_N_1",
+        "FN_N_2",
+        "stress_MPa_2",
+        "cam_torque_Nm",
+    ):
         assert key in rows[0]
     w = PAPER.cam.speed_rpm * RPM
     v = np.array([float(r["V_m_per_s"]) for r in rows])
@@ -236,8 +251,9 @@ def test_on_a_dwell_the_cam_slides_under_the_face(kind):
     dwell = a.in_contact & (a.prog.V == 0)[None, :]
     np.testing.assert_allclose(wear.sliding_ratio(a)[dwell], 1.0, rtol=1e-9)
     k = d.wear.coefficient_mm3_per_N_m * 1e-9
-    np.testing.assert_allclose(wear.depth_per_pass(a)[dwell],
-                               k * a.FN[dwell] / (d.cam.width_mm * MM), rtol=1e-9)
+    np.testing.assert_allclose(
+        wear.depth_per_pass(a)[dwell], k * a.FN[dwell] / (d.cam.width_mm * MM), rtol=1e-9
+    )
 
 
 def test_rollers_roll_and_passes_add_up_along_the_profile():
@@ -267,8 +283,9 @@ def test_pitting_life_follows_the_stress_life_curve():
     assert life == pytest.approx(d.wear.pitting_reference_cycles / 2**d.wear.pitting_exponent)
 
 
-@pytest.mark.parametrize("kind", ["single_concave", "double_concave", "flat_face",
-                                  "knife_edge", "double_roller"])
+@pytest.mark.parametrize(
+    "kind", ["single_concave", "double_concave", "flat_face", "knife_edge", "double_roller"]
+)
 def test_contact_friction_power_balance(kind):
     """With sliding friction at the contact (mu_c) and in the guide (mu), the shaft's
     power at every angle is the follower's power plus what both frictions dissipate:
@@ -284,8 +301,11 @@ def test_contact_friction_power_balance(kind):
     slip = wear.sliding_speed(a) / w  # |v_s| / w per face [m/rad]
     mu, mu_c = d.dynamics.guide_friction, 0.1
     rolls = kind == "double_roller"
-    expected = (a.Ft * a.prog.V + (0.0 if rolls else mu_c) * (a.FN * slip).sum(axis=0)
-                + mu * (a.guide.F1 + a.guide.F2) * np.abs(a.prog.V))
+    expected = (
+        a.Ft * a.prog.V
+        + (0.0 if rolls else mu_c) * (a.FN * slip).sum(axis=0)
+        + mu * (a.guide.F1 + a.guide.F2) * np.abs(a.prog.V)
+    )
     ok = a.guide.mode >= 0  # where the guide does not self-lock
     T = a.torque.sum(axis=0)
     np.testing.assert_allclose(T[ok], expected[ok], atol=1e-9 * np.abs(T).max())

@@ -20,13 +20,15 @@ def test_json_roundtrip_is_lossless():
 def test_an_older_format_is_upgraded_through_migrations(monkeypatch):
     """A format-0 file whose lift was called 'h_mm' loads once a migration exists, and
     goes on through 1 -> 2 (motion as segments)."""
+
     def v0_to_v1(data):
         data["motion"] = dict(data["motion"])
         data["motion"]["lift_mm"] = data["motion"].pop("h_mm")
         return data
 
-    old = json.loads(importlib.resources.files("camcore.presets")
-                     .joinpath("paper_example.json").read_text())
+    old = json.loads(
+        importlib.resources.files("camcore.presets").joinpath("paper_example.json").read_text()
+    )
     assert old["schema_version"] == 1
     old["schema_version"] = 0
     old["motion"]["h_mm"] = old["motion"].pop("lift_mm") + 1.0
@@ -52,11 +54,14 @@ def test_format_1_files_load_and_save_as_format_2():
         assert design_from_json(text) == d
 
 
-@pytest.mark.parametrize("version, message", [
-    (3, "written by a newer program"),
-    (True, "must be an integer"),
-    ("1", "must be an integer"),
-])
+@pytest.mark.parametrize(
+    "version, message",
+    [
+        (3, "written by a newer program"),
+        (True, "must be an integer"),
+        ("1", "must be an integer"),
+    ],
+)
 def test_unreadable_versions_say_why(version, message):
     data = {"schema_version": version}
     with pytest.raises(DesignError, match=message):

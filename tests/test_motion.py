@@ -106,8 +106,9 @@ def test_grid_resolution():
 
 def test_segment_shorter_than_the_grid_is_resolved():
     """Issue 8: a 0.9 deg rise at 1 deg resolution was one sample; now it has 120."""
-    d = Design.model_validate({"motion": {"lift_mm": 8, "rise_deg": 0.9},
-                               "limits": {"resolution_deg": 1.0}})
+    d = Design.model_validate(
+        {"motion": {"lift_mm": 8, "rise_deg": 0.9}, "limits": {"resolution_deg": 1.0}}
+    )
     th = np.degrees(theta_grid(d))
     rise = th[th < 0.9]
     assert rise.size == MIN_MOTION_STEPS

@@ -134,7 +134,8 @@ def eq21_exact(g, face, p):
     udu = np.sum(u * du, -1, keepdims=True)
     dm = udu / m
     ddm = (np.sum(du * du, -1, keepdims=True) + np.sum(u * ddu, -1, keepdims=True)) / m - (
-        udu**2 / m**3)
+        udu**2 / m**3
+    )
     s = g.sigma
     n = s * u / m
     dn = s * (du / m - u * dm / m**2)
@@ -187,13 +188,18 @@ def test_curvature_parallel_curve_equals_eq21_exact(kind):
     g = profile.geometry(d)
     p = program(d, theta_grid(d))
     for face in g.faces:
-        np.testing.assert_allclose(rho_of(g, face, p), eq21_exact(g, face, p),
-                                   rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(
+            rho_of(g, face, p), eq21_exact(g, face, p), rtol=1e-9, atol=1e-12
+        )
 
 
-FOLDED = Design.model_validate({**PAPER.model_dump(), "follower": {
-    **PAPER.follower.model_dump(), "kind": "single_concave"},
-    "motion": {**PAPER.motion.model_dump(), "lift_mm": 12.0, "rise_deg": 40.0}})
+FOLDED = Design.model_validate(
+    {
+        **PAPER.model_dump(),
+        "follower": {**PAPER.follower.model_dump(), "kind": "single_concave"},
+        "motion": {**PAPER.motion.model_dump(), "lift_mm": 12.0, "rise_deg": 40.0},
+    }
+)
 
 
 def test_folded_concave_profile_is_not_convex():
@@ -218,10 +224,13 @@ def test_folded_concave_profile_is_not_convex():
 def test_roller_may_run_on_a_concave_flank():
     """A roller on a concave flank (rho < -r_c) is fine: only a pitch radius in
     (0, r_c] undercuts."""
-    d = Design.model_validate({"motion": {"lift_mm": 40, "rise_deg": 60, "high_dwell_deg": 60,
-                                          "fall_deg": 60},
-                               "follower": {"kind": "single_roller", "roller_radius_mm": 8},
-                               "cam": {"base_radius_mm": 30}})
+    d = Design.model_validate(
+        {
+            "motion": {"lift_mm": 40, "rise_deg": 60, "high_dwell_deg": 60, "fall_deg": 60},
+            "follower": {"kind": "single_roller", "roller_radius_mm": 8},
+            "cam": {"base_radius_mm": 30},
+        }
+    )
     a = analyze(d)
     assert (a.on_curve[0] & (a.rho[0] < -a.geo.r)).sum() > 10  # concave flanks exist
     assert a.lift_error <= checks.lift_tolerance(a)
@@ -229,8 +238,9 @@ def test_roller_may_run_on_a_concave_flank():
     assert "curvature_convex" not in {v.code for v in a.violations}
     # a roller larger than the tightest convex pitch radius undercuts: the rule fires,
     # and the independent geometric check confirms the cam no longer gives S(theta)
-    big = d.model_copy(update={"follower": d.follower.model_copy(
-        update={"roller_radius_mm": 40.0})})
+    big = d.model_copy(
+        update={"follower": d.follower.model_copy(update={"roller_radius_mm": 40.0})}
+    )
     b = analyze(big)
     assert 1.0 / b.kappa_pitch[b.on_curve].max() < b.geo.r  # pitch radius below r_c
     assert {"roller_undercut", "geometric_check"} <= {v.code for v in b.violations}
@@ -277,8 +287,9 @@ def test_normal_and_curvature_from_the_finished_polyline(kind):
     outward = np.stack([chord[:, 1], -chord[:, 0]], -1)  # CCW profile: right of travel
     outward /= np.hypot(*outward.T)[:, None]
     c, s = np.cos(th[k]), np.sin(th[k])
-    world = np.stack([c * outward[:, 0] + s * outward[:, 1],
-                      -s * outward[:, 0] + c * outward[:, 1]], -1)
+    world = np.stack(
+        [c * outward[:, 0] + s * outward[:, 1], -s * outward[:, 0] + c * outward[:, 1]], -1
+    )
     # which face touched at that angle, and its normal there (the profile's angles are
     # not the grid's: evaluate the closed forms at them)
     loc = a.local(th[k])
@@ -305,8 +316,11 @@ def test_dwell_arcs_subtend_eqs_24_and_26(kind):
         idx = np.flatnonzero(part == seg)
         # include the neighbouring motion-curve vertices where the arc begins and ends
         ends = P[[idx[0] - 1, (idx[-1] + 1) % len(P)]]
-        span = np.degrees(np.mod(np.arctan2(ends[1, 1], ends[1, 0])
-                                 - np.arctan2(ends[0, 1], ends[0, 0]), 2 * math.pi))
+        span = np.degrees(
+            np.mod(
+                np.arctan2(ends[1, 1], ends[1, 0]) - np.arctan2(ends[0, 1], ends[0, 0]), 2 * math.pi
+            )
+        )
         assert span == pytest.approx(s["dwell_arc_deg"][key], abs=1e-6)
 
 
@@ -316,12 +330,16 @@ def test_double_follower_with_zero_offset_is_one_face(kind, e):
     """Issue 8: e = 0 was rejected as "crosses itself". Its two faces coincide: a valid,
     degenerate design, analysed as one face on the centreline, like the single kind."""
     d = PAPER.with_kind(kind).model_copy(deep=True)
-    d = Design.model_validate({**d.model_dump(), "follower": {**d.follower.model_dump(),
-                                                               "offset_mm": e}})
+    d = Design.model_validate(
+        {**d.model_dump(), "follower": {**d.follower.model_dump(), "offset_mm": e}}
+    )
     assert math.copysign(1.0, d.follower.offset_mm) == 1.0  # -0.0 is stored as 0.0
     a = analyze(d)
-    single = analyze(PAPER.with_kind("single_concave" if kind == FollowerKind.double_concave
-                                     else "single_roller"))
+    single = analyze(
+        PAPER.with_kind(
+            "single_concave" if kind == FollowerKind.double_concave else "single_roller"
+        )
+    )
     assert a.valid, [v.message for v in a.violations]
     assert len(a.geo.faces) == 1 and a.geo.psi_h == 0.0
     np.testing.assert_array_equal(a.profile.points, single.profile.points)
@@ -376,11 +394,18 @@ def test_zero_low_dwell_keeps_its_arc(kind):
     rise face's first contact. It used to be left out: the exported cam had a chord with
     a 2.5 mm sagitta there, and the chord from the fall to the rise was never measured.
     Exact points on that arc (radius r_b) must lie on the polyline within tolerance."""
-    d = Design.model_validate({
-        "motion": {"lift_mm": 1, "rise_deg": 120, "high_dwell_deg": 120, "fall_deg": 120},
-        "follower": {"kind": kind, "roller_radius_mm": 1, "face_radius_mm": -100,
-                     "offset_mm": 9.5},
-        "cam": {"base_radius_mm": 18}})
+    d = Design.model_validate(
+        {
+            "motion": {"lift_mm": 1, "rise_deg": 120, "high_dwell_deg": 120, "fall_deg": 120},
+            "follower": {
+                "kind": kind,
+                "roller_radius_mm": 1,
+                "face_radius_mm": -100,
+                "offset_mm": 9.5,
+            },
+            "cam": {"base_radius_mm": 18},
+        }
+    )
     a = analyze(d)
     assert a.lift_error <= checks.lift_tolerance(a)
     psi_l = a.geo.psi_l
@@ -397,10 +422,15 @@ def test_invalid_profile_costs_a_bounded_check(monkeypatch):
     """A profile that crosses itself (faces swapped) asks the sampler for millions of
     vertices and the unpruned check for O(N M): both are bounded."""
     from camcore import sampling
+
     original = profile.geometry
-    monkeypatch.setattr(profile, "geometry", lambda d: dataclasses.replace(
-        original(d), faces=original(d).faces[::-1]))
+    monkeypatch.setattr(
+        profile,
+        "geometry",
+        lambda d: dataclasses.replace(original(d), faces=original(d).faces[::-1]),
+    )
     a = analyze(PAPER.with_kind(FollowerKind.double_roller))
     assert a.profile.points.shape[0] <= 2 * sampling.MAX_VERTICES
     assert {"profile_crossing", "geometric_check", "export_tolerance"} <= {
-        v.code for v in a.violations}
+        v.code for v in a.violations
+    }

@@ -88,10 +88,12 @@ def test_constant_velocity_with_polynomial_blends():
 def test_velocity_jump_is_reported_with_its_angle():
     """Constant velocity straight out of a dwell: V jumps by h / beta (an infinite
     acceleration) at both ends."""
-    segs = [{"kind": "rise", "angle_deg": 90, "lift_mm": 9, "law": "constant_velocity"},
-            {"kind": "dwell", "angle_deg": 90},
-            {"kind": "fall", "angle_deg": 90, "lift_mm": 9, "law": "cycloidal"},
-            {"kind": "dwell", "angle_deg": 90}]
+    segs = [
+        {"kind": "rise", "angle_deg": 90, "lift_mm": 9, "law": "constant_velocity"},
+        {"kind": "dwell", "angle_deg": 90},
+        {"kind": "fall", "angle_deg": 90, "lift_mm": 9, "law": "cycloidal"},
+        {"kind": "dwell", "angle_deg": 90},
+    ]
     a = analyze(with_program(segs, kind="single_roller"), verify=False)
     jumps = [v for v in a.violations if v.code == "velocity_jump"]
     assert sorted(v.ranges_deg[0][0] for v in jumps) == pytest.approx([0.0, 90.0])
@@ -99,24 +101,30 @@ def test_velocity_jump_is_reported_with_its_angle():
 
 
 def test_acceleration_jump_can_be_waived():
-    segs = [{"kind": "rise", "angle_deg": 120, "lift_mm": 10, "law": "simple_harmonic"},
-            {"kind": "dwell", "angle_deg": 60},
-            {"kind": "fall", "angle_deg": 120, "lift_mm": 10, "law": "simple_harmonic"},
-            {"kind": "dwell", "angle_deg": 60}]
+    segs = [
+        {"kind": "rise", "angle_deg": 120, "lift_mm": 10, "law": "simple_harmonic"},
+        {"kind": "dwell", "angle_deg": 60},
+        {"kind": "fall", "angle_deg": 120, "lift_mm": 10, "law": "simple_harmonic"},
+        {"kind": "dwell", "angle_deg": 60},
+    ]
     a = analyze(with_program(segs, kind="single_roller"), verify=False)
     jumps = [v for v in a.violations if v.code == "acceleration_jump"]
     # SHM: A = h pi^2 / (2 beta^2) at each end, four ends meet dwells
     peak = 10 * math.pi**2 / (2 * math.radians(120) ** 2)
     assert len(jumps) == 4 and all(v.amount == pytest.approx(peak) for v in jumps)
-    b = analyze(with_program(segs, kind="single_roller",
-                             require_continuous_acceleration=False), verify=False)
+    b = analyze(
+        with_program(segs, kind="single_roller", require_continuous_acceleration=False),
+        verify=False,
+    )
     assert not {v.code for v in b.violations} & {"acceleration_jump", "velocity_jump"}
 
 
 def test_rise_straight_into_fall_breaks_eq28_for_double_followers():
-    segs = [{"kind": "rise", "angle_deg": 120, "lift_mm": 10},
-            {"kind": "fall", "angle_deg": 120, "lift_mm": 10},
-            {"kind": "dwell", "angle_deg": 120}]
+    segs = [
+        {"kind": "rise", "angle_deg": 120, "lift_mm": 10},
+        {"kind": "fall", "angle_deg": 120, "lift_mm": 10},
+        {"kind": "dwell", "angle_deg": 120},
+    ]
     a = analyze(with_program(segs), verify=False)
     v = {v.code: v for v in a.violations}["high_dwell_arc"]
     assert v.equation == "Eq. 28"
@@ -126,10 +134,12 @@ def test_rise_straight_into_fall_breaks_eq28_for_double_followers():
 
 
 def test_a_program_starting_with_a_fall_sits_on_the_base_circle_at_its_lowest():
-    segs = [{"kind": "fall", "angle_deg": 90, "lift_mm": 8},
-            {"kind": "dwell", "angle_deg": 90},
-            {"kind": "rise", "angle_deg": 90, "lift_mm": 8},
-            {"kind": "dwell", "angle_deg": 90}]
+    segs = [
+        {"kind": "fall", "angle_deg": 90, "lift_mm": 8},
+        {"kind": "dwell", "angle_deg": 90},
+        {"kind": "rise", "angle_deg": 90, "lift_mm": 8},
+        {"kind": "dwell", "angle_deg": 90},
+    ]
     d = with_program(segs, kind="single_roller")
     p = motion.program(d, np.linspace(0, 2 * math.pi, 721, endpoint=False))
     assert p.S.min() == pytest.approx(0.0, abs=1e-15) and p.S[0] == pytest.approx(8e-3)
@@ -137,18 +147,38 @@ def test_a_program_starting_with_a_fall_sits_on_the_base_circle_at_its_lowest():
     assert a.lift_error <= checks.lift_tolerance(a)
 
 
-@pytest.mark.parametrize("segments, message", [
-    ([{"kind": "rise", "angle_deg": 100, "lift_mm": 5},
-      {"kind": "fall", "angle_deg": 100, "lift_mm": 5}], "motion.segments: the angles sum to 200"),
-    ([{"kind": "rise", "angle_deg": 180, "lift_mm": 5},
-      {"kind": "fall", "angle_deg": 180, "lift_mm": 4}], "do not close the cycle"),
-    ([{"kind": "rise", "angle_deg": 180},
-      {"kind": "fall", "angle_deg": 180, "lift_mm": 4}], "lift_mm"),
-    ([{"kind": "dwell", "angle_deg": 180, "lift_mm": 3},
-      {"kind": "dwell", "angle_deg": 180}], "a dwell has no lift_mm"),
-    ([{"kind": "dwell", "angle_deg": 360}], "at least one rise and one fall"),
-    ([{"kind": "spin", "angle_deg": 360}], "kind"),
-])
+@pytest.mark.parametrize(
+    "segments, message",
+    [
+        (
+            [
+                {"kind": "rise", "angle_deg": 100, "lift_mm": 5},
+                {"kind": "fall", "angle_deg": 100, "lift_mm": 5},
+            ],
+            "motion.segments: the angles sum to 200",
+        ),
+        (
+            [
+                {"kind": "rise", "angle_deg": 180, "lift_mm": 5},
+                {"kind": "fall", "angle_deg": 180, "lift_mm": 4},
+            ],
+            "do not close the cycle",
+        ),
+        (
+            [{"kind": "rise", "angle_deg": 180}, {"kind": "fall", "angle_deg": 180, "lift_mm": 4}],
+            "lift_mm",
+        ),
+        (
+            [
+                {"kind": "dwell", "angle_deg": 180, "lift_mm": 3},
+                {"kind": "dwell", "angle_deg": 180},
+            ],
+            "a dwell has no lift_mm",
+        ),
+        ([{"kind": "dwell", "angle_deg": 360}], "at least one rise and one fall"),
+        ([{"kind": "spin", "angle_deg": 360}], "kind"),
+    ],
+)
 def test_bad_programs_say_which_field(segments, message):
     from camcore.model import format_validation_error
 

@@ -107,15 +107,21 @@ FIELD_NAMES = {n for _, n in LEAVES} | set(Design.model_fields)
 def _in_range(lo, lo_in, hi, hi_in) -> st.SearchStrategy[float]:
     """Anywhere in the closed/open interval, with extra weight at both ends and on a
     log scale (tiny and huge values) for positive intervals."""
-    inner = st.floats(lo, hi, exclude_min=not lo_in, exclude_max=not hi_in,
-                      allow_nan=False, allow_infinity=False)
-    edges = [lo if lo_in else math.nextafter(lo, math.inf),
-             hi if hi_in else math.nextafter(hi, -math.inf)]
+    inner = st.floats(
+        lo, hi, exclude_min=not lo_in, exclude_max=not hi_in, allow_nan=False, allow_infinity=False
+    )
+    edges = [
+        lo if lo_in else math.nextafter(lo, math.inf),
+        hi if hi_in else math.nextafter(hi, -math.inf),
+    ]
     parts = [inner, st.sampled_from(edges)]
     if lo is not None and lo >= 0 and hi > 0:
         a = max(lo, 1e-300) if lo > 0 else 1e-300
-        parts.append(st.floats(math.log10(a), math.log10(hi)).map(lambda x: 10.0**x).filter(
-            lambda v: (v > lo or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi))))
+        parts.append(
+            st.floats(math.log10(a), math.log10(hi))
+            .map(lambda x: 10.0**x)
+            .filter(lambda v: (v > lo or (lo_in and v == lo)) and (v < hi or (hi_in and v == hi)))
+        )
     return st.one_of(parts)
 
 
@@ -140,8 +146,13 @@ def angles(draw) -> tuple[float, float, float]:
     """(rise, high dwell, fall) [deg] with rise + high + fall <= 360, often at the ends:
     dwells of 0 or almost 360 deg, motions of a hair's width."""
     tiny = st.one_of(st.sampled_from([1e-9, 1e-6, 1e-3, 0.01, 0.1]), log_uniform(1e-9, 1.0))
-    total = draw(st.one_of(st.just(360.0), st.floats(1e-6, 360.0),
-                           st.integers(1, 12).map(lambda k: 360.0 - 10.0**-k)))
+    total = draw(
+        st.one_of(
+            st.just(360.0),
+            st.floats(1e-6, 360.0),
+            st.integers(1, 12).map(lambda k: 360.0 - 10.0**-k),
+        )
+    )
     w = draw(st.lists(st.one_of(st.floats(0.0, 1.0), tiny), min_size=3, max_size=3))
     w[0] = max(w[0], 1e-12)
     w[2] = max(w[2], 1e-12)
@@ -182,8 +193,13 @@ def design_dicts(draw, resolutions=None) -> dict:
     if dependent:
         if kind.is_concave:  # |r_f| > r_b, up to the model's limit
             f["face_radius_mm"] = max(-rb * (1.0 + draw(log_uniform(1e-9, 1e4))), -1e5)
-        r = (f["roller_radius_mm"] if kind.is_roller else f["face_radius_mm"]
-             if kind.is_concave else 0.0)  # flat face: any offset; knife edge: r = 0
+        r = (
+            f["roller_radius_mm"]
+            if kind.is_roller
+            else f["face_radius_mm"]
+            if kind.is_concave
+            else 0.0
+        )  # flat face: any offset; knife edge: r = 0
         reach = abs(r + rb)
         if kind.is_double:
             f["offset_mm"] = min(1000.0, reach * draw(near_one()))
@@ -259,8 +275,9 @@ def check_analysis(a: Analysis) -> dict:
     for path, arr in _arrays(a):
         if path.startswith("analysis.design"):
             continue
-        if kind is FollowerKind.flat_face and re.fullmatch(r"analysis\.geo(\.faces\[\d\])?\.r",
-                                                           path):
+        if kind is FollowerKind.flat_face and re.fullmatch(
+            r"analysis\.geo(\.faces\[\d\])?\.r", path
+        ):
             assert np.all(arr == np.inf), path  # the flat face's radius, by definition
             continue
         if kind is FollowerKind.knife_edge and path == "analysis.stress":
@@ -334,26 +351,34 @@ def prop_verdict_independent_of_resolution(data: dict) -> None:
     design = validate(data)
     if design is None:
         return
-    fine = design.model_copy(update={"limits": design.limits.model_copy(
-        update={"resolution_deg": 0.05})})
+    fine = design.model_copy(
+        update={"limits": design.limits.model_copy(update={"resolution_deg": 0.05})}
+    )
     a, b = run_analysis(design, False), run_analysis(fine, False)
     amount = {}
     for v in [*a.violations, *b.violations]:
         amount[v.code] = max(amount.get(v.code, 0.0), abs(v.amount))
     differ = {v.code for v in a.violations} ^ {v.code for v in b.violations}
     assert all(amount[c] < BORDERLINE for c in differ), (
-        [v.message for v in a.violations], [v.message for v in b.violations])
+        [v.message for v in a.violations],
+        [v.message for v in b.violations],
+    )
 
 
 BORDERLINE = 1e-3  # deg, mm, N or MPa (each violation's own unit): round-off, not a finding
 
 
 # Violations that make the synthesized profile not the one the follower rolls on.
-GEOMETRY_DEFECTS = {"curvature_convex", "curvature_face", "roller_undercut",
-                    "high_dwell_arc", "contact_lost",
-                    # a profile that could not be sampled to the tolerance (reported as
-                    # such) is off the exact cam by its measured chord error, not less
-                    "export_tolerance"}
+GEOMETRY_DEFECTS = {
+    "curvature_convex",
+    "curvature_face",
+    "roller_undercut",
+    "high_dwell_arc",
+    "contact_lost",
+    # a profile that could not be sampled to the tolerance (reported as
+    # such) is off the exact cam by its measured chord error, not less
+    "export_tolerance",
+}
 
 
 @ci(1200)
@@ -400,8 +425,14 @@ def programs(draw) -> list[dict]:
     laws = st.sampled_from(list(MotionLaw))
     segs = []
     for x in motions:
-        segs.append({"kind": "rise" if x > 0 else "fall", "lift_mm": abs(x),
-                     "law": draw(laws).value, "w": draw(st.floats(0.2, 1.0))})
+        segs.append(
+            {
+                "kind": "rise" if x > 0 else "fall",
+                "lift_mm": abs(x),
+                "law": draw(laws).value,
+                "w": draw(st.floats(0.2, 1.0)),
+            }
+        )
         if draw(st.booleans()):
             segs.append({"kind": "dwell", "w": draw(st.floats(0.0, 1.0))})
     total = sum(g["w"] for g in segs)
@@ -427,8 +458,26 @@ def test_any_program_analyses_and_verifies(data):
 # --- 2. hostile values ---------------------------------------------------------------------
 
 NOT_A_NUMBER = st.one_of(
-    st.sampled_from([math.nan, math.inf, -math.inf, None, "", "abc", "nan", "inf", "-inf",
-                     "1e400", "15 mm", [], {}, [1.0], {"value": 1.0}, b"\x00"]),
+    st.sampled_from(
+        [
+            math.nan,
+            math.inf,
+            -math.inf,
+            None,
+            "",
+            "abc",
+            "nan",
+            "inf",
+            "-inf",
+            "1e400",
+            "15 mm",
+            [],
+            {},
+            [1.0],
+            {"value": 1.0},
+            b"\x00",
+        ]
+    ),
     st.text(max_size=20).filter(lambda s: not _parses_as_float(s)),
 )
 
@@ -456,7 +505,8 @@ def beyond(lo, lo_in, hi, hi_in) -> st.SearchStrategy[float]:
 
 def _out_of_range(v, lo, lo_in, hi, hi_in) -> bool:
     return (lo is not None and (v < lo or (v == lo and not lo_in))) or (
-        hi is not None and (v > hi or (v == hi and not hi_in)))
+        hi is not None and (v > hi or (v == hi and not hi_in))
+    )
 
 
 @st.composite
@@ -471,8 +521,11 @@ def hostile(draw) -> tuple[dict, list[tuple[tuple[str, ...], str]]]:
         how = draw(st.sampled_from(["nan", "range", "missing", "extra", "part", "enum", "top"]))
         part, name = draw(st.sampled_from(sorted(LEAVES)))
         if how == "enum":
-            part, name = draw(st.sampled_from([("follower", "kind"), ("motion", "rise_law"),
-                                               ("motion", "fall_law")]))
+            part, name = draw(
+                st.sampled_from(
+                    [("follower", "kind"), ("motion", "rise_law"), ("motion", "fall_law")]
+                )
+            )
         if how != "top" and not isinstance(data.get(part), dict):
             continue  # that part was already deleted or replaced
         if how == "nan":
@@ -502,12 +555,23 @@ def hostile(draw) -> tuple[dict, list[tuple[tuple[str, ...], str]]]:
         elif how == "enum":
             data[part][name] = draw(st.sampled_from(["", "roller", "CYCLOIDAL", 1, None]))
         else:  # top level: schema version, name, unknown keys
-            key, val = draw(st.sampled_from([
-                ("schema_version", 0), ("schema_version", 3), ("schema_version", "1"),
-                ("schema_version", None), ("schema_version", -1), ("schema_version", 1e9),
-                ("name", "x" * 201), ("name", None), ("name", 3), ("version", 1),
-                ("", {}),
-            ]))
+            key, val = draw(
+                st.sampled_from(
+                    [
+                        ("schema_version", 0),
+                        ("schema_version", 3),
+                        ("schema_version", "1"),
+                        ("schema_version", None),
+                        ("schema_version", -1),
+                        ("schema_version", 1e9),
+                        ("name", "x" * 201),
+                        ("name", None),
+                        ("name", 3),
+                        ("version", 1),
+                        ("", {}),
+                    ]
+                )
+            )
             data[key] = val
             done.append(((key,), "top"))
             continue
@@ -526,8 +590,14 @@ def prop_hostile(case) -> None:
         locs = {tuple(str(p) for p in e["loc"]) for e in exc.errors()}
         # at least one of the things we broke is reported (pydantic shows up to all
         # errors; the first 8 reach the message)
-        assert any(any(loc[: len(t)] == t or t[: len(loc)] == loc for loc in locs)
-                   or any(x in msg for x in t) for t, _ in done) or not done, (msg, done)
+        assert (
+            any(
+                any(loc[: len(t)] == t or t[: len(loc)] == loc for loc in locs)
+                or any(x in msg for x in t)
+                for t, _ in done
+            )
+            or not done
+        ), (msg, done)
         # and the JSON path gives the same one-line DesignError
         try:
             text = json.dumps(data, allow_nan=True, default=repr)
@@ -561,14 +631,23 @@ def test_missing_everything_is_the_default_design(_):
 @pytest.mark.parametrize("law", list(MotionLaw))
 def test_every_kind_and_law_on_a_tiny_and_a_huge_cam(kind, law):
     for rb in (1e-2, 1e4):
-        d = Design.model_validate({
-            "follower": {"kind": kind.value, "roller_radius_mm": min(rb * 0.5, 1000),
-                         "face_radius_mm": -min(rb * 3, 1e5), "offset_mm": min(rb * 0.2, 1000)},
-            "motion": {"lift_mm": min(rb * 0.3, 1000), "rise_law": law.value,
-                       "fall_law": law.value},
-            "cam": {"base_radius_mm": rb},
-            "limits": {"resolution_deg": 1.0},
-        })
+        d = Design.model_validate(
+            {
+                "follower": {
+                    "kind": kind.value,
+                    "roller_radius_mm": min(rb * 0.5, 1000),
+                    "face_radius_mm": -min(rb * 3, 1e5),
+                    "offset_mm": min(rb * 0.2, 1000),
+                },
+                "motion": {
+                    "lift_mm": min(rb * 0.3, 1000),
+                    "rise_law": law.value,
+                    "fall_law": law.value,
+                },
+                "cam": {"base_radius_mm": rb},
+                "limits": {"resolution_deg": 1.0},
+            }
+        )
         check_analysis(analyze(d, verify=True))
 
 

@@ -14,9 +14,13 @@ import pytest
 from camcore import sweep
 from camcore.model import DesignError
 
-SPEC = {"base": {"preset": "paper_example"},
-        "grid": {"cam.base_radius_mm": {"from": 70, "to": 90, "num": 3},
-                 "follower.kind": ["single_roller", "double_concave"]}}
+SPEC = {
+    "base": {"preset": "paper_example"},
+    "grid": {
+        "cam.base_radius_mm": {"from": 70, "to": 90, "num": 3},
+        "follower.kind": ["single_roller", "double_concave"],
+    },
+}
 
 
 def rows_of(path) -> list[dict]:
@@ -32,14 +36,31 @@ def test_rows_equal_single_reports(tmp_path):
     rows = rows_of(tmp_path / "r.parquet")
     assert n == len(rows) == 6
     assert [(r["grid.cam.base_radius_mm"], r["grid.follower.kind"]) for r in rows] == [
-        (70.0, "single_roller"), (70.0, "double_concave"), (80.0, "single_roller"),
-        (80.0, "double_concave"), (90.0, "single_roller"), (90.0, "double_concave")]
+        (70.0, "single_roller"),
+        (70.0, "double_concave"),
+        (80.0, "single_roller"),
+        (80.0, "double_concave"),
+        (90.0, "single_roller"),
+        (90.0, "double_concave"),
+    ]
     for r in (rows[1], rows[4]):  # through the real command line
         out = subprocess.run(
-            [sys.executable, "-m", "camcore.cli", "report", "--preset", "paper_example",
-             "--json", "--set", f"cam.base_radius_mm={r['grid.cam.base_radius_mm']}",
-             "--set", f"follower.kind={r['grid.follower.kind']}"],
-            capture_output=True, text=True)
+            [
+                sys.executable,
+                "-m",
+                "camcore.cli",
+                "report",
+                "--preset",
+                "paper_example",
+                "--json",
+                "--set",
+                f"cam.base_radius_mm={r['grid.cam.base_radius_mm']}",
+                "--set",
+                f"follower.kind={r['grid.follower.kind']}",
+            ],
+            capture_output=True,
+            text=True,
+        )
         single = sweep.flatten(json.loads(out.stdout))
         for key, value in single.items():
             assert r[key] == value, key
@@ -47,8 +68,11 @@ def test_rows_equal_single_reports(tmp_path):
 
 
 def test_an_invalid_combination_is_a_row_that_says_why(tmp_path):
-    spec = sweep.parse_spec(json.dumps({"base": {"preset": "paper_example"},
-                                        "grid": {"cam.bore_diameter_mm": [20, 500]}}))
+    spec = sweep.parse_spec(
+        json.dumps(
+            {"base": {"preset": "paper_example"}, "grid": {"cam.bore_diameter_mm": [20, 500]}}
+        )
+    )
     sweep.run(spec, tmp_path / "r.parquet", progress=None)
     ok, bad = rows_of(tmp_path / "r.parquet")
     assert ok["valid"] is True and ok["error"] is None
@@ -87,16 +111,26 @@ def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
         sweep.run(spec, tmp_path / "r.parquet", progress=None)
 
 
-@pytest.mark.parametrize("spec, message", [
-    ({"grid": {"cam.nope": [1]}}, "cam.nope: no such field"),
-    ({"grid": {"cam.base_radius_mm": {"from": 1, "to": 2}}}, "a range is"),
-    ({"grid": {"cam.base_radius_mm": {"from": 1, "to": 2, "num": 0}}}, "num"),
-    ({"grid": {"cam.base_radius_mm": []}}, "a list of 1"),
-    ({"grid": {"cam.base_radius_mm": [1]}, "extra": 1}, "an object with"),
-    ({"base": {"preset": "../../etc/passwd"}, "grid": {"cam.width_mm": [1]}}, "no preset"),
-    ({"grid": {"cam.base_radius_mm": {"from": 60, "to": 90, "num": 1001},
-               "cam.width_mm": {"from": 5, "to": 20, "num": 1000}}}, "at most"),
-])
+@pytest.mark.parametrize(
+    "spec, message",
+    [
+        ({"grid": {"cam.nope": [1]}}, "cam.nope: no such field"),
+        ({"grid": {"cam.base_radius_mm": {"from": 1, "to": 2}}}, "a range is"),
+        ({"grid": {"cam.base_radius_mm": {"from": 1, "to": 2, "num": 0}}}, "num"),
+        ({"grid": {"cam.base_radius_mm": []}}, "a list of 1"),
+        ({"grid": {"cam.base_radius_mm": [1]}, "extra": 1}, "an object with"),
+        ({"base": {"preset": "../../etc/passwd"}, "grid": {"cam.width_mm": [1]}}, "no preset"),
+        (
+            {
+                "grid": {
+                    "cam.base_radius_mm": {"from": 60, "to": 90, "num": 1001},
+                    "cam.width_mm": {"from": 5, "to": 20, "num": 1000},
+                }
+            },
+            "at most",
+        ),
+    ],
+)
 def test_bad_specs_are_refused_with_the_key_named(spec, message):
     with pytest.raises(DesignError, match=message):
         sweep.parse_spec(json.dumps(spec))
@@ -106,12 +140,18 @@ def test_cli_sweep_and_its_exit_codes(tmp_path):
     spec = tmp_path / "spec.json"
     spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": [80, 85]}}))
     out = tmp_path / "r.parquet"
-    run = subprocess.run([sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out",
-                          str(out), "--no-verify"], capture_output=True, text=True)
+    run = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out", str(out), "--no-verify"],
+        capture_output=True,
+        text=True,
+    )
     assert run.returncode == 0, run.stderr
     assert "2/2 designs" in run.stderr and len(rows_of(out)) == 2
-    bad = subprocess.run([sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out",
-                          str(spec)], capture_output=True, text=True)
+    bad = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out", str(spec)],
+        capture_output=True,
+        text=True,
+    )
     assert bad.returncode == 2 and "input" in bad.stderr
 
 
@@ -126,10 +166,13 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
 def test_mixed_value_types_and_structured_values_join_into_one_table(tmp_path):
     """Chunks whose grid values differ in type (an int, then a float; a whole segment
     list) still make one table."""
-    segs = [{"kind": "rise", "angle_deg": 180, "lift_mm": 10},
-            {"kind": "fall", "angle_deg": 180, "lift_mm": 10}]
-    spec = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [80, 85.5],
-                                                 "motion.segments": [segs]}}))
+    segs = [
+        {"kind": "rise", "angle_deg": 180, "lift_mm": 10},
+        {"kind": "fall", "angle_deg": 180, "lift_mm": 10},
+    ]
+    spec = sweep.parse_spec(
+        json.dumps({"grid": {"cam.base_radius_mm": [80, 85.5], "motion.segments": [segs]}})
+    )
     sweep.run(spec, tmp_path / "r.parquet", chunk=1, verify=False, progress=None)
     rows = rows_of(tmp_path / "r.parquet")
     assert [r["grid.cam.base_radius_mm"] for r in rows] == [80.0, 85.5]

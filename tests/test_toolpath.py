@@ -61,8 +61,10 @@ def test_the_cutter_may_not_be_wider_than_the_tightest_concave_stretch():
     with pytest.raises(toolpath.GougeError) as err:
         toolpath.cutter_path(a, 2 * rho_min * 1.03)
     at = math.degrees(a.theta[k])
-    ranges = [tuple(map(float, r.split("-"))) for r in
-              re.search(r"cam angles (.*) deg", str(err.value)).group(1).split(", ")]
+    ranges = [
+        tuple(map(float, r.split("-")))
+        for r in re.search(r"cam angles (.*) deg", str(err.value)).group(1).split(", ")
+    ]
     assert any(lo - 1 <= at <= hi + 1 for lo, hi in ranges)
 
 
@@ -71,16 +73,18 @@ def test_gcode_reads_back_to_the_path():
     D = 10 * MM
     text = toolpath.gcode(a, D)
     assert text.startswith("%\n") and "G21" in text and "M30" in text
-    xy = np.array([(float(m[1]), float(m[2])) for m in
-                   re.finditer(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", text)])
+    xy = np.array(
+        [(float(m[1]), float(m[2])) for m in re.finditer(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", text)]
+    )
     path = toolpath.cutter_path(a, D)[0] / MM
     lead, cut = xy[0], xy[1:-1]
     # every path vertex is cut, clockwise (climb), and the contour closes
     assert cut.shape[0] == path.shape[0] + 1
     np.testing.assert_allclose(cut[:-1], path[::-1], atol=1e-4)
     np.testing.assert_allclose(cut[-1], cut[0])
-    area = 0.5 * np.sum(cut[:-1, 0] * np.roll(cut[:-1, 1], -1)
-                        - np.roll(cut[:-1, 0], -1) * cut[:-1, 1])
+    area = 0.5 * np.sum(
+        cut[:-1, 0] * np.roll(cut[:-1, 1], -1) - np.roll(cut[:-1, 0], -1) * cut[:-1, 1]
+    )
     assert area < 0  # clockwise
     # the plunge happens off the part: a cutter there clears the cam by D/2 at least
     assert brute_distance(lead[None] * MM, a.profile.points)[0] >= 1.5 * D - 1e-6

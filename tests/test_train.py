@@ -20,9 +20,12 @@ def harmonic_cam(speed_rpm: float = 1200.0, **dynamics) -> Design:
     """S = h/2 (1 - cos theta): a simple-harmonic rise over 180 deg and fall over 180
     deg is exactly one harmonic of the cam speed."""
     data = PAPER.model_dump(mode="json")
-    data["motion"] = {"segments": [
-        {"kind": "rise", "angle_deg": 180, "lift_mm": 10, "law": "simple_harmonic"},
-        {"kind": "fall", "angle_deg": 180, "lift_mm": 10, "law": "simple_harmonic"}]}
+    data["motion"] = {
+        "segments": [
+            {"kind": "rise", "angle_deg": 180, "lift_mm": 10, "law": "simple_harmonic"},
+            {"kind": "fall", "angle_deg": 180, "lift_mm": 10, "law": "simple_harmonic"},
+        ]
+    }
     data["limits"]["require_continuous_acceleration"] = False
     data["cam"]["speed_rpm"] = speed_rpm
     data["dynamics"].update(dynamics)
@@ -48,15 +51,17 @@ def test_one_harmonic_matches_the_closed_form():
     assert r.natural_frequency == pytest.approx(math.sqrt(K / m))
     s = h / 2 * (1 - np.cos(r.theta))
     np.testing.assert_allclose(r.s, s, atol=1e-12)
-    Fc = k1 * (s - x) + c * w * (h / 2 * np.sin(r.theta)
-                                 + (h / 2) * np.real(1j * G * np.exp(1j * r.theta)))
+    Fc = k1 * (s - x) + c * w * (
+        h / 2 * np.sin(r.theta) + (h / 2) * np.real(1j * G * np.exp(1j * r.theta))
+    )
     np.testing.assert_allclose(r.contact_force, Fc, atol=1e-6 * np.abs(Fc).max())
 
 
 def test_a_stiff_train_gives_back_the_rigid_model():
     """k1 -> inf: x -> S and F_c -> F_t of Eq. 29 (with the spring's third in the mass)."""
-    d = PAPER.model_copy(update={"dynamics": PAPER.dynamics.model_copy(
-        update={"train_stiffness_N_per_m": 1e12})})
+    d = PAPER.model_copy(
+        update={"dynamics": PAPER.dynamics.model_copy(update={"train_stiffness_N_per_m": 1e12})}
+    )
     r = train.respond(d)
     prog = motion.program(d, r.theta)
     Ft = machine.spring_free_load(d, prog) + machine.spring_force(d, prog)
@@ -85,11 +90,17 @@ def test_dynamic_jump_and_report():
     error, the residual vibration after each rise and fall, and the dynamic jump."""
     from camcore.report import summary
 
-    soft = PAPER.model_copy(update={"dynamics": PAPER.dynamics.model_copy(
-        update={"train_stiffness_N_per_m": 2e4, "damping_ratio": 0.02})})
+    soft = PAPER.model_copy(
+        update={
+            "dynamics": PAPER.dynamics.model_copy(
+                update={"train_stiffness_N_per_m": 2e4, "damping_ratio": 0.02}
+            )
+        }
+    )
     s = summary(analyze(soft, verify=False))["train"]
     assert s["natural_frequency_Hz"] == pytest.approx(
-        math.sqrt((2e4 + PAPER.dynamics.spring_rate_N_per_m) / (0.108)) / (2 * math.pi))
+        math.sqrt((2e4 + PAPER.dynamics.spring_rate_N_per_m) / (0.108)) / (2 * math.pi)
+    )
     assert len(s["residual_vibration"]) == 2  # after the rise and after the fall
     assert s["error_max_mm"] > 0
     # it jumps, and says where: the violation and the summary agree
@@ -97,11 +108,13 @@ def test_dynamic_jump_and_report():
     assert s["contact_force_min_N"] < 0 and s["dynamic_jump_deg"]
     assert "dynamic_jump" in {v.code for v in a.violations}
     # a stiffer train rings less after the rise, and does not jump
-    stiff = soft.model_copy(update={"dynamics": soft.dynamics.model_copy(
-        update={"train_stiffness_N_per_m": 1e6})})
+    stiff = soft.model_copy(
+        update={"dynamics": soft.dynamics.model_copy(update={"train_stiffness_N_per_m": 1e6})}
+    )
     t = summary(analyze(stiff, verify=False))["train"]
-    assert t["residual_vibration"][0]["amplitude_mm"] < s["residual_vibration"][0][
-        "amplitude_mm"] / 10
+    assert (
+        t["residual_vibration"][0]["amplitude_mm"] < s["residual_vibration"][0]["amplitude_mm"] / 10
+    )
     assert not t["dynamic_jump_deg"]
     assert summary(analyze(PAPER, verify=False))["train"] is None
 
@@ -123,6 +136,7 @@ def test_contact_force_between_the_samples_is_the_harmonic_sum():
     F0 = dyn.spring_rate_N_per_m * dyn.preload_mm * MM + m * dyn.gravity_m_s2
     x = (k1 * h / 2 - F0) / K - (h / 2) * np.real(G * np.exp(1j * theta))
     s = h / 2 * (1 - np.cos(theta))
-    ref = k1 * (s - x) + c * w * (h / 2 * np.sin(theta)
-                                  + (h / 2) * np.real(1j * G * np.exp(1j * theta)))
+    ref = k1 * (s - x) + c * w * (
+        h / 2 * np.sin(theta) + (h / 2) * np.real(1j * G * np.exp(1j * theta))
+    )
     np.testing.assert_allclose(Fc, ref, atol=1e-6 * np.abs(ref).max())

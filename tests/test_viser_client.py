@@ -22,9 +22,9 @@ def tiny():
         slider = client.gui.add_slider("Lift", 1.0, 60.0, 0.5, 10.0)
         md = client.gui.add_markdown("lift = 10.0")
         button = client.gui.add_button("Go")
-        plot = client.gui.add_uplot((np.arange(4.0), np.zeros(4)), ({"label": "x"},
-                                                                    {"label": "y"}),
-                                    title="plot")
+        plot = client.gui.add_uplot(
+            (np.arange(4.0), np.zeros(4)), ({"label": "x"}, {"label": "y"}), title="plot"
+        )
         client.scene.add_box("/box", dimensions=(1.0, 1.0, 1.0))
         clicks = [0]
 
@@ -54,8 +54,11 @@ def test_model_update_and_click(tiny):
         try:
             slider = await c.wait_gui("Lift")
             assert (slider.type, slider.value) == ("Slider", 10.0)
-            assert (slider.props["min"], slider.props["max"], slider.props["step"]) == \
-                (1.0, 60.0, 0.5)
+            assert (slider.props["min"], slider.props["max"], slider.props["step"]) == (
+                1.0,
+                60.0,
+                0.5,
+            )
             md = await c.wait_for(lambda: c.find_all(type="Markdown"), what="markdown")
             md = md[0]
             assert "lift = 10.0" in md.text
@@ -66,8 +69,9 @@ def test_model_update_and_click(tiny):
 
             await c.set_value("Lift", 12.5)  # what the browser sends
             await c.wait_for(lambda: "lift = 12.5" in md.text, what="echo")
-            await c.wait_for(lambda: float(np.asarray(plot.props["data"][1])[0]) == 12.5,
-                             what="plot data")
+            await c.wait_for(
+                lambda: float(np.asarray(plot.props["data"][1])[0]) == 12.5, what="plot data"
+            )
             assert isinstance(plot.props["data"][1], np.ndarray)  # binary buffer decoded
             await c.wait_for(lambda: "/ball" in c.scene_names, what="ball")
             assert c.gui[slider.uuid].value == 12.5
@@ -107,12 +111,19 @@ def test_decoder_is_strict():
     with pytest.raises(ProtocolError):
         build_message({"type": "GuiRemoveMessage"})  # missing field
     props = {"order": 0.0, "_markdown": "hi", "visible": True}
-    msg = build_message({"type": "GuiMarkdownMessage", "uuid": "u", "container_uuid": "root",
-                         "props": props})
+    msg = build_message(
+        {"type": "GuiMarkdownMessage", "uuid": "u", "container_uuid": "root", "props": props}
+    )
     assert isinstance(msg, vm.GuiMarkdownMessage)
     with pytest.raises(ProtocolError, match="GuiMarkdownProps"):
-        build_message({"type": "GuiMarkdownMessage", "uuid": "u", "container_uuid": "root",
-                       "props": {**props, "renamed": 1}})
+        build_message(
+            {
+                "type": "GuiMarkdownMessage",
+                "uuid": "u",
+                "container_uuid": "root",
+                "props": {**props, "renamed": 1},
+            }
+        )
     with pytest.raises(ProtocolError):
         decode_frame(b"\x00" * 8)
 
@@ -124,9 +135,13 @@ def test_frame_round_trip():
     arr = np.linspace(0, 1, 5)
     msg = vm.GuiUpdateMessage("u", {"data": (arr, arr * 2)})
     bufs: list[memoryview] = []
-    inner = msgspec.msgpack.encode({"messages": (msg.as_serializable_dict(bufs),),
-                                    "timestampSec": 0.0,
-                                    "binaryBufferLengths": tuple(b.nbytes for b in bufs)})
+    inner = msgspec.msgpack.encode(
+        {
+            "messages": (msg.as_serializable_dict(bufs),),
+            "timestampSec": 0.0,
+            "binaryBufferLengths": tuple(b.nbytes for b in bufs),
+        }
+    )
     comp = zstandard.ZstdCompressor().compress(inner)
     parts = [len(inner).to_bytes(8, "little"), len(comp).to_bytes(8, "little"), comp]
     off = 16 + len(comp)

@@ -72,7 +72,7 @@ def split_frame(data: bytes) -> tuple[dict, list[np.ndarray]]:
     comp_len = int.from_bytes(data[8:16], "little")
     if 16 + comp_len > len(data):
         raise ProtocolError("frame shorter than its compressed payload")
-    inner = _ZSTD.decompress(data[16:16 + comp_len], max_output_size=inner_len)
+    inner = _ZSTD.decompress(data[16 : 16 + comp_len], max_output_size=inner_len)
     if len(inner) != inner_len:
         raise ProtocolError(f"decompressed {len(inner)} bytes, header says {inner_len}")
     payload = msgspec.msgpack.decode(inner)
@@ -85,7 +85,7 @@ def split_frame(data: bytes) -> tuple[dict, list[np.ndarray]]:
         offset += (8 - offset % 8) % 8
         if offset + n > len(data):
             raise ProtocolError("binary buffer runs past the end of the frame")
-        buffers.append(whole[offset:offset + n])
+        buffers.append(whole[offset : offset + n])
         offset += n
     return payload, buffers
 
@@ -108,7 +108,8 @@ def _check_dataclass_fields(value: Any, annotation: Any, where: str) -> None:
         raise ProtocolError(
             f"{where}: fields {sorted(got ^ expected)} differ from viser's "
             f"{annotation.__name__} (extra {sorted(got - expected)}, "
-            f"missing {sorted(expected - got)})")
+            f"missing {sorted(expected - got)})"
+        )
 
 
 def build_message(mapping: dict) -> vm.Message:
@@ -224,19 +225,35 @@ class ViserClient:
 
     async def connect(self, timeout: float = 10.0, camera: bool = True) -> ViserClient:
         self.ws = await asyncio.wait_for(
-            connect(self.url, subprotocols=[SUBPROTOCOL], max_size=None, compression=None,
-                    open_timeout=timeout, ping_interval=None),
-            timeout)
+            connect(
+                self.url,
+                subprotocols=[SUBPROTOCOL],
+                max_size=None,
+                compression=None,
+                open_timeout=timeout,
+                ping_interval=None,
+            ),
+            timeout,
+        )
         self._reader = asyncio.get_running_loop().create_task(self._read_loop())
         if camera:
             await self.send_camera()
         return self
 
     async def send_camera(self, width: int = 800, height: int = 600) -> None:
-        await self.send(vm.ViewerCameraMessage(
-            wxyz=(1.0, 0.0, 0.0, 0.0), position=(0.0, 0.0, 1.0), fov=1.0, near=0.01,
-            far=100.0, image_height=height, image_width=width, look_at=(0.0, 0.0, 0.0),
-            up_direction=(0.0, 0.0, 1.0)))
+        await self.send(
+            vm.ViewerCameraMessage(
+                wxyz=(1.0, 0.0, 0.0, 0.0),
+                position=(0.0, 0.0, 1.0),
+                fov=1.0,
+                near=0.01,
+                far=100.0,
+                image_height=height,
+                image_width=width,
+                look_at=(0.0, 0.0, 0.0),
+                up_direction=(0.0, 0.0, 1.0),
+            )
+        )
 
     async def send(self, msg: vm.Message) -> None:
         assert self.ws is not None, "not connected"
@@ -302,9 +319,12 @@ class ViserClient:
         name = type(msg).__name__
         self.counts[name] += 1
         if isinstance(msg, vm._CreateGuiComponentMessage):
-            el = GuiElement(uuid=msg.uuid, type=_short_type(name),
-                            container=getattr(msg, "container_uuid", None),
-                            props=_as_dict(getattr(msg, "props", {})))
+            el = GuiElement(
+                uuid=msg.uuid,
+                type=_short_type(name),
+                container=getattr(msg, "container_uuid", None),
+                props=_as_dict(getattr(msg, "props", {})),
+            )
             if hasattr(msg, "value"):
                 el.value, el.has_value = msg.value, True
             self.gui[msg.uuid] = el
@@ -323,9 +343,12 @@ class ViserClient:
             self.gui.clear()
         elif isinstance(msg, vm._CreateSceneNodeMessage):
             key = (msg.owner, msg.name)
-            self.scene[key] = SceneNode(name=msg.name, type=name.removesuffix("Message"),
-                                        owner=msg.owner,
-                                        props=_as_dict(getattr(msg, "props", {})))
+            self.scene[key] = SceneNode(
+                name=msg.name,
+                type=name.removesuffix("Message"),
+                owner=msg.owner,
+                props=_as_dict(getattr(msg, "props", {})),
+            )
         elif isinstance(msg, vm.RemoveSceneNodeMessage):
             self.scene.pop((msg.owner, msg.name), None)
         elif isinstance(msg, vm.SceneNodeUpdateMessage):
@@ -358,8 +381,9 @@ class ViserClient:
     def scene_names(self) -> set[str]:
         return {n.name for n in self.scene.values()}
 
-    def find_all(self, label: str | None = None, type: str | None = None,
-                 contains: str | None = None) -> list[GuiElement]:
+    def find_all(
+        self, label: str | None = None, type: str | None = None, contains: str | None = None
+    ) -> list[GuiElement]:
         out = []
         for el in self.gui.values():
             if label is not None and el.label != label:
@@ -371,14 +395,17 @@ class ViserClient:
             out.append(el)
         return out
 
-    def find(self, label: str | None = None, type: str | None = None,
-             contains: str | None = None) -> GuiElement:
+    def find(
+        self, label: str | None = None, type: str | None = None, contains: str | None = None
+    ) -> GuiElement:
         """The one element matching; KeyError if none or several."""
         found = self.find_all(label, type, contains)
         if len(found) != 1:
             have = sorted({str(e.label) for e in self.gui.values() if e.label})
-            raise KeyError(f"{len(found)} GUI elements match label={label!r} type={type!r} "
-                           f"contains={contains!r}; labels: {have}")
+            raise KeyError(
+                f"{len(found)} GUI elements match label={label!r} type={type!r} "
+                f"contains={contains!r}; labels: {have}"
+            )
         return found[0]
 
     def _resolve(self, target: str | GuiElement) -> GuiElement:
@@ -402,8 +429,9 @@ class ViserClient:
         await self.send(vm.GuiUpdateMessage(el.uuid, {"value": True}))
         return el
 
-    async def wait_for(self, predicate: Callable[[], Any], timeout: float = 10.0,
-                       what: str = "condition") -> Any:
+    async def wait_for(
+        self, predicate: Callable[[], Any], timeout: float = 10.0, what: str = "condition"
+    ) -> Any:
         """Wait until ``predicate()`` is truthy (checked after every frame)."""
         deadline = time.monotonic() + timeout
         while True:
@@ -414,12 +442,10 @@ class ViserClient:
             if self.errors:
                 raise self.errors[0]
             if self.closed_reason is not None:
-                raise ConnectionError(f"{self.name}: {self.closed_reason} "
-                                      f"while waiting for {what}")
+                raise ConnectionError(f"{self.name}: {self.closed_reason} while waiting for {what}")
             left = deadline - time.monotonic()
             if left <= 0:
-                raise TimeoutError(f"{self.name}: timed out after {timeout:g} s waiting "
-                                   f"for {what}")
+                raise TimeoutError(f"{self.name}: timed out after {timeout:g} s waiting for {what}")
             try:
                 await asyncio.wait_for(self._changed.wait(), left)
             except TimeoutError:
@@ -434,6 +460,7 @@ class ViserClient:
             await asyncio.sleep(quiet / 3)
 
     async def wait_gui(self, label: str, timeout: float = 10.0) -> GuiElement:
-        await self.wait_for(lambda: self.find_all(label=label), timeout,
-                            what=f"GUI element {label!r}")
+        await self.wait_for(
+            lambda: self.find_all(label=label), timeout, what=f"GUI element {label!r}"
+        )
         return self.find(label=label)
