@@ -1,23 +1,19 @@
-"""The compare tab: the four followers on the current design (Table 1, Figs. 11, 13)."""
+"""The compare tab: the four followers on the current design (Table 1, Figs. 11, 13).
+
+Shows what app.analyst.refined computed: per follower its summary and its contact
+force and stress curves, or the reason it cannot be computed."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from camcore import analysis
-from camcore.model import PAPER_FOLLOWERS, Design
-from camcore.report import PAPER_TABLE1_N, summary
-from camcore.units import to_mpa
+from camcore.model import PAPER_FOLLOWERS
+from camcore.report import PAPER_TABLE1_N
 
 from .panels import esc
-from .plots import COLORS, stride_index
+from .plots import COLORS
 
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
-
-
-def compute(design: Design) -> dict:
-    """{kind: Analysis | error message} for the four followers."""
-    return analysis.compare(design, kinds=KINDS, errors=True)
 
 
 def table_markdown(results: dict) -> str:
@@ -38,7 +34,7 @@ def table_markdown(results: dict) -> str:
             )
             notes.append(f"- *{k.label}*: {esc(a)}")
             continue
-        s = summary(a)
+        s = a["summary"]
         ok = "✔" if s["valid"] else f"⚠ {len(s['violations'])}"
         fn = s["contact_force_max_N"]
         dwell = fn["high_dwell_two_contact"] if k.is_double else fn["high_dwell"]
@@ -99,20 +95,14 @@ class CompareView:
     def update(self, results: dict) -> None:
         self.results = results
         self.md.content = table_markdown(results)
-        ok = [a for a in results.values() if not isinstance(a, str)]
+        ok = [r for r in results.values() if not isinstance(r, str)]
         if not ok:
             return
-        th = ok[0].theta
-        idx = stride_index(th.size)
-        x = np.degrees(th[idx])
+        x = ok[0]["theta_deg"]
+        nan = np.full(x.shape, np.nan)
         fn, st = [x], [x]
-        for a in results.values():
-            if isinstance(a, str):
-                fn.append(np.full(x.shape, np.nan))
-                st.append(np.full(x.shape, np.nan))
-                continue
-            xa = np.degrees(a.theta)
-            fn.append(np.interp(x, xa, a.guide.FN))
-            st.append(np.interp(x, xa, to_mpa(a.stress.max(axis=0))))
+        for r in results.values():
+            fn.append(nan if isinstance(r, str) else np.interp(x, r["theta_deg"], r["FN_N"]))
+            st.append(nan if isinstance(r, str) else np.interp(x, r["theta_deg"], r["stress_MPa"]))
         self.fn.data = tuple(fn)
         self.stress.data = tuple(st)

@@ -3,8 +3,9 @@
 Nothing here reacts to anything: app.session wires the handles' callbacks to its
 actions. Above the tabs: the status panel, the cam's STL one click away, and the
 animation (play, speed, angle, stations, where we are). Tabs: Design (controls,
-program table, key numbers), Curves, Compare, View (overlays, cameras, stations
-diagram), Files (presets, upload, kept designs, downloads).
+program table, key numbers), Curves, Compare, Explore (design-space sweeps), View
+(overlays, cameras, stations diagram), Files (presets, upload, kept designs,
+downloads).
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ from typing import Any
 from camcore.model import Design, preset_names
 
 from . import compare, controls, plots
+from .explore import ExplorePanel
 from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS
 from .segments import SegmentTable
 
@@ -60,6 +62,7 @@ class Layout:
     # Curves, Compare
     curves: list[plots.Curve]
     compare_view: compare.CompareView
+    explore: ExplorePanel
     # View tab
     view_folder: Any
     overlay_boxes: dict[str, Any]
@@ -98,6 +101,8 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
         h["curves"] = plots.build_curves(gui, first)
     with tabs.add_tab("Compare"):
         h["compare_view"] = compare.CompareView(gui)
+    with tabs.add_tab("Explore"):
+        h["explore"] = ExplorePanel(gui)
     with tabs.add_tab("View") as h["view_folder"]:
         _view_tab(gui, h)
     with tabs.add_tab("Files"):

@@ -11,18 +11,21 @@ import ctypes
 import ctypes.util
 import gc
 import signal
+import sys
 import threading
 import time
 import warnings
 
 import viser
 
-from . import uploads
+from . import uploads, viser_speedups
+from .analyst import Analyst
 from .session import Session
 
 # A tab that closes while its redraw is in flight makes viser warn once per queued
 # message; that is expected (the session is being torn down), not worth a log line.
 warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
+SWITCH_INTERVAL_S = 0.0005
 
 
 def _load_malloc_trim():
@@ -66,9 +69,18 @@ class App:
     """The server and the live sessions, by client id."""
 
     def __init__(
-        self, host: str = "127.0.0.1", port: int = 8080, verbose: bool = False, animate: bool = True
+        self,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        verbose: bool = False,
+        animate: bool = True,
+        processes: bool = True,
     ):
         _tune_malloc()  # before the server's threads create their arenas
+        viser_speedups.install()
+        # Threads that wait on I/O (websocket, the analyst's results) retake the GIL only
+        # at a switch interval; at the default 5 ms a busy server delays each of them.
+        sys.setswitchinterval(SWITCH_INTERVAL_S)
         uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
         self.server = viser.ViserServer(
             host=host, port=port, label="Disk-cam designer", verbose=verbose
@@ -81,6 +93,7 @@ class App:
         self._gone: set[int] = set()  # left while their Session was still being built
         self._lock = threading.Lock()
         self.animate = animate
+        self.analyst = Analyst(processes)  # the physics, in worker processes (app.analyst)
         self.server.on_client_connect(self._connect)
         self.server.on_client_disconnect(self._disconnect)
 
@@ -92,7 +105,7 @@ class App:
         # viser runs connect and disconnect callbacks on its thread pool: a tab closed
         # while its Session is built gets its disconnect first; close that Session.
         try:
-            s = Session(client, animate=self.animate)
+            s = Session(client, animate=self.animate, analyst=self.analyst)
         except BaseException:
             with self._lock:
                 self._gone.discard(client.client_id)
@@ -129,6 +142,7 @@ class App:
         for s in sessions:
             s.close()
         self.server.stop()
+        self.analyst.close()
 
 
 def _port_free(host: str, port: int) -> bool:

@@ -18,12 +18,12 @@ import math
 import threading
 
 from camcore import export
-from camcore.analysis import Analysis, analyze
+from camcore.analysis import Analysis
 from camcore.model import Design, DesignError, design_from_json, design_to_json, preset_names
 from camcore.model import load_preset as load_preset_design
-from camcore.report import summary
 
-from . import compare, controls, plots, storage, uploads
+from . import controls, plots, storage, uploads
+from .analyst import Analyst, Result
 from .layout import DEFAULT_PRESET, Layout, build_layout
 from .panels import (
     esc,
@@ -42,19 +42,32 @@ FPS = 30.0
 # tab has been still this long, and runs for one tab at a time across the server.
 SETTLE_S = 0.6
 BACKGROUND = threading.BoundedSemaphore(1)
+# Re-analyses of all tabs run one at a time. Many threads each making many short numpy
+# calls (each releases and retakes the GIL) convoy: with 30 tabs at once every call
+# waits a GIL switch interval, and the server did a third of the work it could. Taken
+# last (inside a tab's lock, never the other way round), re-entrant for inline callbacks.
+FOREGROUND = threading.RLock()
 
 
 class Session:
     """Everything one client sees. ``client`` is a viser ClientHandle; ``animate``
     False starts no background loops (tests and the bench drive them by hand)."""
 
-    def __init__(self, client, design: Design | None = None, animate: bool = True):
+    def __init__(
+        self,
+        client,
+        design: Design | None = None,
+        animate: bool = True,
+        analyst: Analyst | None = None,
+    ):
         self.client = client
+        self.analyst = analyst or Analyst(processes=False)  # the physics (app.analyst)
         self.lock = threading.RLock()
         self.closed = threading.Event()
         self.base = design or load_preset_design(DEFAULT_PRESET)
         self.design = self.base
-        self.analysis: Analysis = analyze(self.base, verify=False)
+        first = self.analyst.fast(self.base)
+        self.analysis: Analysis = first.analysis
         self.error: str | None = None  # the input's error; the last valid design stays
         self.verified = False  # self.analysis is the geometrically checked one
         self.gen = 0  # bumped by every new design: background results of older ones drop
@@ -67,14 +80,14 @@ class Session:
         self._persist = False  # on once the browser's stored design has been read
         self._syncing = False  # True while the session writes into its own widgets
         self._ticket_lock, self._ticket = threading.Lock(), 0
-        self.ticker = Ticker(self.frame, FPS, name=f"cam-animate-{id(self)}")
+        self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
         with self.lock:
             self.ui: Layout = build_layout(client.gui, self.base, self.analysis, self.speed)
             self._wire(self.ui)
             self.view = SceneView(client.scene)
             client.scene.set_up_direction("+y")
-            self._apply(self.base, self.analysis, reset_camera=True)
+            self._apply(self.base, first, reset_camera=True)
         self._restorer = threading.Thread(
             target=self._restore, daemon=True, name=f"cam-restore-{id(self)}"
         )
@@ -105,6 +118,7 @@ class Session:
         ui.delete_saved_btn.on_click(lambda _: self.delete_saved(ui.saved_dd.value))
         for kind, b in ui.download_btns.items():
             b.on_click(lambda _, k=kind: self.download(k))
+        ui.explore.bind(self.analyst, lambda: self.design, self.set_design)
 
     # --- design changes -------------------------------------------------------------
     def on_control(self) -> None:
@@ -119,7 +133,7 @@ class Session:
             mine = self._ticket
         with self.lock:
             if self._syncing or self.closed.is_set() or mine != self._ticket:
-                return
+                return  # (a newer change came while this one waited its turn)
             values = self._values()
             design, err = controls.try_design(self.base, values)
             if design is None:
@@ -171,9 +185,15 @@ class Session:
         finally:
             self._syncing = False
 
-    def _apply(self, design: Design, a: Analysis | None = None, reset_camera: bool = False) -> None:
-        """Analyse (fast path, no verification) and redraw everything. Lock held."""
-        a = analyze(design, verify=False) if a is None else a
+    def _apply(self, design: Design, r: Result | None = None, reset_camera: bool = False) -> None:
+        """Analyse (fast path, no verification; in the analyst's worker, so that other
+        tabs redraw meanwhile) and redraw everything. Lock held."""
+        r = self.analyst.fast(design) if r is None else r
+        with FOREGROUND:
+            self._redraw(design, r.analysis, r.summary, reset_camera)
+        self.refiner.poke()
+
+    def _redraw(self, design: Design, a: Analysis, s: dict, reset_camera: bool) -> None:
         self.design, self.analysis = design, a
         self.gen += 1
         self.verified = False
@@ -189,13 +209,12 @@ class Session:
             ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
-            self._show_summary(summary(a))
+            self._show_summary(s)
             ui.where_md.content = where_markdown(a, k, self.station_events)
             self._show_status()
         self._save_working()
         if reset_camera:
             self.reset_camera()
-        self.refiner.poke()
 
     def _enable_for_kind(self, design: Design) -> None:
         k, c = design.follower.kind, self.ui.controls
@@ -230,22 +249,19 @@ class Session:
         refiner once the tab is still; results of a design changed meanwhile drop)."""
         with self.lock:
             design, gen = self.design, self.gen
-        av = analyze(design, verify=True)
-        if self._stale(gen):
-            return
-        results = compare.compute(design)
-        with self.lock:
+        r = self.analyst.refined(design)
+        with self.lock, FOREGROUND:
             if self._stale(gen):
                 return
             old = [(v.code, v.ranges_deg) for v in self.analysis.violations]
-            self.analysis, self.verified = av, True
-            if [(v.code, v.ranges_deg) for v in av.violations] != old:
-                self.view.build(av)
+            self.analysis, self.verified = r.analysis, True
+            if [(v.code, v.ranges_deg) for v in r.analysis.violations] != old:
+                self.view.build(r.analysis)
                 for c in self.ui.curves:
-                    c.update(av, self._index())
-            self._show_summary(summary(av))
+                    c.update(r.analysis, self._index())
+            self._show_summary(r.summary)
             self._show_status()
-            self.ui.compare_view.update(results)
+            self.ui.compare_view.update(r.compare)
 
     def _stale(self, gen: int) -> bool:
         with self.lock:
@@ -424,6 +440,13 @@ class Session:
             if not self.playing:
                 self._goto(self.theta_deg)
 
+    def _tick(self, dt: float, n: int) -> None:
+        """The ticker's step: a frame, unless paused meanwhile (a step that waited for
+        the lock while the user pressed pause must not move the cam)."""
+        with self.lock:
+            if self.playing:
+                self.frame(dt, n)
+
     def frame(self, dt: float, n: int = 0) -> None:
         """One animation step of dt seconds, the n-th since play (the ticker's step)."""
         with self.lock:
@@ -473,6 +496,7 @@ class Session:
 
     def close(self) -> None:
         self.closed.set()
+        self.ui.explore.close()
         self.ticker.close()
         self.refiner.close()
         for t in self.threads:

@@ -4,11 +4,11 @@ A verdict must hold for the real cam, not only at the analysed angles. On a rise
 fall every checked quantity (pressure angle, pitch curvature, contact force, Hertz
 stress) is a closed-form function of the cam angle, so its extremes can be found
 rather than sampled: each local extreme of the grid samples brackets a true extreme
-between its two neighbours, and a golden-section search (vectorized over all
-brackets at once, one evaluation of the closed forms per step) narrows the bracket by
-0.618 per step. After ITERATIONS steps it is ~1e-5 of a grid step wide, far below any
-difference that matters. Dwells need no search: there every quantity is constant on
-each contact window.
+between its two neighbours, and a zoom search (vectorized over all brackets at once,
+one evaluation of the closed forms per round) samples POINTS angles per bracket and
+keeps the two spacings around the best: after ROUNDS rounds the bracket is 1/4096 of
+its width, far below any difference that matters. Dwells need no search: there every
+quantity is constant on each contact window.
 
 The grid itself resolves every rise and fall with motion.MIN_MOTION_STEPS samples at
 least, so no extreme hides in a segment shorter than the resolution.
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-ROUNDS = 4  # zoom rounds: each samples POINTS per bracket in one evaluation
-POINTS = 17  # a 8-fold zoom per round: 4096-fold in all
+ROUNDS = 3  # zoom rounds: each samples POINTS per bracket in one evaluation
+POINTS = 33  # a 16-fold zoom per round: 4096-fold in all (3 evaluations, not 4)
 CANDIDATES = 4  # local extremes refined per quantity and face (the worst first)
 
 # name -> (per-face quantity of a camcore.analysis.Local, +1 maximize / -1 minimize)

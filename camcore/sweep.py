@@ -282,3 +282,28 @@ def _run_dask(spec, chunk, todo, verify, workers, scheduler, keep) -> None:
 
 def load_spec(path: str | Path) -> Spec:
     return parse_spec(read_capped(path, MAX_SPEC_BYTES))
+
+
+def pareto_mask(values: np.ndarray) -> np.ndarray:
+    """Which rows of ``values`` (n designs x k figures, all to be minimized) are on the
+    Pareto front: no other row is at least as good in every figure and better in one.
+    Rows with a NaN are never on it. O(n^2 k), for the few thousand rows of a sweep."""
+    v = np.asarray(values, dtype=float)
+    ok = np.isfinite(v).all(axis=1)
+    front = ok.copy()
+    for i in np.flatnonzero(ok):
+        others = v[ok]
+        dominated = (others <= v[i]).all(axis=1) & (others < v[i]).any(axis=1)
+        front[i] = not dominated.any()
+    return front
+
+
+def first_violation(row: dict) -> str | None:
+    """The first limit a row's design breaks (its violation code), None if it is
+    valid, "not a design" if the combination was refused before any analysis."""
+    if row.get("error"):
+        return "not a design"
+    if row.get("valid"):
+        return None
+    codes = [v["code"] for v in json.loads(row.get("violations") or "[]")]
+    return codes[0] if codes else "invalid"

@@ -516,3 +516,33 @@ def test_the_touching_face_is_highlighted_and_the_idle_one_dimmed(tab):
     assert tuple(s.view.nodes["face1"].color) == IDLE_FACE_RGB
     s.goto_station(2)  # both on the high-dwell arc
     assert tuple(s.view.nodes["face1"].color) == FOLLOWER_RGB
+
+
+def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
+    """The Explore tab (issue 12): a small sweep of base radius x offset over the four
+    followers runs in the background, shows the map, offers the Pareto front of cam
+    size vs. stress, and loads a design of it into the tab."""
+    s, e = tab, tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (70.0, 90.0), (25.0, 35.0)
+    e.steps.value = 2
+    e.all_kinds.value = True
+    e.fig_a.value, e.fig_b.value = (
+        "cam size R (high-dwell radius)",
+        "max contact stress σ_H",
+    )
+    e.run_btn.value = True  # click
+    assert wait_for(lambda: "on the Pareto front" in e.progress.content, 120.0), e.progress.content
+    assert "**16 designs**" in e.progress.content
+    assert e.image is not None and e.image.image.shape[2] == 3
+    offers = e.front_dd.options
+    assert offers and offers[0].startswith("1. ") and not e.load_btn.disabled
+    # the paper's claim over this little design space: the lowest stress is a concave face
+    assert any("concave" in o for o in offers)
+    e.front_dd.value = offers[-1]
+    e.load_btn.value = True
+    assert wait_for(lambda: s.design.cam.base_radius_mm in (70.0, 90.0), 10.0)
+    e.load("not an offer")  # a hostile value is ignored
+    e.x.value = e.y.value
+    e.run_btn.value = True
+    assert "two different fields" in e.progress.content

@@ -8,6 +8,7 @@ import json
 import subprocess
 import sys
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
@@ -177,3 +178,37 @@ def test_mixed_value_types_and_structured_values_join_into_one_table(tmp_path):
     rows = rows_of(tmp_path / "r.parquet")
     assert [r["grid.cam.base_radius_mm"] for r in rows] == [80.0, 85.5]
     assert json.loads(rows[0]["grid.motion.segments"]) == segs
+
+
+def test_pareto_mask_against_a_brute_force_definition():
+    from camcore.sweep import pareto_mask
+
+    rng = np.random.default_rng(3)
+    v = rng.random((200, 3))
+    v[5] = np.nan
+    v[7] = v[8]  # two equal rows are both on the front or both off it
+    mask = pareto_mask(v)
+    for i in range(len(v)):
+        if not np.isfinite(v[i]).all():
+            assert not mask[i]
+            continue
+        dominated = any(
+            np.isfinite(v[j]).all() and (v[j] <= v[i]).all() and (v[j] < v[i]).any()
+            for j in range(len(v))
+        )
+        assert mask[i] == (not dominated)
+    assert mask[7] == mask[8]
+    assert pareto_mask(np.array([[1.0, 2.0], [2.0, 1.0], [2.0, 2.0]])).tolist() == [
+        True,
+        True,
+        False,
+    ]
+
+
+def test_first_violation_names_the_broken_limit():
+    from camcore.sweep import first_violation
+
+    assert first_violation({"valid": True, "error": None}) is None
+    assert first_violation({"valid": False, "error": "cam.base_radius_mm: ..."}) == "not a design"
+    row = {"valid": False, "error": None, "violations": '[{"code": "pressure_angle"}]'}
+    assert first_violation(row) == "pressure_angle"

@@ -1,0 +1,143 @@
+"""The physics of every tab, computed off the server's interpreter.
+
+The server is one Python process; its GUI work (scene, curves, websocket) holds the
+GIL. The analyses run in worker processes so that a 2-core machine uses both cores:
+
+- the *foreground* worker answers a tab's edit: the fast analysis and its summary
+  (~10 ms, shipped back pickled, ~1 MB);
+- the *background* worker, on CPU time nobody else wants, refines a tab that has
+  gone still: the verified analysis and the four-follower comparison (~0.5 s).
+
+``Analyst(processes=False)`` computes in the calling thread (tests of the pure
+session logic, the bench's floor). A worker that dies is replaced on the next call.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import threading
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from camcore import explore, sweep
+from camcore.analysis import Analysis, analyze, compare
+from camcore.model import PAPER_FOLLOWERS, Design
+from camcore.report import summary
+from camcore.units import to_mpa
+
+COMPARE_POINTS = 720  # samples per compare curve shipped to the GUI
+WORKERS = {"fg": 2, "bg": 1}  # processes per pool
+
+
+@dataclass(frozen=True)
+class Result:
+    """An analysis and its report summary (camcore.report.summary)."""
+
+    analysis: Analysis
+    summary: dict
+
+
+@dataclass(frozen=True)
+class Refined(Result):
+    """The verified analysis, plus the four followers compared on the same design:
+    {kind: {"summary": dict, "theta_deg", "FN_N", "stress_MPa": arrays} | error str}."""
+
+    compare: dict[Any, Any]
+
+
+def fast(design: Design) -> Result:
+    """What a tab needs after an edit (runs in a worker)."""
+    a = analyze(design, verify=False)
+    return Result(a, summary(a))
+
+
+def refined(design: Design) -> Refined:
+    """What a still tab gets next (runs in the background worker)."""
+    a = analyze(design, verify=True)
+    out: dict[Any, Any] = {}
+    for kind, r in compare(design, kinds=PAPER_FOLLOWERS, errors=True).items():
+        if isinstance(r, str):
+            out[kind] = r
+            continue
+        idx = np.unique(np.linspace(0, r.theta.size - 1, COMPARE_POINTS).astype(int))
+        out[kind] = {
+            "summary": summary(r),
+            "theta_deg": np.degrees(r.theta[idx]),
+            "FN_N": r.guide.FN[idx],
+            "stress_MPa": to_mpa(r.stress.max(axis=0))[idx],
+        }
+    return Refined(a, summary(a), out)
+
+
+def _warm(background: bool) -> int:
+    """Worker start: the background worker only gets CPU time no one else wants
+    (SCHED_IDLE where Linux has it, else the lowest nice), so a class's refinements
+    never slow down its edits. Then warm the imports and caches."""
+    if background:
+        try:
+            os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
+        except (AttributeError, OSError):
+            os.nice(19)
+    fast(Design())
+    return os.getpid()
+
+
+class Analyst:
+    """Two single-process pools (foreground, background) or none (``processes=False``)."""
+
+    def __init__(self, processes: bool = True):
+        self.processes = processes
+        self._lock = threading.Lock()
+        self._pools: dict[str, ProcessPoolExecutor | None] = {"fg": None, "bg": None}
+        if processes:
+            for name in self._pools:
+                self._pool(name)  # start now: the first tab should not wait for it
+
+    def _pool(self, name: str) -> ProcessPoolExecutor:
+        with self._lock:
+            pool = self._pools[name]
+            if pool is None:
+                ctx = multiprocessing.get_context("spawn")  # never fork a threaded server
+                pool = ProcessPoolExecutor(WORKERS[name], mp_context=ctx)
+                pool.submit(_warm, name == "bg")
+                self._pools[name] = pool
+            return pool
+
+    def _run(self, name: str, fn, *args):
+        if not self.processes:
+            return fn(*args)
+        for _ in range(2):
+            pool = self._pool(name)
+            try:
+                return pool.submit(fn, *args).result()
+            except BrokenProcessPool:  # the worker died (killed, out of memory): a new one
+                with self._lock:
+                    if self._pools[name] is pool:
+                        self._pools[name] = None
+        return fn(*args)  # twice broken: compute here rather than fail the tab
+
+    def fast(self, design: Design) -> Result:
+        return self._run("fg", fast, design)
+
+    def refined(self, design: Design) -> Refined:
+        return self._run("bg", refined, design)
+
+    def sweep_chunk(self, base: dict, points: list[dict]) -> list[dict]:
+        """Sweep rows (camcore.sweep.row, fast analysis) of a batch of grid points."""
+        return self._run("bg", sweep.run_chunk, base, points, False)
+
+    def explore_png(self, rows, x, y, names, front) -> bytes:
+        """camcore.explore.explore_png, drawn in the background worker."""
+        return self._run("bg", explore.explore_png, rows, x, y, names, front)
+
+    def close(self) -> None:
+        with self._lock:
+            pools, self._pools = list(self._pools.values()), {"fg": None, "bg": None}
+        for pool in pools:
+            if pool is not None:
+                pool.shutdown(wait=True, cancel_futures=True)

@@ -1,0 +1,216 @@
+"""The Explore tab: sweep two design fields (and, optionally, the four followers)
+around the design on screen, in the background, and show which limit fails where and
+the Pareto front of two figures the user picks; a design of the front loads with one
+click.
+
+The sweep is camcore.sweep's (rows equal ``report --json``, fast analysis: the
+geometric check runs when a design is loaded), in chunks on the analyst's background
+worker, which only uses CPU time no tab's edit wants. One sweep per tab, at most
+MAX_DESIGNS designs, cancellable between chunks.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from camcore.explore import FIGURES, pareto
+from camcore.model import PAPER_FOLLOWERS, Design, DesignError
+from camcore.sweep import design_at
+
+from .controls import get_path
+from .panels import esc
+
+# label -> design path of the fields a sweep may vary (numbers only)
+PARAMETERS = {
+    "Base radius r_b [mm]": "cam.base_radius_mm",
+    "Offset e (double) [mm]": "follower.offset_mm",
+    "Axis offset e_s (single) [mm]": "follower.single_offset_mm",
+    "Face radius r_f [mm]": "follower.face_radius_mm",
+    "Roller radius r_c [mm]": "follower.roller_radius_mm",
+    "Lift h [mm]": "motion.lift_mm",
+    "Rise β_r [°]": "motion.rise_deg",
+    "Fall β_f [°]": "motion.fall_deg",
+    "Speed [rpm]": "cam.speed_rpm",
+}
+FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
+MAX_STEPS = 15  # per axis
+MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
+CHUNK = 12  # designs per background job: ~0.2 s, the cancel latency
+MAX_FRONT = 30  # designs of the front offered for loading
+
+
+def grid_points(
+    x: tuple[str, float, float], y: tuple[str, float, float], steps: int, kinds: list[str]
+) -> list[dict]:
+    """The sweep's points: kinds x (x values) x (y values), ``steps`` values per axis
+    (clipped to 2..MAX_STEPS), each a {path: value} dict."""
+    n = int(min(MAX_STEPS, max(2, steps)))
+    xv, yv = np.linspace(x[1], x[2], n), np.linspace(y[1], y[2], n)
+    return [
+        {"follower.kind": k, x[0]: float(a), y[0]: float(b)} for k in kinds for a in xv for b in yv
+    ]
+
+
+class ExplorePanel:
+    """The tab's widgets and its one background sweep. ``bind`` connects it to the
+    session: the analyst, the design on screen, and how to load a design."""
+
+    def __init__(self, gui):
+        self.gui = gui
+        labels = tuple(PARAMETERS)
+        gui.add_markdown(
+            "Sweep two fields around the design on screen; each point is a whole analysis "
+            "(fast path: the geometric check runs when you load a design)."
+        )
+        self.x = gui.add_dropdown("x field", labels, initial_value=labels[0])
+        self.x_range = gui.add_vector2("x from, to", (60.0, 110.0), step=0.5)
+        self.y = gui.add_dropdown("y field", labels, initial_value=labels[1])
+        self.y_range = gui.add_vector2("y from, to", (20.0, 40.0), step=0.5)
+        self.steps = gui.add_slider("Steps per field", 2, MAX_STEPS, 1, 8)
+        self.all_kinds = gui.add_checkbox("All four followers (the paper's claim)", True)
+        figs = tuple(FIGURE_LABELS)
+        self.fig_a = gui.add_dropdown("Figure 1 (Pareto x)", figs, initial_value=figs[0])
+        self.fig_b = gui.add_dropdown("Figure 2 (Pareto y)", figs, initial_value=figs[1])
+        self.run_btn = gui.add_button("Run the sweep", color="green")
+        self.cancel_btn = gui.add_button("Cancel", disabled=True)
+        self.progress = gui.add_markdown("")
+        self.front_dd = gui.add_dropdown("Pareto designs", ("–",), initial_value="–")
+        self.load_btn = gui.add_button("Load this design", disabled=True)
+        self.image: Any = None
+        self._folder = gui.add_folder("Map", expand_by_default=True)
+        self._analyst: Any = None
+        self._design: Callable[[], Design] | None = None
+        self._load: Callable[[Design], None] | None = None
+        self._lock = threading.Lock()
+        self._cancel = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._offers: dict[str, dict] = {}  # dropdown label -> grid point
+        self._base: dict = {}
+
+    def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
+        self._analyst, self._design, self._load = analyst, design, load
+        self.run_btn.on_click(lambda _: self.start())
+        self.cancel_btn.on_click(lambda _: self._cancel.set())
+        self.load_btn.on_click(lambda _: self.load(self.front_dd.value))
+        self.x.on_update(lambda _: self._suggest(self.x, self.x_range))
+        self.y.on_update(lambda _: self._suggest(self.y, self.y_range))
+
+    def _suggest(self, dd, rng) -> None:
+        """A range around the design's value of a newly chosen field (±30 %)."""
+        path = PARAMETERS.get(dd.value)
+        if path is None or self._design is None:
+            return
+        v = get_path(self._design(), path)
+        if isinstance(v, int | float):
+            lo, hi = sorted((0.7 * v, 1.3 * v)) if v else (0.0, 10.0)
+            rng.value = (round(lo, 1), round(hi, 1))
+
+    # --- the sweep ----------------------------------------------------------------
+    def start(self) -> None:
+        """Run the sweep the widgets describe, unless one runs already (one per tab)."""
+        with self._lock:
+            if self._thread is not None and self._thread.is_alive():
+                return
+            job = self._job()
+            if job is None:
+                return
+            self._cancel.clear()
+            self.run_btn.disabled, self.cancel_btn.disabled = True, False
+            self._thread = threading.Thread(
+                target=self._sweep, args=job, daemon=True, name="cam-explore"
+            )
+            self._thread.start()
+
+    def _job(self):
+        """(base, points, x, y, figures) from the widgets, or None (said why)."""
+        px, py = PARAMETERS.get(self.x.value), PARAMETERS.get(self.y.value)
+        fa, fb = FIGURE_LABELS.get(self.fig_a.value), FIGURE_LABELS.get(self.fig_b.value)
+        if px is None or py is None or fa is None or fb is None or px == py or fa == fb:
+            self.progress.content = "✖ Choose two different fields and two different figures."
+            return None
+        assert self._design is not None  # bound before any click
+        design = self._design()
+        kinds = (
+            [k.value for k in PAPER_FOLLOWERS]
+            if self.all_kinds.value
+            else [design.follower.kind.value]
+        )
+        (x0, x1), (y0, y1) = self.x_range.value, self.y_range.value
+        points = grid_points((px, x0, x1), (py, y0, y1), int(self.steps.value), kinds)
+        base = design.model_dump(mode="json")
+        return base, points, (px, self.x.value), (py, self.y.value), [fa, fb]
+
+    def _sweep(self, base, points, x, y, names) -> None:
+        rows: list[dict] = []
+        try:
+            for i in range(0, len(points), CHUNK):
+                if self._cancel.is_set():
+                    break
+                rows += self._analyst.sweep_chunk(base, points[i : i + CHUNK])
+                ok = sum(bool(r.get("valid")) for r in rows)
+                self.progress.content = (
+                    f"Running: **{len(rows)} / {len(points)}** designs, {ok} valid so far…"
+                )
+            self._show(base, rows, len(points), x, y, names)
+        except Exception as exc:  # a worker lost: say so, keep the tab
+            self.progress.content = f"✖ The sweep stopped: {esc(exc)}"
+        finally:
+            self.run_btn.disabled, self.cancel_btn.disabled = False, True
+
+    def _show(self, base, rows, total, x, y, names) -> None:
+        if not rows:
+            self.progress.content = "Cancelled before the first designs."
+            return
+        front = pareto(rows, names)
+        png = self._analyst.explore_png(rows, x, y, names, front)
+        offers = {}
+        for n, i in enumerate(front[:MAX_FRONT], start=1):
+            r = rows[i]
+            point = {k[5:]: v for k, v in r.items() if k.startswith("grid.")}
+            figs = ", ".join(f"{FIGURES[m].get(r):.4g} {FIGURES[m].unit}" for m in names)
+            pars = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in point.values())
+            offers[f"{n}. {pars} → {figs}"] = point
+        with self._lock:
+            self._base, self._offers = base, offers
+            self.front_dd.options = tuple(offers) or ("–",)
+            self.front_dd.value = self.front_dd.options[0]
+            self.load_btn.disabled = not offers
+            if self.image is None:
+                with self._folder:
+                    self.image = self.gui.add_image(_decode(png), format="png")
+            else:
+                self.image.image = _decode(png)
+        ok = sum(bool(r.get("valid")) for r in rows)
+        done = "" if len(rows) == total else f" (cancelled after {len(rows)} of {total})"
+        self.progress.content = (
+            f"**{len(rows)} designs**{done}: {ok} valid, {len(front)} on the Pareto front."
+        )
+
+    def load(self, label: str) -> None:
+        """Load a design of the front (the dropdown's value; anything else is ignored)."""
+        with self._lock:
+            point, base = self._offers.get(label) if isinstance(label, str) else None, self._base
+        if point is None or self._load is None:
+            return
+        try:
+            design = design_at(base, point)
+        except DesignError as exc:
+            self.progress.content = f"✖ {esc(exc)}"
+            return
+        self._load(design)
+
+    def close(self) -> None:
+        self._cancel.set()
+
+
+def _decode(png: bytes) -> np.ndarray:
+    """PNG bytes as an (H, W, 3) array for viser's image widget."""
+    import io
+
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB"))
