@@ -40,6 +40,14 @@ DOWNLOADS = (
     ("pdf", "Report PDF"),
 )
 STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session adapts them
+# The wide panel (Curves tab): viser's widest panel is 384 px; this rule, in an HTML
+# element of the tab, anchors the panel at the right edge and widens it (its charts
+# follow). viser 1.1.1 marks the panel data-testid="floating-panel"; while the rule is
+# on, the panel cannot be dragged.
+WIDE_PANEL_CSS = (
+    "<style>[data-testid='floating-panel']{left:auto!important;right:15px!important;"
+    "width:min(62vw,1000px)!important}</style>"
+)
 
 
 @dataclass
@@ -47,6 +55,7 @@ class Layout:
     """Handles of one tab's widgets (viser GUI handles unless said otherwise)."""
 
     status: Any
+    wide_css: Any  # holds WIDE_PANEL_CSS while the wide panel is on
     quick_stl_btn: Any
     # animation
     play_btn: Any
@@ -60,6 +69,7 @@ class Layout:
     segments: SegmentTable
     summary_md: Any
     # Curves, Compare
+    wide_box: Any
     curves: list[plots.Curve]
     compare_view: compare.CompareView
     explore: ExplorePanel
@@ -86,7 +96,7 @@ class Layout:
 def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     """Build the whole tab in ``gui`` (a client's GuiApi) for design ``base`` whose
     analysis is ``first`` (the curves take their series from it)."""
-    h: dict[str, Any] = {"status": gui.add_html("")}
+    h: dict[str, Any] = {"status": gui.add_html(""), "wide_css": gui.add_html("")}
     h["quick_stl_btn"] = gui.add_button("⬇ Download the cam (STL, mm)")
     with gui.add_folder("Animation", expand_by_default=True):
         h["play_btn"] = gui.add_button("▶ Play", color="green")
@@ -98,6 +108,12 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     with tabs.add_tab("Design"):
         _design_tab(gui, base, h)
     with tabs.add_tab("Curves"):
+        h["wide_box"] = gui.add_checkbox(
+            "Wide panel",
+            False,
+            hint="the curves up to 1000 px wide, the panel at the right edge (it covers "
+            "part of the 3D view; turn off to see all of it)",
+        )
         h["curves"] = plots.build_curves(gui, first)
     with tabs.add_tab("Compare"):
         h["compare_view"] = compare.CompareView(gui)

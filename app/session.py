@@ -24,7 +24,7 @@ from camcore.model import load_preset as load_preset_design
 
 from . import controls, plots, storage, uploads
 from .analyst import Analyst, Result
-from .layout import DEFAULT_PRESET, Layout, build_layout
+from .layout import DEFAULT_PRESET, WIDE_PANEL_CSS, Layout, build_layout
 from .panels import (
     esc,
     file_stem,
@@ -109,6 +109,7 @@ class Session:
         for name, cb in ui.overlay_boxes.items():
             cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
         ui.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))
+        ui.wide_box.on_update(lambda e: self.set_wide_panel(bool(e.target.value)))
         ui.camera_btn.on_click(lambda _: self.reset_camera())
         ui.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
         ui.preset_btn.on_click(lambda _: self.load_preset(ui.preset_dd.value))
@@ -472,6 +473,11 @@ class Session:
             else:
                 with self.ui.view_folder:
                     self.ui.stations_img = self.client.gui.add_image(image, format="png")
+
+    def set_wide_panel(self, on: bool) -> None:
+        """Widen the control panel for the curves (layout.WIDE_PANEL_CSS), or not."""
+        with self.lock:
+            self.ui.wide_css.content = WIDE_PANEL_CSS if on else ""
 
     def set_camera_view(self, view: str) -> None:
         """A preset view (Front by default; the close-up follows the animation)."""

@@ -546,3 +546,12 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     e.x.value = e.y.value
     e.run_btn.value = True
     assert "two different fields" in e.progress.content
+
+
+def test_wide_panel_toggle(tab):
+    from app.layout import WIDE_PANEL_CSS
+
+    tab.ui.wide_box.value = True
+    assert tab.ui.wide_css.content == WIDE_PANEL_CSS
+    tab.ui.wide_box.value = False
+    assert tab.ui.wide_css.content == ""

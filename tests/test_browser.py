@@ -86,6 +86,23 @@ def test_app_in_headless_chromium(tmp_path):
             page.get_by_role("button", name="5", exact=True).click()
             page.get_by_text("at station 5").first.wait_for()
 
+            # the wide panel gives the curves room, and gives it back
+            panel = page.locator("[data-testid=floating-panel]")
+            narrow = panel.bounding_box()["width"]
+            page.get_by_role("tab", name="Curves").click()
+            page.get_by_text("Wide panel").first.click()
+            page.wait_for_function(
+                "() => document.querySelector('[data-testid=floating-panel]')"
+                ".getBoundingClientRect().width > 550"
+            )
+            box = panel.bounding_box()
+            assert box["x"] + box["width"] <= 1000 and box["width"] > narrow + 150
+            page.get_by_text("Wide panel").first.click()
+            page.wait_for_function(
+                f"() => document.querySelector('[data-testid=floating-panel]')"
+                f".getBoundingClientRect().width < {narrow + 1}"
+            )
+
             # download the STL through the browser
             page.get_by_role("tab", name="Files").click()
             with page.expect_download(timeout=T) as dl:
