@@ -72,6 +72,19 @@ def test_app_in_headless_chromium(tmp_path):
             )
             assert drawn_fraction(shot) > 0.02
 
+            # the teaching view: a station button says what happens there and which
+            # face touches, in words and in colour (the idle face dimmed)
+            from app.scene import FOLLOWER_RGB, IDLE_FACE_RGB
+
+            page.get_by_role("button", name="1", exact=True).click()
+            page.get_by_text("at station 1").first.wait_for()
+            page.get_by_text("In contact: S1 (left face) ·").first.wait_for()
+            assert tuple(session.view.nodes["face1"].color) == IDLE_FACE_RGB
+            page.get_by_role("button", name="2", exact=True).click()
+            page.get_by_text("S2 touches; from here the load is shared").first.wait_for()
+            page.get_by_text("In contact: S1 (left face), S2 (right face)").first.wait_for()
+            assert tuple(session.view.nodes["face1"].color) == FOLLOWER_RGB
+
             # change a control: follower kind -> single roller, and see the change
             kind_input = page.evaluate_handle(
                 "() => [...document.querySelectorAll('input')]"
