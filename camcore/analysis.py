@@ -70,7 +70,7 @@ def contacts(
     design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...], theta: np.ndarray
 ) -> Contacts:
     """The contact geometry (Eqs. 1-19) at the cam angles ``theta`` [rad]."""
-    prog = motion.program(design, theta)
+    prog = motion.program(design, theta, segs)
     faces = [profile.face_contact(geo, f, prog) for f in geo.faces]
     windows, part = profile.contact_windows(geo, prog, segs)
     body = np.stack([profile.to_body(prog.theta, c.point) for c in faces])

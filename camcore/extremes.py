@@ -145,15 +145,37 @@ def refine_max(f, theta: np.ndarray, values: np.ndarray) -> tuple[float, float]:
     CANDIDATES largest local maxima of the samples are each searched between their grid
     neighbours (the same zoom as worst_values). Returns (value, angle [rad]); -inf if
     no sample is finite."""
+    return refine_maxes(lambda x: f(x)[None, :], theta, [values])[0]
+
+
+def refine_maxes(f, theta: np.ndarray, values: list[np.ndarray]) -> list[tuple[float, float]]:
+    """refine_max of several quantities in one search: ``f`` maps cam angles x to the
+    (Q, len(x)) values of all Q quantities (one evaluation of the closed forms serves
+    every bracket), ``values`` holds each quantity on the grid ``theta``."""
+    out: list[tuple[float, float]] = [(-np.inf, float("nan"))] * len(values)
     with np.errstate(all="ignore"):
-        cand = [k for _, k in _candidates(values[None, :], np.isfinite(values)[None, :])]
-        if not cand:
-            return -np.inf, float("nan")
-        k = np.array(cand)
-        lo = theta[np.maximum(k - 1, 0)]
-        hi = theta[np.minimum(k + 1, theta.size - 1)]
-        best, at = _zoom(f, lo, hi)
-        best = np.fmax(best, values[k])  # the zoom never loses the sample itself
-        at = np.where(best > values[k], at, theta[k])
-    j = int(np.argmax(best))
-    return float(best[j]), float(at[j])
+        q, k = [], []
+        for j, v in enumerate(values):
+            cand = [kk for _, kk in _candidates(v[None, :], np.isfinite(v)[None, :])]
+            q += [j] * len(cand)
+            k += cand
+        if not k:
+            return out
+        qa, ka = np.array(q), np.array(k)
+        lo = theta[np.maximum(ka - 1, 0)]
+        hi = theta[np.minimum(ka + 1, theta.size - 1)]
+
+        def g(x):  # the quantity of each bracket at its POINTS angles, bracket-major
+            per = x.size // qa.size
+            return f(x)[np.repeat(qa, per), np.arange(x.size)]
+
+        best, at = _zoom(g, lo, hi)
+        grid = np.array([values[j][kk] for j, kk in zip(qa, ka, strict=True)])
+        best = np.fmax(best, grid)  # the zoom never loses the sample itself
+        at = np.where(best > grid, at, theta[ka])
+    for j in range(len(values)):
+        m = np.flatnonzero(qa == j)
+        if m.size:
+            i = m[np.argmax(best[m])]
+            out[j] = (float(best[i]), float(at[i]))
+    return out

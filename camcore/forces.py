@@ -100,20 +100,21 @@ def _first_mode(design: Design, Ft, normal, x_c, r: float, S, V, slide, moment) 
     arm1, arm2 = l1 - r, l1 + dyn.guide_length_mm * MM - r
     mu_sv = dyn.guide_friction * np.sign(V)  # no friction while the follower is at rest
     tol = 1e-9 * (np.abs(Ft) + 1.0)
-    out = np.full((3, Ft.shape[0]), np.nan)
-    mode = np.full(Ft.shape[0], -1, dtype=np.int8)
-    for k, (s1, s2) in enumerate(MODES):
-        F1, F2, FN = _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d, slide, moment)
-        ok = (mode < 0) & np.isfinite(FN) & (F1 >= -tol) & (F2 >= -tol)
-        out[:, ok] = np.stack([F1, F2, FN])[:, ok]
-        mode[ok] = k
+    sides = np.array(MODES)  # all four modes at once: (mode, angle) arrays
+    F1, F2, FN = _solve_mode(
+        sides[:, :1], sides[:, 1:], mu_sv, normal, Ft, x_c, arm1, arm2, d, slide, moment
+    )
+    ok = np.isfinite(FN) & (F1 >= -tol) & (F2 >= -tol)
+    mode = np.where(ok.any(axis=0), ok.argmax(axis=0), -1).astype(np.int8)  # the first
+    cols, pick = np.arange(Ft.shape[0]), np.maximum(mode, 0)
+    out = np.stack([F1[pick, cols], F2[pick, cols], FN[pick, cols]])
     jam = mode < 0
     if jam.any():
         # Self-locking guide: no mode balances with friction. Keep finite numbers (the
         # frictionless solution, whose signed guide forces pick the walls) and let the
         # checks report the violation.
-        F1, F2, FN = _solve_mode(1.0, -1.0, 0 * mu_sv, normal, Ft, x_c, arm1, arm2, d)
-        out[:, jam] = np.stack([np.abs(F1), np.abs(F2), FN])[:, jam]
+        G1, G2, GN = _solve_mode(1.0, -1.0, 0 * mu_sv, normal, Ft, x_c, arm1, arm2, d)
+        out[:, jam] = np.stack([np.abs(G1), np.abs(G2), GN])[:, jam]
     sides = np.array(MODES + ((0.0, 0.0),))[mode]
     return GuideSolution(
         np.maximum(out[0], 0.0), np.maximum(out[1], 0.0), out[2], mode, sides[:, 0], sides[:, 1]

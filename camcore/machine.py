@@ -51,37 +51,38 @@ def _over(num: np.ndarray, den: np.ndarray) -> np.ndarray:
         return np.where(num > 0, np.where(den > 0, num / den, np.inf), 0.0)
 
 
-def _sup(
-    design: Design, theta: np.ndarray, per_program, prog: motion.Program | None = None
-) -> tuple[float, float]:
-    """Sup over the cycle of per_program(program) (>= 0), between samples too; ``prog``
-    is the program on ``theta`` if the caller has it already."""
+def _sups(
+    design: Design, theta: np.ndarray, per_programs: list, prog: motion.Program | None = None
+) -> list[tuple[float, float]]:
+    """Sup over the cycle of each per_program(program) (>= 0), between samples too, in
+    one search (one program evaluation per zoom round serves all); ``prog`` is the
+    program on ``theta`` if the caller has it already."""
+    segs = motion.segments(design)
+    prog = motion.program(design, theta, segs) if prog is None else prog
+    grids = [fn(prog) for fn in per_programs]
 
     def f(x):
-        return per_program(motion.program(design, x))
+        p = motion.program(design, x, segs)
+        return np.stack([fn(p) for fn in per_programs])
 
-    grid = f(theta) if prog is None else per_program(prog)
-    if np.isinf(grid).any():  # unbounded: no finite value will do
-        return np.inf, float(theta[np.argmax(grid)])
-    value, at = extremes.refine_max(f, theta, grid)
-    return max(value, 0.0), at
+    found = extremes.refine_maxes(f, theta, grids)
+    out = []
+    for grid, (value, at) in zip(grids, found, strict=True):
+        if np.isinf(grid).any():  # unbounded: no finite value will do
+            out.append((np.inf, float(theta[np.argmax(grid)])))
+        else:
+            out.append((max(value, 0.0), at))
+    return out
 
 
-def spring_rate_min(
-    design: Design, theta: np.ndarray, prog: motion.Program | None = None
-) -> tuple[float, float]:
-    """The smallest spring rate k [N/m] that keeps contact with the design's preload,
-    and the cam angle [rad] that sets it; inf if no rate does (the follower must be
-    pulled back where the spring is not compressed, S + s_p = 0)."""
+def _rate_need(design: Design):
+    """k that keeps contact at each angle, given the preload (spring_rate_min)."""
     s_p = design.dynamics.preload_mm * MM
-    return _sup(design, theta, lambda p: _over(-spring_free_load(design, p), p.S + s_p), prog)
+    return lambda p: _over(-spring_free_load(design, p), p.S + s_p)
 
 
-def preload_min(
-    design: Design, theta: np.ndarray, prog: motion.Program | None = None
-) -> tuple[float, float]:
-    """The smallest preload s_p [m] that keeps contact with the design's spring rate,
-    and the angle [rad] that sets it; inf if none does (k = 0 and D < 0 somewhere)."""
+def _preload_need(design: Design):
+    """s_p that keeps contact at each angle, given the rate (preload_min)."""
     k = design.dynamics.spring_rate_N_per_m
 
     def need(p):
@@ -90,7 +91,35 @@ def preload_min(
             return np.where(D < 0, np.inf, 0.0)
         return np.maximum(-D / k - p.S, 0.0)
 
-    return _sup(design, theta, need, prog)
+    return need
+
+
+def _jump_need(design: Design):
+    """1 / w^2 at which F_N reaches zero at each angle (jump_speed_rpm)."""
+    d = design.dynamics
+    M, k, s_p = d.mass_g * GRAM, d.spring_rate_N_per_m, d.preload_mm * MM
+    return lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p))
+
+
+def _rpm(inv_w2: float) -> float:
+    return np.inf if inv_w2 == 0.0 else float(1.0 / np.sqrt(inv_w2) / RPM)
+
+
+def spring_rate_min(
+    design: Design, theta: np.ndarray, prog: motion.Program | None = None
+) -> tuple[float, float]:
+    """The smallest spring rate k [N/m] that keeps contact with the design's preload,
+    and the cam angle [rad] that sets it; inf if no rate does (the follower must be
+    pulled back where the spring is not compressed, S + s_p = 0)."""
+    return _sups(design, theta, [_rate_need(design)], prog)[0]
+
+
+def preload_min(
+    design: Design, theta: np.ndarray, prog: motion.Program | None = None
+) -> tuple[float, float]:
+    """The smallest preload s_p [m] that keeps contact with the design's spring rate,
+    and the angle [rad] that sets it; inf if none does (k = 0 and D < 0 somewhere)."""
+    return _sups(design, theta, [_preload_need(design)], prog)[0]
 
 
 def jump_speed_rpm(
@@ -102,14 +131,8 @@ def jump_speed_rpm(
 
     F_t = M g + k (S + s_p) + M A w^2 >= 0 fails first where (-M A) / (M g + k (S + s_p))
     is largest (only A < 0 can pull the follower off)."""
-    d = design.dynamics
-    M, k, s_p = d.mass_g * GRAM, d.spring_rate_N_per_m, d.preload_mm * MM
-    inv_w2, at = _sup(
-        design, theta, lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p)), prog
-    )
-    if inv_w2 == 0.0:
-        return np.inf, at
-    return 1.0 / np.sqrt(inv_w2) / RPM, at
+    inv_w2, at = _sups(design, theta, [_jump_need(design)], prog)[0]
+    return _rpm(inv_w2), at
 
 
 @dataclass(frozen=True)
@@ -164,9 +187,7 @@ class Spring:
 def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None) -> Spring:
     """Spring sizing and jump speed of ``design`` over the grid ``theta`` [rad] (``prog``:
     its program there, if at hand, e.g. an Analysis's)."""
-    prog = motion.program(design, theta) if prog is None else prog
-    k_min, k_at = spring_rate_min(design, theta, prog)
-    s_min, _ = preload_min(design, theta, prog)
-    rpm, at = jump_speed_rpm(design, theta, prog)
+    needs = [_rate_need(design), _preload_need(design), _jump_need(design)]
+    (k_min, k_at), (s_min, _), (inv_w2, at) = _sups(design, theta, needs, prog)
     n = design.dynamics.spring_safety_factor
-    return Spring(k_min, k_at, s_min, rpm, at, n, n * k_min)
+    return Spring(k_min, k_at, s_min, _rpm(inv_w2), at, n, n * k_min)

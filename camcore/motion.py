@@ -319,13 +319,14 @@ def segment_of(design: Design, theta: np.ndarray) -> np.ndarray:
     return codes[segment_index(segs, np.mod(np.asarray(theta, dtype=float), 2 * math.pi))]
 
 
-def program(design: Design, theta: np.ndarray) -> Program:
-    """Evaluate S, V, A, J at the cam angles ``theta`` [rad] (vectorized).
+def program(design: Design, theta: np.ndarray, segs: tuple[Segment, ...] | None = None) -> Program:
+    """Evaluate S, V, A, J at the cam angles ``theta`` [rad] (vectorized); ``segs`` are
+    the design's segments if the caller has them at hand (they are the same each time).
 
     A rise or fall of lift H over beta is S = S0 + H s(x), x = (theta - start)/beta,
     so V = H s'/beta, A = H s''/beta^2, J = H s'''/beta^3 (H < 0 for a fall).
     """
-    segs = segments(design)
+    segs = segments(design) if segs is None else segs
     th = np.mod(np.asarray(theta, dtype=float), 2 * math.pi)
     idx = segment_index(segs, th)
     S, V, A, J = (np.zeros_like(th) for _ in range(4))

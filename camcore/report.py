@@ -115,23 +115,24 @@ def _station_list(a: Analysis) -> list[dict]:
     there in words (``event``)."""
     names = [f.name.split(" ")[0] for f in a.geo.faces]
     two_pi = 2 * math.pi
-    before = a.local(np.mod(a.stations - 1e-7, two_pi))
-    after = a.local(np.mod(a.stations + 1e-7, two_pi))
-    st = a.stations
+    st, n = a.stations, a.stations.size
+    both = a.local(np.mod(np.concatenate([st - 1e-7, st + 1e-7]), two_pi))  # one evaluation
+    before_in, after_in = both.in_contact[:, :n], both.in_contact[:, n:]
+    before_seg, after_seg = both.prog.segment[:n], both.prog.segment[n:]
     return [
         {
             "theta_deg": float(t * R2D),
-            "contacts": [names[i] for i in range(len(names)) if after.in_contact[i, k]],
+            "contacts": [names[i] for i in range(len(names)) if after_in[i, k]],
             "event": (
                 f"station {k}: the same angle as station {k - 1} (one face: nothing to hand over)"
                 if k > 0 and abs(t - st[k - 1]) < 1e-12
                 else _event(
                     k,
                     names,
-                    before.in_contact[:, k],
-                    after.in_contact[:, k],
-                    int(before.prog.segment[k]),
-                    int(after.prog.segment[k]),
+                    before_in[:, k],
+                    after_in[:, k],
+                    int(before_seg[k]),
+                    int(after_seg[k]),
                 )
             ),
         }
