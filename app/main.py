@@ -11,7 +11,6 @@ import ctypes
 import ctypes.util
 import gc
 import signal
-import sys
 import threading
 import time
 import warnings
@@ -25,7 +24,7 @@ from .session import Session
 # A tab that closes while its redraw is in flight makes viser warn once per queued
 # message; that is expected (the session is being torn down), not worth a log line.
 warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
-SWITCH_INTERVAL_S = 0.0005
+IDLE_TRIM_S = 2.0  # after the last tab leaves
 
 
 def _load_malloc_trim():
@@ -78,9 +77,6 @@ class App:
     ):
         _tune_malloc()  # before the server's threads create their arenas
         viser_speedups.install()
-        # Threads that wait on I/O (websocket, the analyst's results) retake the GIL only
-        # at a switch interval; at the default 5 ms a busy server delays each of them.
-        sys.setswitchinterval(SWITCH_INTERVAL_S)
         uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
         self.server = viser.ViserServer(
             host=host, port=port, label="Disk-cam designer", verbose=verbose
@@ -135,6 +131,12 @@ class App:
             s.close()
             del s
             _trim_heap()
+            with self._lock:
+                last = not self.sessions
+            if last:  # the class has left: trim again once their in-flight work is gone
+                t = threading.Timer(IDLE_TRIM_S, _trim_heap)
+                t.daemon = True
+                t.start()
 
     def stop(self) -> None:
         with self._lock:

@@ -32,6 +32,8 @@ def measure(tabs: int = 30, duration: float = 30.0, rate_hz: float = 1.0) -> dic
         rss_load = srv.rss_mb()
         time.sleep(5.0)
         rss_after = srv.rss_mb()
+        time.sleep(15.0)
+        rss_later = srv.rss_mb()
     finally:
         srv.stop()
         srv.cleanup()
@@ -50,6 +52,7 @@ def measure(tabs: int = 30, duration: float = 30.0, rate_hz: float = 1.0) -> dic
         "rss_idle_mb": rss_idle,
         "rss_load_mb": rss_load,
         "rss_after_mb": rss_after,
+        "rss_20s_after_mb": rss_later,
         "foreign_redraws": s["foreign"],
         "errors": s["errors"][:5],
     }

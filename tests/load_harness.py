@@ -150,7 +150,7 @@ def lift_shown(el: GuiElement) -> float | None:
         return None
     s = np.asarray(data[1], float)
     s = s[np.isfinite(s)]
-    return round(float(s.max()) * 2) / 2 if s.size > 2 else None
+    return round(float(s.max()) * 4) / 4 if s.size > 2 else None  # own values: 0.25 mm apart
 
 
 async def open_tab(url: str, name: str = "tab", timeout: float = 30.0) -> ViserClient:
@@ -269,8 +269,10 @@ class Tab:
 
 
 def own_values(i: int, n: int = 12) -> list[float]:
-    """Lifts [mm] only tab ``i`` uses: 20 + 6 i ... + 5.5, never the default 15."""
-    return [20.0 + 6.0 * i + 0.5 * k for k in range(n)]
+    """Lifts [mm] only tab ``i`` uses: 20 + 3 i ... + 2.75, never the default 15. Up to
+    30 tabs every value is a valid design of the paper example (its lift must stay
+    below 169.7 mm, Eq. 3), so every change costs a whole analysis and redraw."""
+    return [20.0 + 3.0 * i + 0.25 * k for k in range(n)]
 
 
 @dataclass
