@@ -31,7 +31,8 @@ from camcore.report import summary
 from camcore.units import to_mpa
 
 COMPARE_POINTS = 720  # samples per compare curve shipped to the GUI
-WORKERS = {"fg": 2, "bg": 1}  # processes per pool
+WORKERS = {"fg": 1, "bg": 1}  # processes per pool (a second foreground one did not help
+# the class benchmark on 2 cores, and each worker holds ~130 MB)
 
 
 @dataclass(frozen=True)
@@ -92,16 +93,18 @@ class Analyst:
 
     def __init__(self, processes: bool = True):
         self.processes = processes
+        self.closed = False  # after close(): compute in the caller (a tab shutting down)
         self._lock = threading.Lock()
         self._pools: dict[str, ProcessPoolExecutor | None] = {"fg": None, "bg": None}
         if processes:
             for name in self._pools:
                 self._pool(name)  # start now: the first tab should not wait for it
 
-    def _pool(self, name: str) -> ProcessPoolExecutor:
+    def _pool(self, name: str) -> ProcessPoolExecutor | None:
+        """The pool, started if need be; None once the analyst is closed."""
         with self._lock:
             pool = self._pools[name]
-            if pool is None:
+            if pool is None and not self.closed:
                 ctx = multiprocessing.get_context("spawn")  # never fork a threaded server
                 pool = ProcessPoolExecutor(WORKERS[name], mp_context=ctx)
                 pool.submit(_warm, name == "bg")
@@ -109,17 +112,21 @@ class Analyst:
             return pool
 
     def _run(self, name: str, fn, *args):
-        if not self.processes:
+        if not self.processes or self.closed:  # closed: never start a worker again
             return fn(*args)
         for _ in range(2):
             pool = self._pool(name)
+            if pool is None:
+                break
             try:
                 return pool.submit(fn, *args).result()
             except BrokenProcessPool:  # the worker died (killed, out of memory): a new one
                 with self._lock:
                     if self._pools[name] is pool:
                         self._pools[name] = None
-        return fn(*args)  # twice broken: compute here rather than fail the tab
+            except RuntimeError:  # shut down meanwhile (the server stops)
+                break
+        return fn(*args)  # twice broken, or closed: compute here rather than fail the tab
 
     def fast(self, design: Design) -> Result:
         return self._run("fg", fast, design)
@@ -137,6 +144,7 @@ class Analyst:
 
     def close(self) -> None:
         with self._lock:
+            self.closed = True
             pools, self._pools = list(self._pools.values()), {"fg": None, "bg": None}
         for pool in pools:
             if pool is not None:

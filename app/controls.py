@@ -230,7 +230,4 @@ def try_design_dict(data: dict) -> tuple[Design | None, str | None]:
 
 def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, str | None]:
     """(design, None) if the control values make a valid design, else (None, message)."""
-    try:
-        return Design.model_validate(merged(base, values)), None
-    except ValidationError as exc:
-        return None, format_validation_error(exc)
+    return try_design_dict(merged(base, values))

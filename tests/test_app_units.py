@@ -121,3 +121,28 @@ def test_debouncer_runs_once_after_quiet_and_one_at_a_time():
     assert wait_for(lambda: len(runs) == 4, 3.0) and most[0] == 1
     for d in ds:
         d.close()
+
+
+def test_analyst_workers_match_in_process_survive_a_killed_worker_and_close(paper):
+    """app.analyst: a worker's result equals the in-process one; a worker killed (out
+    of memory, by hand) is replaced on the next call; after close nothing starts again
+    and the work is done in the caller."""
+    import os
+    import signal
+
+    from app.analyst import Analyst, fast
+
+    an = Analyst(processes=True)
+    try:
+        r = an.fast(paper)
+        here = fast(paper)
+        assert r.summary == here.summary
+        assert np.array_equal(r.analysis.prog.S, here.analysis.prog.S)
+        (pid,) = an._pools["fg"]._processes  # the one foreground worker
+        os.kill(pid, signal.SIGKILL)
+        assert an.fast(paper).summary == here.summary  # served by a new worker
+        assert pid not in an._pools["fg"]._processes
+    finally:
+        an.close()
+    assert an.fast(paper).summary == here.summary  # closed: computed here
+    assert an._pools == {"fg": None, "bg": None}
