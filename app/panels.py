@@ -37,17 +37,23 @@ def program_text(design: Design) -> str:
 
 
 def low_dwell_text(values: dict[str, Any], design: Design | None = None) -> str:
+    """The derived low dwell under the motion sliders: the design's (camcore.model) when
+    the controls make one, else what the typed values imply (e.g. negative), so the user
+    sees why the input is refused."""
     if design is not None and design.motion.classic is None:
         return program_text(design)
-    try:
-        bl = (
-            360.0
-            - float(values["motion.rise_deg"])
-            - float(values["motion.high_dwell_deg"])
-            - float(values["motion.fall_deg"])
-        )
-    except (KeyError, TypeError, ValueError):
-        return "Low dwell β_l: -"
+    if design is not None:
+        bl = float(design.motion.low_dwell_deg)
+    else:
+        try:
+            bl = (
+                360.0
+                - float(values["motion.rise_deg"])
+                - float(values["motion.high_dwell_deg"])
+                - float(values["motion.fall_deg"])
+            )
+        except (KeyError, TypeError, ValueError):
+            return "Low dwell β_l: -"
     flag = "  ⚠ negative" if bl < 0 else ""
     return f"Low dwell β_l = 360 − β_r − β_h − β_f = **{bl:g}°**{flag}"
 

@@ -146,3 +146,10 @@ def test_analyst_workers_match_in_process_survive_a_killed_worker_and_close(pape
         an.close()
     assert an.fast(paper).summary == here.summary  # closed: computed here
     assert an._pools == {"fg": None, "bg": None}
+
+
+def test_low_dwell_is_the_designs_or_what_the_typed_values_imply(paper):
+    assert "**60°**" in panels.low_dwell_text({}, paper)  # 360 - 100 - 70 - 130 (Sec. 6)
+    typed = {"motion.rise_deg": 200.0, "motion.high_dwell_deg": 100.0, "motion.fall_deg": 90.0}
+    assert "**-30°**" in panels.low_dwell_text(typed) and "negative" in panels.low_dwell_text(typed)
+    assert panels.low_dwell_text({}) == "Low dwell β_l: -"
