@@ -65,7 +65,9 @@ def _trim_heap() -> None:
 
 
 class App:
-    """The server and the live sessions, by client id."""
+    """The server and the live sessions, by client id. ``processes`` runs the physics in
+    spawned worker processes (app.analyst): a script that creates an App must do so
+    under ``if __name__ == "__main__":``, the multiprocessing rule."""
 
     def __init__(
         self,
