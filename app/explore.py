@@ -139,8 +139,16 @@ class ExplorePanel:
             if self.all_kinds.value
             else [design.follower.kind.value]
         )
-        (x0, x1), (y0, y1) = self.x_range.value, self.y_range.value
-        points = grid_points((px, x0, x1), (py, y0, y1), int(self.steps.value), kinds)
+        try:  # a client may send anything: two finite numbers per range, a step count
+            (x0, x1), (y0, y1) = (
+                _finite_pair(self.x_range.value),
+                _finite_pair(self.y_range.value),
+            )
+            steps = int(self.steps.value)
+        except (TypeError, ValueError):
+            self.progress.content = "✖ Each range needs two finite numbers."
+            return None
+        points = grid_points((px, x0, x1), (py, y0, y1), steps, kinds)
         base = design.model_dump(mode="json")
         return base, points, (px, self.x.value), (py, self.y.value), [fa, fb]
 
@@ -205,6 +213,14 @@ class ExplorePanel:
 
     def close(self) -> None:
         self._cancel.set()
+
+
+def _finite_pair(value) -> tuple[float, float]:
+    """(from, to) as two finite floats, else ValueError."""
+    lo, hi = (float(v) for v in value)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise ValueError("not finite")
+    return lo, hi
 
 
 def _decode(png: bytes) -> np.ndarray:

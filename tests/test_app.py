@@ -555,3 +555,13 @@ def test_wide_panel_toggle(tab):
     assert tab.ui.wide_css.content == WIDE_PANEL_CSS
     tab.ui.wide_box.value = False
     assert tab.ui.wide_css.content == ""
+
+
+def test_explore_refuses_hostile_ranges(tab):
+    e = tab.ui.explore
+    e.x_range._impl.value = ("a", 3)  # what a hostile client could send
+    e.run_btn.value = True
+    assert "two finite numbers" in e.progress.content
+    e.x_range._impl.value = (float("nan"), 3.0)
+    e.run_btn.value = True
+    assert "two finite numbers" in e.progress.content
