@@ -100,7 +100,7 @@ class Session:
         """Connect the widgets to the session's actions."""
         ui.quick_stl_btn.on_click(lambda _: self.download("stl"))
         ui.play_btn.on_click(lambda _: self.toggle_play())
-        ui.speed_slider.on_update(lambda e: setattr(self, "speed", float(e.target.value)))
+        ui.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
         ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
         for h in ui.controls.values():
@@ -421,6 +421,16 @@ class Session:
                 return
             self._set_playing(False)
             self._goto(math.degrees(float(self.analysis.stations[int(i)])))
+
+    def _set_speed(self, value) -> None:
+        """The animation speed [deg/s]; a value that is not a finite number in the
+        slider's range (a hostile client) is ignored."""
+        try:
+            v = float(value)
+        except (TypeError, ValueError):
+            return
+        if math.isfinite(v) and 0.0 <= v <= 360.0:
+            self.speed = v
 
     def _set_overlay(self, name: str, on: bool) -> None:
         with self.lock:

@@ -565,3 +565,14 @@ def test_explore_refuses_hostile_ranges(tab):
     e.x_range._impl.value = (float("nan"), 3.0)
     e.run_btn.value = True
     assert "two finite numbers" in e.progress.content
+
+
+def test_hostile_animation_speed_is_ignored(tab):
+    tab.ui.speed_slider.value = 90.0
+    assert tab.speed == 90.0
+    for bad in (float("nan"), float("inf"), -5.0, 1e9):
+        tab.ui.speed_slider._impl.value = bad
+        tab._set_speed(bad)
+        assert tab.speed == 90.0
+    tab._set_speed("fast")
+    assert tab.speed == 90.0
