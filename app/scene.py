@@ -63,9 +63,12 @@ def _sector(cx, cy, r_in, r_out, a0, a1, z0, z1, n=48) -> trimesh.Trimesh:
     for i in range(m):  # side walls
         j = (i + 1) % m
         faces += [[i, j, m + j], [i, m + j, m + i]]
-    mesh = trimesh.Trimesh(verts, np.array(faces), process=True)
-    mesh.fix_normals()
-    return mesh
+    # the winding is consistent by construction; outward iff the signed volume is > 0
+    # (a1 < a0 turns it inside out): cheaper than trimesh's fix_normals on every redraw
+    tri = verts[np.array(faces)]
+    volume = np.einsum("ij,ij->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])) / 6.0
+    faces_arr = np.array(faces) if volume > 0 else np.array(faces)[:, ::-1]
+    return trimesh.Trimesh(verts, faces_arr, process=False)
 
 
 def _box(x0, x1, y0, y1, z0, z1) -> trimesh.Trimesh:
