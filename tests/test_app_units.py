@@ -9,6 +9,7 @@ import threading
 import time
 
 import numpy as np
+import pytest
 from conftest import wait_for
 
 from app import controls, panels
@@ -153,3 +154,14 @@ def test_low_dwell_is_the_designs_or_what_the_typed_values_imply(paper):
     typed = {"motion.rise_deg": 200.0, "motion.high_dwell_deg": 100.0, "motion.fall_deg": 90.0}
     assert "**-30°**" in panels.low_dwell_text(typed) and "negative" in panels.low_dwell_text(typed)
     assert panels.low_dwell_text({}) == "Low dwell β_l: -"
+
+
+def test_concave_pad_mesh_is_closed_and_outward_either_way_round():
+    from app.scene import _sector
+
+    for a0, a1 in ((-0.1, 0.05), (0.3, -0.2)):
+        m = _sector(0.01, -0.2, 0.25, 0.256, a0, a1, -0.0075, 0.0075)
+        assert m.is_watertight and m.is_winding_consistent
+        # outward: the signed volume is the ring sector's, 0.5 (R^2 - r^2) |a1 - a0| w
+        expect = 0.5 * (0.256**2 - 0.25**2) * abs(a1 - a0) * 0.015
+        assert m.volume == pytest.approx(expect, rel=1e-3)
