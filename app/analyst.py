@@ -30,7 +30,8 @@ from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import summary
 from camcore.units import to_mpa
 
-COMPARE_POINTS = 720  # samples per compare curve shipped to the GUI
+from .plots import stride_index
+
 WORKERS = {"fg": 1, "bg": 1}  # processes per pool (a second foreground one did not help
 # the class benchmark on 2 cores, and each worker holds ~130 MB)
 
@@ -65,7 +66,7 @@ def refined(design: Design) -> Refined:
         if isinstance(r, str):
             out[kind] = r
             continue
-        idx = np.unique(np.linspace(0, r.theta.size - 1, COMPARE_POINTS).astype(int))
+        idx = stride_index(r.theta.size)  # as the other curves
         out[kind] = {
             "summary": summary(r),
             "theta_deg": np.degrees(r.theta[idx]),

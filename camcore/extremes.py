@@ -138,20 +138,14 @@ def worst_values(a) -> dict[str, Worst | None]:
     return out
 
 
-def refine_max(f, theta: np.ndarray, values: np.ndarray) -> tuple[float, float]:
-    """The maximum of a closed-form quantity over the cycle, between the samples too.
-
-    f : cam angles [rad] -> values (vectorized); ``values`` = f(theta) on the grid. The
-    CANDIDATES largest local maxima of the samples are each searched between their grid
-    neighbours (the same zoom as worst_values). Returns (value, angle [rad]); -inf if
-    no sample is finite."""
-    return refine_maxes(lambda x: f(x)[None, :], theta, [values])[0]
-
-
 def refine_maxes(f, theta: np.ndarray, values: list[np.ndarray]) -> list[tuple[float, float]]:
-    """refine_max of several quantities in one search: ``f`` maps cam angles x to the
-    (Q, len(x)) values of all Q quantities (one evaluation of the closed forms serves
-    every bracket), ``values`` holds each quantity on the grid ``theta``."""
+    """The maximum of each of Q closed-form quantities over the cycle, between the
+    samples too, in one search: ``f`` maps cam angles x [rad] to the (Q, len(x)) values
+    of all of them (one evaluation of the closed forms serves every bracket), ``values``
+    holds each quantity on the grid ``theta``. The CANDIDATES largest local maxima of
+    each quantity's samples are searched between their grid neighbours (the same zoom
+    as worst_values). Returns (value, angle [rad]) per quantity; -inf where no sample is
+    finite."""
     out: list[tuple[float, float]] = [(-np.inf, float("nan"))] * len(values)
     with np.errstate(all="ignore"):
         q, k = [], []

@@ -8,7 +8,7 @@ keeps contact (F_N >= 0) exactly where
     k (S + s_p) >= -D,   D = M (g + A w^2)   (the load without the spring)
 
 whatever the guide friction. This gives, as closed forms over the cam angle (their
-extremes found between the grid samples, camcore.extremes.refine_max):
+extremes found between the grid samples, camcore.extremes.refine_maxes):
 
 * the smallest spring rate for the design's preload, and the smallest preload for its
   rate;
