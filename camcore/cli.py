@@ -190,7 +190,8 @@ def _sweep(args) -> int:
         spec,
         args.out,
         chunk=args.chunk,
-        verify=not args.no_verify,
+        verify=not (args.no_verify or args.fast),
+        fast=args.fast,
         workers=args.workers,
         scheduler=args.scheduler,
     )
@@ -291,6 +292,13 @@ def _parser() -> argparse.ArgumentParser:
         "--no-verify",
         action="store_true",
         help="skip the geometric check (faster; its columns are empty)",
+    )
+    w.add_argument(
+        "--fast",
+        action="store_true",
+        help="the batched core: designs that differ only in their geometry are analysed "
+        "together (many times faster); the report's fixed-size figures and the paper's "
+        "limits, no profile figures, wear or geometric check (column profile_checked)",
     )
     w.set_defaults(run=_sweep)
     return p

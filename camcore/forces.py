@@ -76,49 +76,69 @@ def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d, slide=0.0, moment
     follower), so sum F_y gives F_N = (F_t + mu_sv (F1 + F2)) / D_y; substituting into
     sum F_x and sum M_C leaves two linear equations in F1, F2, solved by Cramer's rule.
     """
-    tx, ty = normal[:, 1], -normal[:, 0]
-    Dx, Dy = normal[:, 0] + slide * tx, normal[:, 1] + slide * ty
+    if np.ndim(slide) == 0 and slide == 0.0:  # the paper: D = n (the same numbers, faster)
+        Dx, Dy = normal[:, 0], normal[:, 1]
+    else:
+        Dx, Dy = normal[:, 0] + slide * normal[:, 1], normal[:, 1] - slide * normal[:, 0]
     t = Dx / Dy
-    q = moment / Dy
     a, b = t * mu_sv - s1, t * mu_sv - s2
-    m1 = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c) + q * mu_sv
-    m2 = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c) + q * mu_sv
-    xq = x_c + q
+    m1 = s1 * arm1 - mu_sv * (s1 * d / 2 - x_c)
+    m2 = s2 * arm2 - mu_sv * (s2 * d / 2 - x_c)
+    xq = x_c
+    if not (np.ndim(moment) == 0 and moment == 0.0):
+        q = moment / Dy
+        m1, m2, xq = m1 + q * mu_sv, m2 + q * mu_sv, x_c + q
     det = a * m2 - b * m1
     with np.errstate(divide="ignore", invalid="ignore"):
         F1 = Ft * (b * xq - t * m2) / det
         F2 = Ft * (t * m1 - a * xq) / det
-    FN = (Ft + mu_sv * (F1 + F2)) / Dy
-    return np.stack([F1, F2, FN])
+        FN = (Ft + mu_sv * (F1 + F2)) / Dy
+    return F1, F2, FN
 
 
-def _first_mode(design: Design, Ft, normal, x_c, r: float, S, V, slide, moment) -> GuideSolution:
-    """Solve in the modes of Fig. 6 and keep the first with F1, F2 >= 0."""
+def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> GuideSolution:
+    """Solve in the modes of Fig. 6 and keep the first with F1, F2 >= 0: each mode is
+    solved only at the angles no earlier mode balanced (mode (a) holds almost
+    everywhere, so this is about one solve, not four)."""
     dyn = design.dynamics
     d = dyn.guide_width_mm * MM
     l1 = dyn.overhang_mm * MM - (S if dyn.overhang_shrinks else 0.0)
     arm1, arm2 = l1 - r, l1 + dyn.guide_length_mm * MM - r
     mu_sv = dyn.guide_friction * np.sign(V)  # no friction while the follower is at rest
     tol = 1e-9 * (np.abs(Ft) + 1.0)
-    sides = np.array(MODES)  # all four modes at once: (mode, angle) arrays
-    F1, F2, FN = _solve_mode(
-        sides[:, :1], sides[:, 1:], mu_sv, normal, Ft, x_c, arm1, arm2, d, slide, moment
-    )
-    ok = np.isfinite(FN) & (F1 >= -tol) & (F2 >= -tol)
-    mode = np.where(ok.any(axis=0), ok.argmax(axis=0), -1).astype(np.int8)  # the first
-    cols, pick = np.arange(Ft.shape[0]), np.maximum(mode, 0)
-    out = np.stack([F1[pick, cols], F2[pick, cols], FN[pick, cols]])
-    jam = mode < 0
-    if jam.any():
+    n = Ft.shape[0]
+    out = np.zeros((3, n))
+    mode = np.full(n, -1, np.int8)
+    todo = None  # the angles without a mode yet (None: all of them)
+    for i, (s1, s2) in enumerate(MODES):
+        mu, nrm, F, xc, a1, a2, sl, mo, tl = (
+            at_(x, todo) for x in (mu_sv, normal, Ft, x_c, arm1, arm2, slide, moment, tol)
+        )
+        F1, F2, FN = _solve_mode(s1, s2, mu, nrm, F, xc, a1, a2, d, sl, mo)
+        ok = np.isfinite(FN) & (F1 >= -tl) & (F2 >= -tl)
+        idx = np.flatnonzero(ok) if todo is None else todo[ok]
+        out[:, idx] = np.stack([F1[ok], F2[ok], FN[ok]])
+        mode[idx] = i
+        todo = np.flatnonzero(~ok) if todo is None else todo[~ok]
+        if not todo.size:
+            break
+    if todo is not None and todo.size:
         # Self-locking guide: no mode balances with friction. Keep finite numbers (the
         # frictionless solution, whose signed guide forces pick the walls) and let the
         # checks report the violation.
-        G1, G2, GN = _solve_mode(1.0, -1.0, 0 * mu_sv, normal, Ft, x_c, arm1, arm2, d)
-        out[:, jam] = np.stack([np.abs(G1), np.abs(G2), GN])[:, jam]
+        jam = todo
+        nrm, F, xc, a1, a2 = (at_(x, jam) for x in (normal, Ft, x_c, arm1, arm2))
+        G1, G2, GN = _solve_mode(1.0, -1.0, 0.0, nrm, F, xc, a1, a2, d)
+        out[:, jam] = np.stack([np.abs(G1), np.abs(G2), GN])
     sides = np.array(MODES + ((0.0, 0.0),))[mode]
     return GuideSolution(
         np.maximum(out[0], 0.0), np.maximum(out[1], 0.0), out[2], mode, sides[:, 0], sides[:, 1]
     )
+
+
+def at_(x, idx):
+    """x at the angles ``idx`` if x is per angle (None: all angles; a scalar stays)."""
+    return x if idx is None or np.ndim(x) == 0 else x[idx]
 
 
 def one_contact(design: Design, Ft, normal, x_c, r: float, S, V, slide=0.0) -> GuideSolution:

@@ -172,9 +172,66 @@ def row(base: dict, point: dict, verify: bool = True) -> dict:
     return {**out, **flatten(s), "valid": s["valid"], "error": None}
 
 
-def run_chunk(base: dict, points: list[dict], verify: bool = True) -> list[dict]:
-    """Rows of a batch of designs (the unit of work sent to a worker)."""
+def run_chunk(
+    base: dict, points: list[dict], verify: bool = True, fast: bool = False
+) -> list[dict]:
+    """Rows of a batch of designs (the unit of work sent to a worker). ``fast``: the
+    batched core (fast_rows), else one full analysis per design (row)."""
+    if fast:
+        return fast_rows(base, points)
     return [row(base, p, verify) for p in points]
+
+
+def _batch_key(point: dict, design: Design) -> tuple:
+    """Designs of a chunk that one batch can hold: the same values of every grid field
+    the batched core does not vary, and the same number of faces (e = 0 makes a double
+    follower's two faces one)."""
+    from . import batch, profile
+
+    fixed = tuple(
+        (k, json.dumps(v))
+        for k, v in point.items()
+        if tuple(k.split(".")) not in batch.BATCHED_FIELDS
+    )
+    return fixed, len(profile.geometry(design).faces), batch.batchable(design)
+
+
+def fast_rows(base: dict, points: list[dict]) -> list[dict]:
+    """Rows of the batched core (camcore.batch): the designs that differ only in their
+    geometry are analysed together. Their rows hold the report's fixed-size figures
+    (the same keys and values as ``row``) and ``profile_checked`` = False: the profile's
+    own figures and checks (area, vertices, chord error, star shape, wear, geometric
+    check) are not computed. Designs the batch cannot take (contact friction on a
+    sliding face) get the full analysis, with ``profile_checked`` = True."""
+    from . import batch
+    from .analysis import analyze
+    from .report import summary
+
+    rows: list[dict | None] = [None] * len(points)
+    groups: dict[tuple, list[tuple[int, Design]]] = {}
+    for i, p in enumerate(points):
+        grid = {
+            f"grid.{k}": v
+            if isinstance(v, int | float | str | bool) or v is None
+            else json.dumps(v)
+            for k, v in p.items()
+        }
+        try:
+            design = design_at(base, p)
+        except DesignError as exc:
+            rows[i] = {**grid, "valid": False, "error": str(exc)}
+            continue
+        rows[i] = grid
+        groups.setdefault(_batch_key(p, design), []).append((i, design))
+    for (_, _, ok), members in groups.items():
+        designs = [d for _, d in members]
+        if ok:
+            sums = batch.summaries(designs)
+        else:
+            sums = [{**summary(analyze(d, verify=False)), "profile_checked": True} for d in designs]
+        for (i, _), s in zip(members, sums, strict=True):
+            rows[i] = {**rows[i], **flatten(s), "valid": s["valid"], "error": None}  # type: ignore[dict-item]
+    return rows  # type: ignore[return-value]
 
 
 def _table(rows: list[dict]):
@@ -203,6 +260,7 @@ def run(
     *,
     chunk: int = DEFAULT_CHUNK,
     verify: bool = True,
+    fast: bool = False,
     workers: int | None = None,
     scheduler: str | None = None,
     progress: Callable[[int, int, float], None] | None = _progress,
@@ -211,17 +269,19 @@ def run(
 
     Finished chunks are kept in ``out.parts/`` (with the spec's fingerprint) until the
     whole table is written, so a run interrupted and started again with the same spec
-    computes only the missing chunks."""
+    computes only the missing chunks. ``fast``: the batched core (``fast_rows``; the
+    geometric check is not run either way)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     out = Path(out)
     parts = out.with_name(out.name + ".parts")
     stamp = parts / "spec.fingerprint"
-    if parts.exists() and (not stamp.is_file() or stamp.read_text() != spec.fingerprint()):
+    mark = spec.fingerprint() + (" fast" if fast else " verify" if verify else "")
+    if parts.exists() and (not stamp.is_file() or stamp.read_text() != mark):
         raise DesignError(f"{parts} holds the parts of another sweep; remove it first")
     parts.mkdir(parents=True, exist_ok=True)
-    stamp.write_text(spec.fingerprint())
+    stamp.write_text(mark)
     total = spec.size
     n_chunks = -(-total // chunk)
     todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
@@ -239,9 +299,9 @@ def run(
 
     if workers is None and scheduler is None:
         for i in todo:
-            keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify))
+            keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify, fast))
     else:
-        _run_dask(spec, chunk, todo, verify, workers, scheduler, keep)
+        _run_dask(spec, chunk, todo, (verify, fast), workers, scheduler, keep)
     if progress:
         sys.stderr.write("\n")
     tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
@@ -253,7 +313,7 @@ def run(
     return table.num_rows
 
 
-def _run_dask(spec, chunk, todo, verify, workers, scheduler, keep) -> None:
+def _run_dask(spec, chunk, todo, how, workers, scheduler, keep) -> None:
     """The chunks on a Dask cluster: a LocalCluster of ``workers`` processes, or the
     scheduler at ``scheduler``. Each finished chunk is kept as it arrives."""
     from dask.distributed import Client, LocalCluster, as_completed
@@ -269,8 +329,7 @@ def _run_dask(spec, chunk, todo, verify, workers, scheduler, keep) -> None:
     try:
         base = client.scatter(spec.base, broadcast=True)
         futures = {
-            client.submit(run_chunk, base, spec.chunk(i, chunk), verify, pure=False): i
-            for i in todo
+            client.submit(run_chunk, base, spec.chunk(i, chunk), *how, pure=False): i for i in todo
         }
         for fut in as_completed(futures):
             keep(futures[fut], fut.result())

@@ -58,16 +58,18 @@ def test_mode_a_matches_printed_equations(segment):
     face = 0 if segment == RISE else 1
     idx = np.flatnonzero((a.prog.segment == segment) & (a.prog.V != 0))[::40]
     l1 = L10 - a.prog.S[idx]
-    ours = forces._solve_mode(
-        1.0,
-        -1.0,
-        MU * np.sign(a.prog.V[idx]),
-        a.normal[face, idx],
-        a.Ft[idx],
-        a.geo.faces[face].x_c,
-        l1 - rf,
-        l1 + L2 - rf,
-        D,
+    ours = np.array(
+        forces._solve_mode(
+            1.0,
+            -1.0,
+            MU * np.sign(a.prog.V[idx]),
+            a.normal[face, idx],
+            a.Ft[idx],
+            a.geo.faces[face].x_c,
+            l1 - rf,
+            l1 + L2 - rf,
+            D,
+        )
     )
     solve = paper_rise_mode_a if segment == RISE else paper_fall_mode_a
     for j, k in enumerate(idx):
@@ -85,16 +87,18 @@ def test_first_valid_mode_is_chosen():
         f = 0 if a.in_contact[0, k] else 1
         l1 = L10 - a.prog.S[k]
         sols = [
-            forces._solve_mode(
-                s1,
-                s2,
-                MU * np.sign(a.prog.V[k : k + 1]),
-                a.normal[f, k : k + 1],
-                a.Ft[k : k + 1],
-                a.geo.faces[f].x_c,
-                l1 + 0.25,
-                l1 + L2 + 0.25,
-                D,
+            np.array(
+                forces._solve_mode(
+                    s1,
+                    s2,
+                    MU * np.sign(a.prog.V[k : k + 1]),
+                    a.normal[f, k : k + 1],
+                    a.Ft[k : k + 1],
+                    a.geo.faces[f].x_c,
+                    l1 + 0.25,
+                    l1 + L2 + 0.25,
+                    D,
+                )
             )
             for s1, s2 in forces.MODES
         ]

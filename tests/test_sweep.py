@@ -212,3 +212,51 @@ def test_first_violation_names_the_broken_limit():
     assert first_violation({"valid": False, "error": "cam.base_radius_mm: ..."}) == "not a design"
     row = {"valid": False, "error": None, "violations": '[{"code": "pressure_angle"}]'}
     assert first_violation(row) == "pressure_angle"
+
+
+def test_fast_sweep_rows_equal_the_full_rows_where_both_report(tmp_path):
+    """--fast (camcore.batch): the same grid columns, the same figures as the full rows,
+    profile_checked = False; on a Dask LocalCluster the same rows; parts of a fast run
+    are not mixed into a full one."""
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    sweep.run(spec, tmp_path / "full.parquet", chunk=4, verify=False, progress=None)
+    sweep.run(spec, tmp_path / "fast.parquet", chunk=4, fast=True, progress=None)
+    full, fast = rows_of(tmp_path / "full.parquet"), rows_of(tmp_path / "fast.parquet")
+    for f, r in zip(fast, full, strict=True):
+        assert f["profile_checked"] is False and f["valid"] == r["valid"]
+        shared = set(f) - {"profile_checked", "violations"}
+        assert "contact_stress_max_MPa.cycle" in shared and "profile.vertices" not in shared
+        for k in shared:
+            a, b = f[k], r[k]
+            if isinstance(a, float):
+                assert a == pytest.approx(b, rel=1e-9), k
+            elif isinstance(a, str) and a.startswith("["):
+                assert json.loads(a) == pytest.approx(json.loads(b), rel=1e-9), k
+            else:
+                assert a == b, k
+    pytest.importorskip("dask.distributed")
+    sweep.run(spec, tmp_path / "dask.parquet", chunk=4, fast=True, workers=2, progress=None)
+    assert rows_of(tmp_path / "dask.parquet") == fast
+
+    def stop(done, total, t0):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run(spec, tmp_path / "r.parquet", chunk=2, fast=True, progress=stop)
+    with pytest.raises(DesignError, match="another sweep"):
+        sweep.run(spec, tmp_path / "r.parquet", chunk=2, progress=None)
+
+
+def test_cli_fast_sweep(tmp_path):
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": {"from": 60, "to": 90, "num": 7}}}))
+    out = tmp_path / "r.parquet"
+    run = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out", str(out), "--fast"],
+        capture_output=True,
+        text=True,
+    )
+    assert run.returncode == 0, run.stderr
+    rows = rows_of(out)
+    assert len(rows) == 7 and not any(r["profile_checked"] for r in rows)
+    assert [r["grid.cam.base_radius_mm"] for r in rows] == [60, 65, 70, 75, 80, 85, 90]

@@ -1,0 +1,559 @@
+"""The batched core: many designs along a leading axis, one evaluation (issue 12).
+
+A sweep asks the same question of thousands of designs that differ only in their
+geometry: base radius, roller or face radius, the double follower's offset e, a
+single follower's offset. Those designs share the motion program, the follower kind,
+the dynamics and the materials, so their closed forms (Eqs. 1-21, 29-42) can be
+evaluated for all of them at once: each design's geometry is an array entry (not a
+Python scalar), each design keeps its own angle grid (the one ``analyze`` would use,
+padded with its last angle to a common length), and everything is computed on the
+flattened (design, angle) axis with one numpy call per formula.
+
+Out come fixed-size figures per design: the grid maxima and ranges of the report
+(``camcore report --json``, the same keys), the worst values between the samples
+(the zoom search of camcore.extremes, batched), the shaft figures, and the verdict of
+the paper's limits (camcore.checks, the same rules in the same order). What needs the
+ragged profile is not built here: the profile's area, perimeter and vertices, its
+chord error and the export tolerance, the star-shape check, wear along the profile and
+the geometric check (``camcore.sweep`` runs those through the single analysis when
+asked). Figures that do not depend on the geometry (the spring, jump speed, elastic
+train, continuity of the program) are computed once per group of designs.
+
+Sliding faces with contact friction (mu_c > 0) are not batched: their force direction
+depends on the slip (camcore.analysis._contact_slide); ``batchable`` says so and the
+sweep falls back to the single analysis for them.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any
+
+import numpy as np
+
+from . import checks, extremes, forces, machine, motion, profile, train
+from .analysis import stations
+from .contact import compliance, conservative_stress, half_width, hertz_line_stress
+from .model import Design, allowable_contact_stress_MPa, omega_rad_s
+from .motion import FALL, HIGH, MOTIONS, RISE
+from .units import MM
+
+R2D = 180.0 / math.pi
+
+# the fields a batch may vary (everything else of its designs must be equal)
+BATCHED_FIELDS = (
+    ("cam", "base_radius_mm"),
+    ("follower", "roller_radius_mm"),
+    ("follower", "face_radius_mm"),
+    ("follower", "offset_mm"),
+    ("follower", "single_offset_mm"),
+)
+
+# the violations this core can decide; the others need the profile (module docstring)
+PROFILE_CHECKS = ("profile_crossing", "export_tolerance", "geometric_check")
+
+
+def group_key(design: Design) -> str:
+    """Designs with the same key can share a batch: all but BATCHED_FIELDS equal."""
+    data = design.model_dump(mode="json")
+    for block, name in BATCHED_FIELDS:
+        data[block].pop(name, None)
+    return json.dumps(data, sort_keys=True)
+
+
+def batchable(design: Design) -> bool:
+    """False where the batched forces would differ from the single analysis: a sliding
+    face (concave, flat, knife edge) with contact friction."""
+    kind = design.follower.kind
+    return design.dynamics.contact_friction == 0.0 or kind.is_roller
+
+
+@dataclass(frozen=True)
+class Batch:
+    """B designs of one group: their geometry as arrays, their grids padded to N."""
+
+    designs: tuple[Design, ...]
+    segs: tuple[motion.Segment, ...]
+    r: np.ndarray  # (B,) signed face radius [m] (+inf flat face, 0 knife edge)
+    y0: np.ndarray  # (B,) Y_C at S = 0 [m] (Eq. 3)
+    sigma: np.ndarray  # (B,)
+    stem_x: np.ndarray  # (B,) [m]
+    x_c: np.ndarray  # (B, F) face centre abscissae [m]
+    arc: np.ndarray  # (B, n_segments, 3): start, end [rad] and psi of each dwell arc
+    theta: np.ndarray  # (B, N) each design's grid, padded with its last angle
+    real: np.ndarray  # (B, N) False on the padding
+    geos: tuple[profile.Geometry, ...]
+    stations: tuple[np.ndarray, ...]
+
+    @property
+    def flat(self) -> bool:
+        return bool(np.isinf(self.r[0]))
+
+    @property
+    def n_faces(self) -> int:
+        return self.x_c.shape[1]
+
+
+def make_batch(designs: list[Design]) -> Batch:
+    """The batch of ``designs`` (all of one group_key, all batchable)."""
+    d0 = designs[0]
+    segs = motion.segments(d0)
+    geos = [profile.geometry(d) for d in designs]
+    if len({len(g.faces) for g in geos}) != 1:  # e = 0 makes a double follower single
+        raise ValueError("a batch holds designs with the same number of faces")
+    sts = [stations(d, g) for d, g in zip(designs, geos, strict=True)]
+    grids = [motion.theta_grid(d, tuple(s)) for d, s in zip(designs, sts, strict=True)]
+    n = max(g.size for g in grids)
+    theta = np.stack([np.pad(g, (0, n - g.size), mode="edge") for g in grids])
+    real = np.arange(n)[None, :] < np.array([g.size for g in grids])[:, None]
+    arc = np.zeros((len(designs), len(segs), 3))
+    for b, geo in enumerate(geos):
+        for j, g in enumerate(segs):
+            if not g.is_motion:
+                arc[b, j] = (*profile.arc_span(geo, segs, j), profile.dwell_psi(geo, g.S0))
+    return Batch(
+        designs=tuple(designs),
+        segs=segs,
+        r=np.array([g.r for g in geos]),
+        y0=np.array([g.y0 for g in geos]),
+        sigma=np.array([g.sigma for g in geos]),
+        stem_x=np.array([g.stem_x for g in geos]),
+        x_c=np.array([[f.x_c for f in g.faces] for g in geos]),
+        arc=arc,
+        theta=theta,
+        real=real,
+        geos=tuple(geos),
+        stations=tuple(sts),
+    )
+
+
+def _windows(bt: Batch, prog: motion.Program, which: np.ndarray):
+    """profile.contact_windows with each angle's own design (``which``)."""
+    F, M = bt.n_faces, prog.theta.size
+    part = np.repeat(prog.index[None, :], F, axis=0)
+    if F == 1:
+        return np.ones((1, M), dtype=bool), part
+    driver = np.where(prog.segment == RISE, 0, np.where(prog.segment == FALL, 1, -1))
+    windows = np.stack([driver == 0, driver == 1])
+    tol = 1e-12
+    for j, g in enumerate(bt.segs):
+        if g.is_motion:
+            continue
+        start, end, psi_j = (bt.arc[which, j, k] for k in range(3))
+        th = np.where(prog.theta < g.start - tol, prog.theta + 2 * math.pi, prog.theta)
+        inside = (th >= g.start - tol) & (th <= g.end + tol)
+        for i, side in enumerate((1.0, -1.0)):
+            c = th + side * psi_j
+            on = inside & (c >= start - tol) & (c <= end + tol)
+            windows[i] |= on
+            part[i] = np.where(on & (driver != i), j, part[i])
+    return windows, part
+
+
+def local(bt: Batch, theta: np.ndarray, which: np.ndarray) -> SimpleNamespace:
+    """analysis.evaluate for many designs: at cam angles ``theta`` (M,) [rad], angle k
+    belonging to design ``which[k]``. Per-face arrays are (F, M), SI units."""
+    d0 = bt.designs[0]
+    prog = motion.program(d0, theta, bt.segs)
+    S, V, A = prog.S, prog.V, prog.A
+    r, sigma, y0 = bt.r[which], bt.sigma[which], bt.y0[which]
+    yc = y0 + S
+    F, M = bt.n_faces, theta.size
+    nrm, pw = np.empty((F, M, 2)), np.empty((F, M, 2))
+    phi, k, lever = np.zeros((F, M)), np.empty((F, M)), np.empty((F, M))
+    for i in range(F):
+        if bt.flat:  # profile.face_contact, pitch_curvature, lever_x for a flat face
+            nrm[i, :, 0], nrm[i, :, 1] = 0.0, 1.0
+            pw[i, :, 0], pw[i, :, 1] = -V, yc
+            with np.errstate(divide="ignore"):
+                k[i] = 1.0 / (yc + A)
+            lever[i] = -V - bt.stem_x[which]
+            continue
+        # Eqs. 3-10, 13-18 (profile.face_contact), the pitch curvature (Eq. 21)
+        x_c = bt.x_c[which, i]
+        u = x_c + V
+        m = np.hypot(u, yc)
+        nx, ny = sigma * u / m, sigma * yc / m
+        nrm[i, :, 0], nrm[i, :, 1] = nx, ny
+        pw[i, :, 0], pw[i, :, 1] = x_c - r * nx, yc - r * ny
+        phi[i] = np.arctan2(sigma * nx, ny)
+        k[i] = (yc * yc + u * (u + V) - A * yc) / (yc * yc + u * u) ** 1.5
+        lever[i] = x_c - bt.stem_x[which]
+    r_face = np.zeros_like(r) if bt.flat else r  # profile.curvature_radius
+    with np.errstate(divide="ignore"):
+        rho = np.where(k == 0.0, np.inf, sigma / k - r_face)
+    windows, part = _windows(bt, prog, which)
+    Ft = forces.total_load(d0, S, A)  # Eqs. 29-30
+    guide = forces.follower_forces(d0, Ft, windows, nrm, lever, r_face, S, V, None)
+    FN = np.where(windows, guide.FN[None, :], 0.0)
+    return SimpleNamespace(
+        prog=prog,
+        in_contact=windows,
+        part=part,
+        normal=nrm,
+        point_world=pw,
+        pressure_angle=phi,
+        kappa_pitch=k,
+        rho=rho,
+        Ft=Ft,
+        guide=guide,
+        FN=FN,
+        stress=_stress(d0, FN, rho, r),
+        torque=forces.cam_torque(pw, nrm, FN),
+    )
+
+
+def _stress(d0: Design, FN, rho, r) -> np.ndarray:
+    """contact.contact_stress (Eq. 42, conservative beyond Hertz's validity) with each
+    angle's own follower radius r (M,)."""
+    if d0.follower.radius_mm == 0.0:  # knife edge: not defined
+        return np.full(np.shape(FN), np.nan)
+    w = d0.cam.width_mm * MM
+    plain = hertz_line_stress(FN, r, rho, w, compliance(d0))
+    return conservative_stress(FN, plain, r, rho, w)[0]
+
+
+def _on_curve(loc, segs) -> np.ndarray:
+    codes = np.array([g.code for g in segs], dtype=np.int8)[loc.part]
+    return loc.in_contact & np.isin(codes, MOTIONS)
+
+
+def _quantities(bt: Batch) -> dict:
+    """The quantities of extremes.QUANTITIES the verdict and figures of this kind need."""
+    names = ["pressure_angle_max", "FN_min", "torque_max", "torque_min"]
+    if bt.r[0] > 0 and not bt.flat:
+        names.append("kappa_pitch_max")
+    elif bt.r[0] < 0 or bt.flat:
+        names.append("kappa_pitch_min")
+    if bt.r[0] != 0.0:
+        names.append("stress_max")
+    return {n: extremes.QUANTITIES[n] for n in names}
+
+
+def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
+    """extremes.worst_values for every design at once: name -> (B, C) refined values of
+    the candidates (C per design, NaN where there is none), in the quantity's sense."""
+    B, N = bt.theta.shape
+    F = bt.n_faces
+    th = bt.theta
+    mask = (on.reshape(F, B, N)) & bt.real[None]
+    qs = _quantities(bt)
+    rows = []  # per quantity: (face, design, grid index) of its candidates
+    for get, sense in qs.values():
+        v = np.where(mask, sense * get(loc).reshape(F, B, N), -np.inf)
+        left = np.concatenate([np.full((F, B, 1), -np.inf), v[..., :-1]], axis=-1)
+        right = np.concatenate([v[..., 1:], np.full((F, B, 1), -np.inf)], axis=-1)
+        peak = mask & (v >= left) & (v >= right) & np.isfinite(v)
+        pv = np.where(peak, v, -np.inf)
+        c = min(extremes.CANDIDATES, N)
+        top = np.argpartition(-pv, c - 1, axis=-1)[..., :c]  # (F, B, c) unordered
+        ok = np.isfinite(np.take_along_axis(pv, top, axis=-1))
+        f, b, j = np.nonzero(ok)
+        rows.append((f, b, top[f, b, j]))
+    q = np.concatenate([np.full(r[0].size, i) for i, r in enumerate(rows)])
+    face, des, k = (np.concatenate([r[i] for r in rows]) for i in range(3))
+    out = {n: np.full((B, F * extremes.CANDIDATES), np.nan) for n in qs}
+    if q.size == 0:
+        return out
+    mflat = mask.reshape(F, B * N)
+    kk = des * N + k
+    has_lo = (k > 0) & mflat[face, np.maximum(kk - 1, 0)]
+    has_hi = (k < N - 1) & mflat[face, np.minimum(kk + 1, B * N - 1)]
+    flat_th = th.ravel()
+    lo = np.where(has_lo, flat_th[np.maximum(kk - 1, 0)], flat_th[kk])
+    hi = np.where(has_hi, flat_th[np.minimum(kk + 1, B * N - 1)], flat_th[kk])
+    getters = list(qs.values())
+    sense = np.array([s for _, s in getters])[q]
+
+    def fz(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
+        per = x.size // q.size
+        at = local(bt, x, np.repeat(des, per))
+        vals = np.stack([get(at) for get, _ in getters])
+        idx = np.arange(x.size)
+        return np.repeat(sense, per) * vals[np.repeat(q, per), np.repeat(face, per), idx]
+
+    with np.errstate(all="ignore"):
+        grid = sense * np.stack([get(loc) for get, _ in getters])[q, face, kk]
+        best, _ = extremes._zoom(fz, lo, hi)
+        best = np.where(np.nan_to_num(best, nan=-np.inf) > grid, best, grid)
+    key = q * B + des  # the candidate's column in its design's row: its rank in the run
+    order = np.argsort(key, kind="stable")
+    first = np.searchsorted(key[order], key[order], side="left")
+    slot = np.empty(q.size, int)
+    slot[order] = np.arange(q.size) - first
+    for i, name in enumerate(qs):
+        m = q == i
+        out[name][des[m], slot[m]] = sense[m] * best[m]
+    return out
+
+
+def _max(x: np.ndarray, mask: np.ndarray | None = None) -> list[float | None]:
+    """report._max per design: x is (B, ...) or (F, B, N) with the design on axis -2 if
+    3-D; the largest non-NaN value under ``mask`` per design, None if there is none."""
+    mask = np.ones(x.shape, bool) if mask is None else mask
+    x = np.moveaxis(x, -2, 0) if x.ndim == 3 else x
+    mask = np.moveaxis(mask, -2, 0) if mask.ndim == 3 else mask
+    m = np.broadcast_to(mask, x.shape) & ~np.isnan(x)
+    top = np.where(m, x, -np.inf).reshape(x.shape[0], -1).max(axis=1)
+    has = m.reshape(x.shape[0], -1).any(axis=1)
+    return [float(t) if h else None for t, h in zip(top, has, strict=True)]
+
+
+def _min(x: np.ndarray, mask: np.ndarray) -> list[float | None]:
+    return [None if v is None else -v for v in _max(-x, mask)]
+
+
+def _range(x: np.ndarray, mask: np.ndarray) -> list[list[float] | None]:
+    """report._range_mm per design: [min, max] under ``mask``, None if it is empty."""
+    lo, hi = _min(x, mask), _max(x, mask)
+    return [None if a is None or b is None else [a, b] for a, b in zip(lo, hi, strict=True)]
+
+
+def _scaled(values: list[float | None], factor: float) -> list[float | None]:
+    return [None if v is None else v * factor for v in values]
+
+
+def _finite(x: float, factor: float = 1.0) -> float | None:
+    return float(x * factor) if math.isfinite(x) else None
+
+
+def _worst(cands: np.ndarray, sense: float) -> np.ndarray:
+    """The worst refined value per design (NaN where there is no candidate)."""
+    with np.errstate(all="ignore"):
+        some = ~np.isnan(cands).all(axis=1)
+        pick = np.nanmax if sense > 0 else np.nanmin
+        out = np.full(cands.shape[0], np.nan)
+        if some.any():
+            out[some] = pick(cands[some], axis=1)
+    return out
+
+
+def _shaft(bt: Batch, T: np.ndarray, worst: dict) -> list[dict]:
+    """machine.shaft per design: T (B, N) the driving torque on each grid."""
+    d0 = bt.designs[0]
+    w = omega_rad_s(d0)
+    th = np.concatenate([bt.theta, bt.theta[:, :1] + 2 * np.pi], axis=1)
+    Tc = np.concatenate([T, T[:, :1]], axis=1)
+    steps = 0.5 * (Tc[:, 1:] + Tc[:, :-1]) * np.diff(th, axis=1)
+    cum = np.concatenate([np.zeros((T.shape[0], 1)), np.cumsum(steps, axis=1)], axis=1)
+    T_mean = cum[:, -1] / (2 * np.pi)
+    energy = cum - T_mean[:, None] * (th - th[:, :1])
+    delta_E = energy.max(axis=1) - energy.min(axis=1)
+    hi = np.nan_to_num(_worst(worst["torque_max"], 1.0), nan=0.0)
+    lo = np.nan_to_num(_worst(worst["torque_min"], -1.0), nan=0.0)
+    drive = np.maximum(np.maximum(T.max(axis=1), hi), 0.0)
+    brake = np.maximum(np.maximum(-T.min(axis=1), -lo), 0.0)
+    c_w2 = d0.dynamics.speed_fluctuation * w**2
+    return [
+        {
+            "cam_torque_max_Nm": {"drive": float(drive[b]), "brake": float(brake[b])},
+            "power_max_W": float(drive[b] * w),
+            "power_mean_W": float(T_mean[b] * w),
+            "flywheel_energy_J": float(delta_E[b]),
+            "flywheel_inertia_kg_m2": _finite(delta_E[b] / c_w2 if c_w2 > 0 else np.inf),
+        }
+        for b in range(T.shape[0])
+    ]
+
+
+def _group_figures(bt: Batch) -> tuple[dict, list[str], list[str]]:
+    """The figures and violations that do not depend on the geometry: the spring and
+    jump speed (machine.spring), the elastic train, the program's continuity."""
+    from .report import _train
+
+    d0 = bt.designs[0]
+    sp = machine.spring(d0, bt.theta[0][bt.real[0]])
+    resp = train.respond(d0)
+    figures = {
+        "spring_rate_min_N_per_m": _finite(sp.rate_min),
+        "preload_min_mm": _finite(sp.preload_min, 1e3),
+        "spring_proposal": {
+            "safety_factor": sp.safety_factor,
+            "spring_rate_N_per_m": _finite(sp.proposed_rate),
+            "preload_mm": d0.dynamics.preload_mm,
+        },
+        "jump_speed_rpm": _finite(sp.jump_speed_rpm),
+        "train": _train(SimpleNamespace(train=resp, design=d0)),  # type: ignore[arg-type]
+    }
+    one = SimpleNamespace(design=d0, train=resp)
+    return figures, [v.code for v in checks._continuity(one)], [v.code for v in checks._train(one)]
+
+
+def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list[list[str]]:
+    """The codes of the violations of each design, as checks.run_all lists them (the
+    same rules: on the grid, or at a refined extreme between the samples; ``group``:
+    the codes of the program's continuity and of the elastic train), without the
+    profile's own checks."""
+    B, N = bt.theta.shape
+    F = bt.n_faces
+    d0 = bt.designs[0]
+    on3 = on.reshape(F, B, N)
+    k = loc.kappa_pitch.reshape(F, B, N)
+
+    def grid_any(bad: np.ndarray) -> np.ndarray:  # (F, B, N) or (B, N) -> (B,)
+        return np.asarray(bad.reshape(-1, B, N).any(axis=(0, 2)))
+
+    def cand_any(name: str, test) -> np.ndarray:
+        c = worst.get(name)
+        with np.errstate(invalid="ignore"):
+            return np.zeros(B, bool) if c is None else test(c).any(axis=1)
+
+    codes: list[list[tuple[int, str]]] = [[] for _ in range(B)]
+
+    def add(bad: np.ndarray, rank: int, code: str) -> None:
+        for b in np.flatnonzero(bad):
+            codes[b].append((rank, code))
+
+    r = bt.r[:, None]  # (B, 1)
+    if bt.flat:
+        add(
+            grid_any(on3 & (k <= 0)) | cand_any("kappa_pitch_min", lambda v: v <= 0),
+            0,
+            "curvature_convex",
+        )
+    elif bt.r[0] > 0:
+        lim = 1.0 / r
+        add(
+            grid_any(on3 & (k >= lim)) | cand_any("kappa_pitch_max", lambda v: v > lim),
+            0,
+            "roller_undercut",
+        )
+    elif bt.r[0] < 0:
+        lim = 1.0 / -r
+        fold = grid_any(on3 & (k > 0) & (k <= lim)) | cand_any(
+            "kappa_pitch_min", lambda v: (v > 0) & (v <= lim)
+        )
+        add(fold, 0, "curvature_convex")
+        add(
+            grid_any(on3 & (k <= 0)) | cand_any("kappa_pitch_min", lambda v: v <= 0),
+            1,
+            "curvature_face",
+        )
+    limit = d0.limits.max_pressure_angle_deg  # Eqs. 5, 13
+    phi = np.abs(loc.pressure_angle) * R2D
+    bad = grid_any(on & (phi > limit)) | cand_any(
+        "pressure_angle_max", lambda v: v > math.radians(limit)
+    )
+    add(bad, 2, "pressure_angle")
+    if bt.r[0] != 0.0:  # Eq. 42
+        lim_pa = allowable_contact_stress_MPa(d0) * 1e6 / d0.limits.contact_stress_safety_factor
+        stress = np.where(loc.in_contact, loc.stress, 0.0)
+        add(
+            grid_any(stress > lim_pa) | cand_any("stress_max", lambda v: v > lim_pa),
+            3,
+            "contact_stress",
+        )
+    for b, (d, geo) in enumerate(zip(bt.designs, bt.geos, strict=True)):  # Eq. 28
+        if F == 2:
+            codes[b] += [
+                (4, v.code) for v in checks._dwell_arcs(SimpleNamespace(geo=geo, design=d))
+            ]
+    touching = loc.in_contact.any(axis=0).reshape(B, N)
+    FN = loc.guide.FN.reshape(B, N)
+    add((touching & (FN <= 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), 6, "jump")
+    add((~touching).any(axis=1), 7, "contact_lost")
+    add((touching & (loc.guide.mode.reshape(B, N) < 0)).any(axis=1), 8, "guide_jam")
+    for row in codes:
+        row += [(5, c) for c in group[0]] + [(9, c) for c in group[1]]
+    return [[c for _, c in sorted(row, key=lambda t: t[0])] for row in codes]
+
+
+def summaries(designs: list[Design]) -> list[dict]:
+    """The report of each design (camcore.report.summary's keys, as far as they need no
+    profile: see the module docstring), plus ``violations`` as a list of {"code": ...}
+    in the order of checks.run_all, ``valid`` (no violation among the checks run) and
+    ``profile_checked`` = False. All designs of one group_key, all batchable."""
+    bt = make_batch(designs)
+    B, N = bt.theta.shape
+    F = bt.n_faces
+    d0 = bt.designs[0]
+    loc = local(bt, bt.theta.ravel(), np.repeat(np.arange(B), N))
+    on = _on_curve(loc, bt.segs)
+    worst = _refine(bt, loc, on)
+    group, continuity, dynamic = _group_figures(bt)
+    verdicts = _verdicts(bt, loc, on, worst, (continuity, dynamic))
+
+    seg = loc.prog.segment.reshape(B, N)
+    high = seg == HIGH
+    two = high & (loc.in_contact.sum(axis=0).reshape(B, N) == 2)
+    code = np.array([g.code for g in bt.segs], dtype=np.int8)[loc.part].reshape(F, B, N)
+    inc = loc.in_contact.reshape(F, B, N)
+    phi = (np.abs(loc.pressure_angle) * R2D).reshape(F, B, N)
+    rho_mm = loc.rho.reshape(F, B, N) * 1e3
+    FN, Ft = loc.guide.FN.reshape(B, N), loc.Ft.reshape(B, N)
+    stress = loc.stress.reshape(F, B, N)
+    stress_high = np.where(high[None], stress, np.nan)
+    if d0.follower.radius_mm == 0.0:
+        b_half = np.zeros_like(stress)
+    else:
+        r = bt.r[None, :, None]
+        w = d0.cam.width_mm * MM
+        fn = np.where(inc, FN[None], 0.0)
+        b_half = half_width(fn, hertz_line_stress(fn, r, rho_mm * 1e-3, w, compliance(d0)), w)
+    cols: dict[str, list[Any]] = {
+        "pa_rise": _max(phi, inc & (code == RISE)),
+        "pa_fall": _max(phi, inc & (code == FALL)),
+        "rho_rise": _range(rho_mm, inc & (code == RISE)),
+        "rho_fall": _range(rho_mm, inc & (code == FALL)),
+        "fn": _max(FN),
+        "fn_high": _max(FN, high),
+        "fn_two": _max(FN, two),
+        "f1": _max(loc.guide.F1.reshape(B, N)),
+        "f2": _max(loc.guide.F2.reshape(B, N)),
+        "s": _scaled(_max(stress), 1e-6),
+        "s_high": _scaled(_max(stress_high), 1e-6),
+        "b": _scaled(_max(b_half), 1e3),
+        "ft_high": _max(Ft, high),
+    }
+    if bt.flat:
+        x = np.abs(-loc.prog.V.reshape(B, N) - bt.stem_x[:, None])
+        width: list[float | None] = list(2.0 * x.max(axis=1) * 1e3)
+    else:
+        width = [None] * B
+    shaft = _shaft(bt, loc.torque.sum(axis=0).reshape(B, N), worst)
+    classic = d0.motion.classic
+    out = []
+    for b, (d, geo) in enumerate(zip(bt.designs, bt.geos, strict=True)):
+        codes = verdicts[b]
+        out.append(
+            {
+                "design": d.name,
+                "follower": d.follower.kind.value,
+                "valid": not codes,
+                "profile_checked": False,
+                "violations": [{"code": c} for c in codes],
+                "dwell_radius_mm": geo.dwell_radius * 1e3,
+                "psi_h_deg": geo.psi_h * R2D,
+                "psi_l_deg": geo.psi_l * R2D,
+                "stations_deg": [float(s) for s in bt.stations[b] * R2D],
+                "dwell_arc_deg": {
+                    "high": None
+                    if classic is None
+                    else classic.high_dwell_deg - 2 * geo.psi_h * R2D,
+                    "low": None if classic is None else classic.low_dwell_deg + 2 * geo.psi_l * R2D,
+                },
+                "pressure_angle_max_deg": {"rise": cols["pa_rise"][b], "fall": cols["pa_fall"][b]},
+                "curvature_radius_mm": {"rise": cols["rho_rise"][b], "fall": cols["rho_fall"][b]},
+                "contact_force_max_N": {
+                    "cycle": cols["fn"][b],
+                    "high_dwell": cols["fn_high"][b],
+                    "high_dwell_two_contact": cols["fn_two"][b],
+                },
+                "guide_force_max_N": {"F1": cols["f1"][b], "F2": cols["f2"][b]},
+                "contact_stress_max_MPa": {
+                    "cycle": cols["s"][b],
+                    "high_dwell": cols["s_high"][b] if high[b].any() else None,
+                },
+                "contact_half_width_max_mm": cols["b"][b],
+                "contact_stress_allowable_MPa": allowable_contact_stress_MPa(d),
+                "contact_stress_safety_factor": d.limits.contact_stress_safety_factor,
+                "total_load_high_dwell_N": cols["ft_high"][b],
+                "flat_face_width_min_mm": width[b],
+                **group,
+                **shaft[b],
+            }
+        )
+    return out

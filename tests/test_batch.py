@@ -1,0 +1,164 @@
+"""The batched core (camcore.batch) against the single analysis: for every preset,
+follower kind and a spread of geometries (valid and not), each figure it reports equals
+the single report's, and its verdict lists the same violations in the same order (less
+the profile's own checks, which it does not run)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from camcore import batch, sweep
+from camcore.analysis import analyze
+from camcore.model import DesignError, FollowerKind, load_preset
+from camcore.report import summary
+
+PRESETS = (
+    "paper_example",
+    "classroom_harmonic",
+    "double_index",
+    "indexer_345",
+    "valve_lift_roller",
+)
+KINDS = [k.value for k in FollowerKind]
+
+
+def differences(fast, single, path=""):
+    """Where the batched summary differs from the single one (relative 1e-9)."""
+    if isinstance(fast, dict):
+        out = []
+        for k, v in fast.items():
+            if k == "violations":
+                a = [x["code"] for x in v]
+                b = [x["code"] for x in single[k] if x["code"] not in batch.PROFILE_CHECKS]
+                out += [] if a == b else [(path + k, a, b)]
+            elif k != "profile_checked":
+                out += differences(v, single[k], f"{path}{k}.")
+        return out
+    if isinstance(fast, list):
+        if not isinstance(single, list) or len(fast) != len(single):
+            return [(path, fast, single)]
+        return [d for a, b in zip(fast, single, strict=True) for d in differences(a, b, path)]
+    if isinstance(fast, float) and isinstance(single, int | float):
+        same = fast == single or math.isclose(fast, single, rel_tol=1e-9, abs_tol=1e-12)
+        return [] if same else [(path, fast, single)]
+    return [] if fast == single else [(path, fast, single)]
+
+
+# whole-group changes that break the other limits: follower jump, a self-locking guide,
+# a roller that undercuts, a concave face as curved as the cam, the elastic train
+VARIANTS = {
+    "as_is": {},
+    "fast": {"cam.speed_rpm": 4000.0},
+    "sticky": {"dynamics.guide_friction": 0.9, "dynamics.overhang_mm": 80.0},
+    "big_radii": {"follower.roller_radius_mm": 80.0, "follower.face_radius_mm": -110.0},
+    "elastic": {"dynamics.train_stiffness_N_per_m": 5e4, "cam.speed_rpm": 3000.0},
+}
+
+
+def designs_of(preset: str, kind: str, variant: str = "as_is") -> list:
+    base = json.loads(load_preset(preset).model_dump_json())
+    for path, value in VARIANTS[variant].items():
+        block, name = path.split(".")
+        base[block][name] = value
+    r_b = base["cam"]["base_radius_mm"]
+    points = [
+        {"follower.kind": kind, "cam.base_radius_mm": r, "follower.single_offset_mm": s}
+        for r in (0.125 * r_b, 0.35 * r_b, 0.7 * r_b, r_b, 1.3 * r_b)
+        for s in (0.0, 0.1 * r_b)
+    ]
+    out = []
+    for p in points:
+        try:
+            out.append(sweep.design_at(base, p))
+        except DesignError:
+            pass
+    return out
+
+
+def _cases():
+    yield from ((p, k, "as_is") for p in PRESETS for k in KINDS)
+    yield from (("paper_example", k, v) for v in VARIANTS if v != "as_is" for k in KINDS)
+
+
+@pytest.mark.parametrize(("preset", "kind", "variant"), list(_cases()))
+def test_batch_equals_single_reports(preset, kind, variant):
+    designs = designs_of(preset, kind, variant)
+    if not designs:
+        pytest.skip("no valid input for this follower")
+    groups: dict[int, list] = {}
+    for d in designs:  # one face or two (e = 0) cannot share a batch
+        groups.setdefault(len(analyze(d, verify=False).geo.faces), []).append(d)
+    for group in groups.values():
+        for d, fast in zip(group, batch.summaries(group), strict=True):
+            single = summary(analyze(d, verify=False))
+            assert fast["profile_checked"] is False
+            assert differences(fast, single) == [], (d.cam.base_radius_mm, kind)
+
+
+def test_the_spread_has_broken_limits_too():
+    """The geometries above are not all valid: the comparison covers verdicts."""
+    codes = set()
+    for preset, kind, variant in _cases():
+        for d in designs_of(preset, kind, variant):
+            codes |= {v["code"] for v in batch.summaries([d])[0]["violations"]}
+    assert codes >= {
+        "pressure_angle",
+        "curvature_convex",
+        "curvature_face",
+        "roller_undercut",
+        "contact_stress",
+        "high_dwell_arc",
+        "jump",
+        "guide_jam",
+        "contact_lost",
+        "dynamic_jump",
+    }
+
+
+def test_fast_rows_equal_rows_and_fall_back_where_they_must():
+    """A chunk of mixed followers, an invalid combination and a sliding face with contact
+    friction (not batchable: the full analysis, profile_checked = True)."""
+    base = json.loads(load_preset("paper_example").model_dump_json())
+    points = [
+        {"cam.base_radius_mm": r, "follower.kind": k}
+        for r in (30.0, 80.0, 95.0)
+        for k in ("double_concave", "single_roller")
+    ] + [{"cam.base_radius_mm": 80.0, "follower.kind": "no such kind"}]
+    fast = sweep.fast_rows(base, points)
+    for p, f in zip(points, fast, strict=True):
+        full = sweep.row(base, p, verify=False)
+        assert f["error"] == full["error"] and f["valid"] == full["valid"] or "violations" in f
+        for k, v in f.items():
+            if k in ("violations", "profile_checked", "valid"):
+                continue
+            w = full[k]
+            assert (
+                v == w
+                or (isinstance(v, float) and math.isclose(v, w, rel_tol=1e-9))
+                or (isinstance(v, str) and np.allclose(json.loads(v), json.loads(w), rtol=1e-9))
+            ), k
+    friction = dict(base, dynamics={**base["dynamics"], "contact_friction": 0.1})
+    (r,) = sweep.fast_rows(friction, [{"cam.base_radius_mm": 80.0}])
+    assert r["profile_checked"] is True and "profile.vertices" in r
+    assert r == {
+        **sweep.row(friction, {"cam.base_radius_mm": 80.0}, verify=False),
+        "profile_checked": True,
+    }
+
+
+def test_batch_is_faster_than_one_analysis_each():
+    """Not a timing test (bench/ measures it): the batch evaluates the closed forms for
+    all designs in one call, so the number of evaluations does not grow with B."""
+    designs = designs_of("paper_example", "double_concave")[2:]
+    calls = []
+    real = batch.local
+    try:
+        batch.local = lambda *a: calls.append(1) or real(*a)  # type: ignore[assignment]
+        batch.summaries(designs * 4)
+    finally:
+        batch.local = real  # type: ignore[assignment]
+    assert len(calls) == 1 + 3  # the grid, and one per zoom round (extremes.ROUNDS)
