@@ -135,9 +135,10 @@ class Analyst:
     def refined(self, design: Design) -> Refined:
         return self._run("bg", refined, design)
 
-    def sweep_chunk(self, base: dict, points: list[dict]) -> list[dict]:
-        """Sweep rows (camcore.sweep.row, fast analysis) of a batch of grid points."""
-        return self._run("bg", sweep.run_chunk, base, points, False)
+    def sweep_chunk(self, base: dict, points: list[dict], batched: bool = False) -> list[dict]:
+        """Sweep rows of a batch of grid points: one fast analysis each
+        (camcore.sweep.row), or ``batched`` the batched core (camcore.batch)."""
+        return self._run("bg", sweep.run_chunk, base, points, False, batched)
 
     def explore_png(self, rows, x, y, names, front) -> bytes:
         """camcore.explore.explore_png, drawn in the background worker."""

@@ -3,10 +3,12 @@ around the design on screen, in the background, and show which limit fails where
 the Pareto front of two figures the user picks; a design of the front loads with one
 click.
 
-The sweep is camcore.sweep's (rows equal ``report --json``, fast analysis: the
-geometric check runs when a design is loaded), in chunks on the analyst's background
-worker, which only uses CPU time no tab's edit wants. One sweep per tab, at most
-MAX_DESIGNS designs, cancellable between chunks.
+The sweep is camcore.sweep's (rows equal ``report --json``), in chunks on the
+analyst's background worker, which only uses CPU time no tab's edit wants. It runs on
+the batched core (camcore.batch: the paper's limits and the fixed-size figures, about
+three times faster) unless a chosen figure needs the profile (wear); the profile's own
+checks and the geometric check run when a design is loaded. One sweep per tab, at
+most MAX_DESIGNS designs, cancellable between chunks.
 """
 
 from __future__ import annotations
@@ -39,7 +41,8 @@ PARAMETERS = {
 FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
 MAX_STEPS = 15  # per axis
 MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
-CHUNK = 12  # designs per background job: ~0.2 s, the cancel latency
+CHUNK = 12  # designs per background job: ~0.1 s, the cancel latency
+PROFILE_FIGURES = {"wear"}  # figures the batched core does not compute
 MAX_FRONT = 30  # designs of the front offered for loading
 
 
@@ -64,7 +67,8 @@ class ExplorePanel:
         labels = tuple(PARAMETERS)
         gui.add_markdown(
             "Sweep two fields around the design on screen; each point is a whole analysis "
-            "(fast path: the geometric check runs when you load a design)."
+            "(the paper's limits; the profile and geometric checks run when you load a "
+            "design)."
         )
         self.x = gui.add_dropdown("x field", labels, initial_value=labels[0])
         self.x_range = gui.add_vector2("x from, to", (60.0, 110.0), step=0.5)
@@ -158,7 +162,8 @@ class ExplorePanel:
             for i in range(0, len(points), CHUNK):
                 if self._cancel.is_set():
                     break
-                rows += self._analyst.sweep_chunk(base, points[i : i + CHUNK])
+                batched = not PROFILE_FIGURES & set(names)
+                rows += self._analyst.sweep_chunk(base, points[i : i + CHUNK], batched)
                 ok = sum(bool(r.get("valid")) for r in rows)
                 self.progress.content = (
                     f"Running: **{len(rows)} / {len(points)}** designs, {ok} valid so far…"

@@ -548,6 +548,19 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     assert "two different fields" in e.progress.content
 
 
+def test_explore_with_a_profile_figure_runs_the_full_analysis(tab):
+    """Wear needs the profile, which the batched core does not build: a sweep that
+    ranks by wear runs one full analysis per design, and its front shows wear."""
+    e = tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (75.0, 85.0), (25.0, 30.0)
+    e.steps.value, e.all_kinds.value = 2, False
+    e.fig_a.value, e.fig_b.value = "cam size R (high-dwell radius)", "max wear depth"
+    e.run_btn.value = True
+    assert wait_for(lambda: "on the Pareto front" in e.progress.content, 120.0), e.progress.content
+    assert e.front_dd.options and all("µm" in o for o in e.front_dd.options)
+
+
 def test_wide_panel_toggle(tab):
     from app.layout import WIDE_PANEL_CSS
 
