@@ -96,9 +96,7 @@ def run(quick: bool = False) -> list[dict]:
     )
     fast_points = list(spec.points()) * (4 if quick else 2)  # 32 or 64 designs
     sweep.run_chunk(spec.base, fast_points[:8], fast=True)
-    cpu = min(
-        _cpu_ms(lambda: sweep.run_chunk(spec.base, fast_points, fast=True)) for _ in range(3)
-    )
+    cpu = min(_cpu_ms(lambda: sweep.run_chunk(spec.base, fast_points, fast=True)) for _ in range(3))
     rate = len(fast_points) / (cpu / 1e3)
     rows.append(
         _row(

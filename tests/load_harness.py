@@ -236,10 +236,15 @@ class Tab:
             for k in [k for k, ts in self.pending.items() if ts < sent_t]:
                 del self.pending[k]
 
-    async def drag(self, duration: float, rate_hz: float, rng: random.Random) -> None:
+    async def drag(
+        self, duration: float, rate_hz: float, rng: random.Random, phase: float = 0.0
+    ) -> None:
+        """Send a new lift every 1 / rate_hz s for ``duration`` s, the first after
+        ``phase`` periods (0: at once)."""
         period = 1.0 / rate_hz
         t_end = time.monotonic() + duration
-        nxt = time.monotonic()
+        nxt = time.monotonic() + phase * period
+        await asyncio.sleep(phase * period)
         prev = None
         n_max = int(duration * rate_hz) + 1
         for _ in range(n_max):
@@ -335,9 +340,19 @@ def _quantiles(xs: list[float]) -> dict:
 
 
 async def run_load(
-    url: str, n_clients: int, duration: float, rate_hz: float, seed: int = 0, probe: bool = True
+    url: str,
+    n_clients: int,
+    duration: float,
+    rate_hz: float,
+    seed: int = 0,
+    probe: bool = True,
+    lockstep: bool = False,
 ) -> LoadResult:
-    """``n_clients`` tabs drag their own lift values at ``rate_hz`` for ``duration`` s."""
+    """``n_clients`` tabs drag their own lift values at ``rate_hz`` for ``duration`` s.
+
+    Each tab starts at its own random phase of the period, as a class's students do
+    (``lockstep``: all at the same instant, so every second brings a burst of
+    ``n_clients`` edits at once: the worst case)."""
     t0 = time.perf_counter()
     rng = random.Random(seed)
     clients = await asyncio.gather(*(open_tab(url, f"tab{i}") for i in range(n_clients)))
@@ -356,7 +371,12 @@ async def run_load(
         await probe_once()
 
     try:
-        jobs = [t.drag(duration, rate_hz, random.Random(rng.random())) for t in tabs]
+        jobs = [
+            t.drag(
+                duration, rate_hz, random.Random(rng.random()), 0.0 if lockstep else rng.random()
+            )
+            for t in tabs
+        ]
         if probe:
             jobs.append(probe_mid())
         await asyncio.gather(*jobs)
