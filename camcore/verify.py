@@ -137,6 +137,7 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
     lo = ctr - hw + theta
     full = hw >= math.pi
     best = L.copy()
+    chords = 0 <= r < math.inf  # only a roller (or knife edge) can rest on a chord
     part = np.flatnonzero(~full)
     if part.size:
         # blocks of consecutive angles share one contiguous run of the polar-sorted
@@ -154,12 +155,11 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
                 full[rows] = True
                 continue
             cc, ss = c[rows], s[rows]
-            m = _face_max(
-                _rotate(cc, ss, p3[0][s0:e0], p3[1][s0:e0]),
-                _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]),
-                r,
-                x_c,
-            )
+            P = _rotate(cc, ss, p3[0][s0:e0], p3[1][s0:e0])
+            if chords:
+                m = _face_max(P, _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]), r, x_c)
+            else:
+                m = _vertex_max(P, r, x_c)
             best[rows] = np.maximum(best[rows], m)
     if full.any():
         best[full] = np.maximum(best[full], _face_full(pts, nxt, c[full], s[full], r, x_c))
