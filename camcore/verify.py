@@ -37,11 +37,14 @@ vertices in a wedge of directions (seen from the cam axis) can reach above L:
   cos(psi - psi_C) <= (rho_max^2 + |C|^2 - r^2) / (2 rho_max |C|), psi_C the
   direction of (x_c, L).
 
-L comes from a strided sample of the vertices at the same angle; the vertices are
-sorted once by polar angle, so each wedge is a contiguous run. The pruned maximum is
-over a superset of the vertices that can attain it, with the same arithmetic, so it
-equals the full maximum exactly; angles where no bound applies (a follower narrower
-than the vertex spacing, a wedge of everything) use the full maximum.
+L is the best of the few vertices (and chords) right under the face, where a sound cam
+touches it, so the wedge is narrow; the vertices are sorted once by polar angle, so
+each wedge is a contiguous run. For concave and flat faces the wedge is then tightened
+with the largest radius inside it instead of the profile's (only those vertices can
+count, and they lie within it). The pruned maximum is over a superset of the vertices
+that can attain it, with the same arithmetic, so it equals the full maximum exactly
+whatever L is (a loose L only widens the wedge); angles where no bound applies (a
+follower narrower than the vertex spacing, a wedge of everything) use the full maximum.
 """
 
 from __future__ import annotations
@@ -51,8 +54,7 @@ import math
 import numpy as np
 
 CHUNK = 192  # cam angles per block of the full maximum: memory CHUNK x vertices x 8 bytes
-BLOCK = 32  # consecutive cam angles per block of the pruned maximum
-SAMPLE = 64  # vertices in the strided sample that gives the lower bound L
+BLOCK = 128  # consecutive cam angles per block of the pruned maximum
 _SLACK = 1e-9  # [rad] widening of every wedge against round-off in its bounds
 
 
@@ -104,8 +106,9 @@ def _wedge(L, r, x_c, rho_max):
     ctr = np.full(L.shape, math.pi / 2)
     fin = np.isfinite(L)
     if math.isinf(r):  # flat face: a vertex at radius <= rho_max reaches Y >= L only
-        ok = fin & (L > 0) & (L < rho_max)  # within acos(L / rho_max) of straight up
-        hw[ok] = np.arccos(L[ok] / rho_max)
+        rho = np.broadcast_to(rho_max, L.shape)
+        ok = fin & (L > 0) & (L < rho)  # within acos(L / rho_max) of straight up
+        hw[ok] = np.arccos(L[ok] / rho[ok])
     elif r >= 0:  # rollers, and the knife edge (r = 0)
         ymin = L - r
         ok = fin & (ymin > 0)
@@ -122,17 +125,15 @@ def _wedge(L, r, x_c, rho_max):
     return ctr, np.where(hw < math.pi, hw + _SLACK, 4.0)
 
 
-def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
+def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table) -> np.ndarray:
     px, py = pts
     M = px.size
-    # lower bound from a strided sample (any vertex's value is one) ...
-    stride = max(1, M // SAMPLE)
-    sample = (px[::stride], py[::stride])
-    L = _vertex_max(_rotate(c, s, *sample), r, x_c)
-    # ... and from the vertices and chords right under the face: a roller narrower than
-    # the vertex spacing reaches no sampled vertex, only the chord beneath it
-    L = np.maximum(L, _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max))
+    # a lower bound (any vertex's value is one): the vertices and chords right under
+    # the face, where it touches on a sound cam (exact or close: the wedge is narrow)
+    L = _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max)
     ctr, hw = _wedge(L, r, x_c, rho_max)
+    if not 0 <= r < math.inf:  # concave and flat faces: tighten with the run's own radius
+        ctr, hw = _tighten(L, r, x_c, theta, ctr, hw, phi3, radius_table, M)
     # world direction psi = body angle phi - theta: the body window starts at lo
     lo = ctr - hw + theta
     full = hw >= math.pi
@@ -166,6 +167,55 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
     return best
 
 
+TIGHTEN = 2  # rounds of _tighten
+
+
+def _run(lo, hw, theta, phi3):
+    """[s0, e0) of the polar-sorted (tiled) vertices in each body window [lo, lo + 2 hw]
+    (lo in world directions, shifted to body angles by theta), as _face_lift takes it."""
+    lo = lo + theta
+    lo = lo - 2 * math.pi * np.floor((lo + math.pi) / (2 * math.pi))
+    s0 = np.searchsorted(phi3, lo, "left") - 1
+    e0 = np.searchsorted(phi3, lo + 2 * hw, "right")
+    return np.maximum(s0, 0), e0
+
+
+def _range_max(table, s0, e0):
+    """max of the array under ``table`` (sparse_table) over each [s0, e0), e0 > s0."""
+    k = np.floor(np.log2(np.maximum(e0 - s0, 1))).astype(int)
+    levels = np.stack(table)
+    return np.maximum(levels[k, s0], levels[k, np.maximum(e0 - (1 << k), s0)])
+
+
+def sparse_table(x: np.ndarray) -> list[np.ndarray]:
+    """Level j holds max(x[i : i + 2^j]) (padded at the end): O(1) range maxima."""
+    out = [x]
+    while (1 << len(out)) <= x.size:
+        prev, h = out[-1], 1 << (len(out) - 1)
+        out.append(np.maximum(prev, np.concatenate([prev[h:], prev[-h:]])))
+    return out
+
+
+def _tighten(L, r, x_c, theta, ctr, hw, phi3, table, M):
+    """Narrower wedges for concave and flat faces. The wedge assumes every vertex may lie
+    at rho_max from the axis; but only vertices inside it can beat L, and those lie
+    within the largest radius among them, so the wedge for that radius holds every
+    candidate too. Repeated TIGHTEN times, per angle (exact: a superset of the vertices
+    that can attain the maximum, as before)."""
+    for _ in range(TIGHTEN):
+        ok = hw < math.pi
+        if not ok.any():
+            break
+        s0, e0 = _run(ctr[ok] - hw[ok], hw[ok], theta[ok], phi3)
+        small = (e0 - s0 < M) & (e0 > s0)
+        rows = np.flatnonzero(ok)[small]
+        rho = _range_max(table, s0[small], e0[small])
+        c2, h2 = _wedge(L[rows], r, x_c, rho)
+        narrower = h2 < hw[rows]
+        ctr[rows[narrower]], hw[rows[narrower]] = c2[narrower], h2[narrower]
+    return ctr, hw
+
+
 LOCAL = 8  # vertices on each side of the face's direction in the local lower bound
 
 
@@ -187,8 +237,9 @@ def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
         rho = radius[idx3[np.clip(j0, 0, idx3.size - 1)]]
     j = idx3[np.clip((j0 - k // 2)[:, None] + np.arange(k), 0, idx3.size - 1)]
     P = _rotate(c, s, pts[0][j], pts[1][j])
-    Q = _rotate(c, s, nxt[0][j], nxt[1][j])
-    return _face_max(P, Q, r, x_c)
+    if not 0 <= r < math.inf:  # a concave or flat face rests on vertices only
+        return _vertex_max(P, r, x_c)
+    return _face_max(P, _rotate(c, s, nxt[0][j], nxt[1][j]), r, x_c)
 
 
 def _vertex_max(P, r, x_c) -> np.ndarray:
@@ -238,10 +289,11 @@ def follower_lift(
         phi3 = np.concatenate([phi_s - 2 * math.pi, phi_s, phi_s + 2 * math.pi])
         idx3 = np.tile(order, 3)
         rho_max = float(np.hypot(*pts).max())
+        radius_table = sparse_table(np.hypot(*pts)[idx3])
     best = np.full(theta.size, -np.inf)
     for r, x_c in faces:
         face = (
-            _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max)
+            _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
             if prune
             else _face_full(pts, nxt, c, s, r, x_c)
         )

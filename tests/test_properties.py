@@ -362,9 +362,9 @@ def prop_verdict_independent_of_resolution(data: dict) -> None:
     broken = [{v.code for v in x.violations} & GEOMETRY_DEFECTS for x in (a, b)]
     if broken[0] and broken[1]:
         # both grids find the profile is not a cam (a cusp, a crossing): the figures on
-        # it (contact windows, stress) are not of a real cam and may differ by grid; the
-        # geometric verdict must still agree
-        differ &= GEOMETRY_DEFECTS
+        # it (contact windows, stress, how closely its chords follow it) are not of a
+        # real cam and may differ by grid; the geometric verdict must still agree
+        differ &= GEOMETRY_DEFECTS - {"export_tolerance"}
     assert all(amount[c] < BORDERLINE for c in differ), (
         [v.message for v in a.violations],
         [v.message for v in b.violations],
@@ -407,6 +407,62 @@ def test_fine_resolution_designs(data):
 
 @ci(150)
 @given(design_dicts(resolutions=COARSE))
+@example(  # a flat face on a 0.05 deg rise of 1 m: crossing on both grids, chords not
+    data={
+        "motion": {
+            "fall_deg": 54.97251374312844,
+            "high_dwell_deg": 54.97251374312844,
+            "lift_mm": 1000.0,
+            "rise_deg": 0.054972513743128434,
+            "rise_law": "cycloidal",
+            "fall_law": "cycloidal",
+        },
+        "follower": {
+            "face_radius_mm": -1.0,
+            "offset_mm": 0.0,
+            "roller_radius_mm": 1.0,
+            "single_offset_mm": 0.0,
+            "kind": "flat_face",
+        },
+        "cam": {
+            "base_radius_mm": 421.6965034285823,
+            "bore_diameter_mm": 1.0,
+            "cutter_diameter_mm": 1.0,
+            "keyway_depth_mm": 1.0,
+            "keyway_width_mm": 0.1,
+            "speed_rpm": 1.0,
+            "width_mm": 1.0,
+        },
+        "dynamics": {
+            "contact_friction": 0.0,
+            "damping_ratio": 0.0,
+            "gravity_m_s2": 0.0,
+            "guide_friction": 0.0,
+            "guide_length_mm": 1.0,
+            "guide_width_mm": 1.0,
+            "mass_g": 1.0,
+            "overhang_mm": 0.0,
+            "preload_mm": 0.0,
+            "speed_fluctuation": 1.0,
+            "spring_mass_g": 0.0,
+            "spring_rate_N_per_m": 0.0,
+            "spring_safety_factor": 1.0,
+            "overhang_shrinks": False,
+        },
+        "material": {"cam_E_GPa": 1.0, "cam_nu": 0.0, "follower_E_GPa": 1.0, "follower_nu": 0.0},
+        "wear": {
+            "coefficient_mm3_per_N_m": 0.0,
+            "pitting_exponent": 2.0,
+            "pitting_reference_cycles": 1.0,
+        },
+        "limits": {
+            "contact_stress_safety_factor": 1.0,
+            "export_tolerance_mm": 1.0,
+            "max_pressure_angle_deg": 1.0,
+            "resolution_deg": 5.0,
+        },
+    },
+).via("discovered failure")
 @example(
     data={
         "motion": {
