@@ -132,11 +132,13 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
     # the face, where it touches on a sound cam (exact or close: the wedge is narrow)
     L = _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max)
     ctr, hw = _wedge(L, r, x_c, rho_max)
-    if not 0 <= r < math.inf:  # concave and flat faces: tighten with the run's own radius
-        ctr, hw = _tighten(L, r, x_c, theta, ctr, hw, phi3, radius_table, M)
+    below, above = hw, hw.copy()  # half-widths on each side of ctr
+    if not 0 <= r < math.inf:  # concave and flat faces: tighten with the runs' own radii
+        below, above = _tighten(L, r, x_c, theta, ctr, below, above, phi3, radius_table, M)
     # world direction psi = body angle phi - theta: the body window starts at lo
-    lo = ctr - hw + theta
-    full = hw >= math.pi
+    lo = ctr - below + theta
+    width = below + above
+    full = np.maximum(below, above) >= math.pi
     best = L.copy()
     chords = 0 <= r < math.inf  # only a roller (or knife edge) can rest on a chord
     part = np.flatnonzero(~full)
@@ -151,7 +153,7 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
             lo_r = lo[rows]
             lo_r = lo_r - 2 * math.pi * math.floor((lo_r.min() + math.pi) / (2 * math.pi))
             s0 = int(np.searchsorted(phi3, lo_r.min(), "left")) - 1
-            e0 = int(np.searchsorted(phi3, (lo_r + 2 * hw[rows]).max(), "right"))
+            e0 = int(np.searchsorted(phi3, (lo_r + width[rows]).max(), "right"))
             if e0 - s0 >= M:
                 full[rows] = True
                 continue
@@ -170,13 +172,13 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
 TIGHTEN = 2  # rounds of _tighten
 
 
-def _run(lo, hw, theta, phi3):
-    """[s0, e0) of the polar-sorted (tiled) vertices in each body window [lo, lo + 2 hw]
+def _run(lo, width, theta, phi3):
+    """[s0, e0) of the polar-sorted (tiled) vertices in each body window [lo, lo + width]
     (lo in world directions, shifted to body angles by theta), as _face_lift takes it."""
     lo = lo + theta
     lo = lo - 2 * math.pi * np.floor((lo + math.pi) / (2 * math.pi))
     s0 = np.searchsorted(phi3, lo, "left") - 1
-    e0 = np.searchsorted(phi3, lo + 2 * hw, "right")
+    e0 = np.searchsorted(phi3, lo + width, "right")
     return np.maximum(s0, 0), e0
 
 
@@ -196,27 +198,28 @@ def sparse_table(x: np.ndarray) -> list[np.ndarray]:
     return out
 
 
-def _tighten(L, r, x_c, theta, ctr, hw, phi3, table, M):
-    """Narrower wedges for concave and flat faces. The wedge assumes every vertex may lie
-    at rho_max from the axis; but only vertices inside it can beat L, and those lie
-    within the largest radius among them, so the wedge for that radius holds every
-    candidate too. Repeated TIGHTEN times, per angle (exact: a superset of the vertices
-    that can attain the maximum, as before)."""
+def _tighten(L, r, x_c, theta, ctr, below, above, phi3, table, M):
+    """Narrower wedges for concave and flat faces, one side at a time. The wedge assumes
+    every vertex may lie at rho_max from the axis; but only the vertices inside it can
+    beat L, and those on one side of ctr lie within the largest radius among them, so
+    the wedge for that radius bounds that side too (its half-width grows with the
+    radius). Repeated TIGHTEN times, per angle: exact, a superset of the vertices that
+    can attain the maximum, as before."""
     for _ in range(TIGHTEN):
-        ok = hw < math.pi
-        if not ok.any():
-            break
-        s0, e0 = _run(ctr[ok] - hw[ok], hw[ok], theta[ok], phi3)
-        small = (e0 - s0 < M) & (e0 > s0)
-        rows = np.flatnonzero(ok)[small]
-        rho = _range_max(table, s0[small], e0[small])
-        c2, h2 = _wedge(L[rows], r, x_c, rho)
-        narrower = h2 < hw[rows]
-        ctr[rows[narrower]], hw[rows[narrower]] = c2[narrower], h2[narrower]
-    return ctr, hw
+        for side in (below, above):
+            ok = side < math.pi
+            if not ok.any():
+                break
+            start = ctr[ok] - side[ok] if side is below else ctr[ok]
+            s0, e0 = _run(start, side[ok], theta[ok], phi3)
+            small = (e0 - s0 < M) & (e0 > s0)
+            rows = np.flatnonzero(ok)[small]
+            _, h2 = _wedge(L[rows], r, x_c, _range_max(table, s0[small], e0[small]))
+            side[rows] = np.minimum(side[rows], h2)
+    return below, above
 
 
-LOCAL = 8  # vertices on each side of the face's direction in the local lower bound
+LOCAL = 3  # vertices on each side of the face's direction in the local lower bound
 
 
 def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
