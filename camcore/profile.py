@@ -38,6 +38,8 @@ from .model import Design
 from .motion import FALL, RISE, Program, Segment
 from .units import MM
 
+MIN_OFFSET = 1e-12  # [m] offsets below this are 0: the faces coincide
+
 
 @dataclass(frozen=True)
 class Face:
@@ -81,6 +83,8 @@ def geometry(design: Design) -> Geometry:
     """
     f = design.follower
     r, e = f.radius_mm * MM, abs(f.effective_offset_mm) * MM  # abs: -0.0 mm is 0
+    if e < MIN_OFFSET:  # a picometre is no offset (and a denormal one underflows psi)
+        e = 0.0
     r_b, h = design.cam.base_radius_mm * MM, design.motion.lift_mm * MM
     stem_x = f.stem_x_mm * MM
     sigma = 1.0 if r + r_b > 0 else -1.0

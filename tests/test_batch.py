@@ -10,6 +10,9 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from test_properties import ci
 
 from camcore import batch, sweep
 from camcore.analysis import analyze
@@ -35,6 +38,9 @@ def differences(fast, single, path=""):
                 a = [x["code"] for x in v]
                 b = [x["code"] for x in single[k] if x["code"] not in batch.PROFILE_CHECKS]
                 out += [] if a == b else [(path + k, a, b)]
+            elif k == "valid":  # the batch does not run the profile's own checks
+                rest = [x for x in single["violations"] if x["code"] not in batch.PROFILE_CHECKS]
+                out += [] if v == (not rest) else [(path + k, v, single[k])]
             elif k != "profile_checked":
                 out += differences(v, single[k], f"{path}{k}.")
         return out
@@ -162,3 +168,44 @@ def test_batch_is_faster_than_one_analysis_each():
     finally:
         batch.local = real  # type: ignore[assignment]
     assert len(calls) == 1 + 3  # the grid, and one per zoom round (extremes.ROUNDS)
+
+
+@st.composite
+def geometric_variants(draw) -> tuple[dict, list[dict]]:
+    """A preset with any follower and resolution, and three geometries of it (the
+    fields a batch varies), drawn over wide ranges: valid or not, limits broken or not."""
+    base = json.loads(load_preset(draw(st.sampled_from(PRESETS))).model_dump_json())
+    base["follower"]["kind"] = draw(st.sampled_from(KINDS))
+    base["limits"]["resolution_deg"] = draw(st.sampled_from([5.0, 1.0, 0.5, 0.25]))
+    base["cam"]["speed_rpm"] *= draw(st.sampled_from([0.5, 1.0, 2.5]))
+    geometry = st.fixed_dictionaries(
+        {
+            "cam.base_radius_mm": st.floats(5.0, 150.0),
+            "follower.offset_mm": st.floats(0.0, 40.0),
+            "follower.single_offset_mm": st.floats(-30.0, 30.0),
+            "follower.roller_radius_mm": st.floats(1.0, 60.0),
+            "follower.face_radius_mm": st.floats(-600.0, -40.0),
+        }
+    )
+    return base, [draw(geometry) for _ in range(3)]
+
+
+@ci(60)
+@given(geometric_variants())
+def test_batch_equals_single_on_random_geometries(case):
+    """Random geometries of any preset and follower: the batch reports what the single
+    analyses report, verdicts included."""
+    base, points = case
+    designs = []
+    for p in points:
+        try:
+            designs.append(sweep.design_at(base, p))
+        except DesignError:
+            continue
+    groups: dict[int, list] = {}
+    for d in designs:
+        groups.setdefault(len(analyze(d, verify=False).geo.faces), []).append(d)
+    for group in groups.values():
+        for d, fast in zip(group, batch.summaries(group), strict=True):
+            single = summary(analyze(d, verify=False))
+            assert differences(fast, single) == [], d.model_dump_json()

@@ -458,3 +458,14 @@ def test_tightened_check_equals_the_brute_force_on_every_paper_follower():
         th = a.theta[::37]
         args = (a.profile.points, th, [(f.r, f.x_c) for f in a.geo.faces], a.geo.r_b)
         np.testing.assert_array_equal(follower_lift(*args), follower_lift(*args, prune=False))
+
+
+def test_a_vanishing_offset_is_no_offset():
+    """A double follower's offset of 1e-313 mm (a denormal in metres) made the dwell
+    arcs underflow and the profile cross itself; below a picometre it is e = 0."""
+    d = PAPER.with_kind(FollowerKind.double_roller)
+    tiny = d.model_copy(update={"follower": d.follower.model_copy(update={"offset_mm": 2e-313})})
+    zero = d.model_copy(update={"follower": d.follower.model_copy(update={"offset_mm": 0.0})})
+    a, b = analyze(tiny, verify=False), analyze(zero, verify=False)
+    assert len(a.geo.faces) == 1 and a.geo.e == 0.0
+    assert [v.code for v in a.violations] == [v.code for v in b.violations]
