@@ -141,6 +141,7 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
     full = np.maximum(below, above) >= math.pi
     best = L.copy()
     chords = 0 <= r < math.inf  # only a roller (or knife edge) can rest on a chord
+    reach_all = _reaches_all(r, x_c, rho_max)
     part = np.flatnonzero(~full)
     if part.size:
         # blocks of consecutive angles share one contiguous run of the polar-sorted
@@ -162,7 +163,7 @@ def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
             if chords:
                 m = _face_max(P, _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]), r, x_c)
             else:
-                m = _vertex_max(P, r, x_c)
+                m = _vertex_max(P, r, x_c, reach_all)
             best[rows] = np.maximum(best[rows], m)
     if full.any():
         best[full] = np.maximum(best[full], _face_full(pts, nxt, c[full], s[full], r, x_c))
@@ -241,16 +242,25 @@ def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
     j = idx3[np.clip((j0 - k // 2)[:, None] + np.arange(k), 0, idx3.size - 1)]
     P = _rotate(c, s, pts[0][j], pts[1][j])
     if not 0 <= r < math.inf:  # a concave or flat face rests on vertices only
-        return _vertex_max(P, r, x_c)
+        return _vertex_max(P, r, x_c, _reaches_all(r, x_c, rho_max))
     return _face_max(P, _rotate(c, s, nxt[0][j], nxt[1][j]), r, x_c)
 
 
-def _vertex_max(P, r, x_c) -> np.ndarray:
-    """The vertex part of _face_max (a lower bound of the lift for any face)."""
+def _reaches_all(r: float, x_c: float, rho_max: float) -> bool:
+    """A concave face wider than the whole cam: every vertex (|X| <= rho_max) is within
+    |r| of x_c horizontally, with room for the rotation's round-off."""
+    return r < 0 and (rho_max + abs(x_c)) * (1 + 1e-9) < -r
+
+
+def _vertex_max(P, r, x_c, reach_all: bool = False) -> np.ndarray:
+    """The vertex part of _face_max (a lower bound of the lift for any face);
+    ``reach_all``: the caller knows every vertex is within |r| of x_c horizontally."""
     X, Y = P
     if math.isinf(r):
         return np.max(Y, axis=1)
     dx2 = (X - x_c) ** 2
+    if reach_all:  # every vertex lies under the face: the same numbers without masks
+        return np.max(Y + math.copysign(1.0, r) * np.sqrt(r * r - dx2), axis=1)
     reach = dx2 <= r * r
     yc = Y + math.copysign(1.0, r) * np.sqrt(np.where(reach, r * r - dx2, 0.0))
     return np.max(np.where(reach, yc, -np.inf), axis=1)
