@@ -26,6 +26,7 @@ sweep falls back to the single analysis for them.
 
 from __future__ import annotations
 
+import copy
 import json
 import math
 from dataclasses import dataclass
@@ -39,7 +40,7 @@ from .analysis import stations
 from .contact import compliance, conservative_stress, half_width, hertz_line_stress
 from .model import Design, allowable_contact_stress_MPa, omega_rad_s
 from .motion import FALL, HIGH, MOTIONS, RISE
-from .units import MM
+from .units import MM, to_deg
 
 R2D = 180.0 / math.pi
 
@@ -98,8 +99,13 @@ class Batch:
 
 
 def make_batch(designs: list[Design]) -> Batch:
-    """The batch of ``designs`` (all of one group_key, all batchable)."""
+    """The batch of ``designs``: all batchable, of one group_key and with the same
+    number of faces (ValueError otherwise)."""
     d0 = designs[0]
+    if not all(batchable(d) for d in designs):
+        raise ValueError("a sliding face with contact friction is not batched")
+    if len({group_key(d) for d in designs}) != 1:
+        raise ValueError(f"a batch holds designs that differ only in {BATCHED_FIELDS}")
     segs = motion.segments(d0)
     geos = [profile.geometry(d) for d in designs]
     if len({len(g.faces) for g in geos}) != 1:  # e = 0 makes a double follower single
@@ -233,6 +239,23 @@ def _quantities(bt: Batch) -> dict:
     return {n: extremes.QUANTITIES[n] for n in names}
 
 
+def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """extremes._candidates for many rows at once: (row, grid index) of the CANDIDATES
+    largest local maxima of each row of ``values`` (R, N) among the samples in
+    ``mask``, the larger first and, between equal ones, the earlier (a stable sort,
+    as the single analysis picks them)."""
+    v = np.where(mask, values, -np.inf)
+    edge = np.full((v.shape[0], 1), -np.inf)
+    left = np.concatenate([edge, v[:, :-1]], axis=1)
+    right = np.concatenate([v[:, 1:], edge], axis=1)
+    row, k = np.nonzero(mask & (v >= left) & (v >= right) & np.isfinite(v))
+    order = np.lexsort((k, -v[row, k], row))  # by row, then value down, then index
+    row, k = row[order], k[order]
+    rank = np.arange(row.size) - np.searchsorted(row, row, side="left")
+    keep = rank < extremes.CANDIDATES
+    return row[keep], k[keep]
+
+
 def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     """extremes.worst_values for every design at once: name -> (B, C) refined values of
     the candidates (C per design, NaN where there is none), in the quantity's sense."""
@@ -243,16 +266,8 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     qs = _quantities(bt)
     rows = []  # per quantity: (face, design, grid index) of its candidates
     for get, sense in qs.values():
-        v = np.where(mask, sense * get(loc).reshape(F, B, N), -np.inf)
-        left = np.concatenate([np.full((F, B, 1), -np.inf), v[..., :-1]], axis=-1)
-        right = np.concatenate([v[..., 1:], np.full((F, B, 1), -np.inf)], axis=-1)
-        peak = mask & (v >= left) & (v >= right) & np.isfinite(v)
-        pv = np.where(peak, v, -np.inf)
-        c = min(extremes.CANDIDATES, N)
-        top = np.argpartition(-pv, c - 1, axis=-1)[..., :c]  # (F, B, c) unordered
-        ok = np.isfinite(np.take_along_axis(pv, top, axis=-1))
-        f, b, j = np.nonzero(ok)
-        rows.append((f, b, top[f, b, j]))
+        row, k = top_peaks(sense * get(loc).reshape(F * B, N), mask.reshape(F * B, N))
+        rows.append((row // B, row % B, k))
     q = np.concatenate([np.full(r[0].size, i) for i, r in enumerate(rows)])
     face, des, k = (np.concatenate([r[i] for r in rows]) for i in range(3))
     out = {n: np.full((B, F * extremes.CANDIDATES), np.nan) for n in qs}
@@ -277,7 +292,7 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
 
     with np.errstate(all="ignore"):
         grid = sense * np.stack([get(loc) for get, _ in getters])[q, face, kk]
-        best, _ = extremes._zoom(fz, lo, hi)
+        best, _ = extremes.zoom(fz, lo, hi)
         best = np.where(np.nan_to_num(best, nan=-np.inf) > grid, best, grid)
     key = q * B + des  # the candidate's column in its design's row: its rank in the run
     order = np.argsort(key, kind="stable")
@@ -342,8 +357,8 @@ def _shaft(bt: Batch, T: np.ndarray, worst: dict) -> list[dict]:
     T_mean = cum[:, -1] / (2 * np.pi)
     energy = cum - T_mean[:, None] * (th - th[:, :1])
     delta_E = energy.max(axis=1) - energy.min(axis=1)
-    hi = np.nan_to_num(_worst(worst["torque_max"], 1.0), nan=0.0)
-    lo = np.nan_to_num(_worst(worst["torque_min"], -1.0), nan=0.0)
+    hi, lo = _worst(worst["torque_max"], 1.0), _worst(worst["torque_min"], -1.0)
+    hi, lo = np.where(np.isnan(hi), 0.0, hi), np.where(np.isnan(lo), 0.0, lo)
     drive = np.maximum(np.maximum(T.max(axis=1), hi), 0.0)
     brake = np.maximum(np.maximum(-T.min(axis=1), -lo), 0.0)
     c_w2 = d0.dynamics.speed_fluctuation * w**2
@@ -359,27 +374,58 @@ def _shaft(bt: Batch, T: np.ndarray, worst: dict) -> list[dict]:
     ]
 
 
-def _group_figures(bt: Batch) -> tuple[dict, list[str], list[str]]:
-    """The figures and violations that do not depend on the geometry: the spring and
-    jump speed (machine.spring), the elastic train, the program's continuity."""
+def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
+    """machine.spring for each design on its own grid (``prog``: the program on the
+    flattened grids), in one search: the grid's sup of each need per design, refined
+    between the samples as extremes.refine_maxes does, then machine._sups' rules."""
+    d0 = bt.designs[0]
+    B, N = bt.theta.shape
+    needs = [machine._rate_need(d0), machine._preload_need(d0), machine._jump_need(d0)]
+    grid = np.stack([fn(prog) for fn in needs]).reshape(len(needs) * B, N)
+    with np.errstate(all="ignore"):
+        row, k = top_peaks(grid, np.isfinite(grid) & np.tile(bt.real, (len(needs), 1)))
+        q, des = row // B, row % B
+        last = bt.real.sum(axis=1) - 1  # each design's last real grid index
+        lo = bt.theta[des, np.maximum(k - 1, 0)]
+        hi = bt.theta[des, np.minimum(k + 1, last[des])]
+
+        def g(x):  # the need of each bracket at its POINTS angles, bracket-major
+            p = motion.program(d0, x, bt.segs)
+            per = x.size // q.size
+            return np.stack([fn(p) for fn in needs])[np.repeat(q, per), np.arange(x.size)]
+
+        best = extremes.zoom(g, lo, hi)[0] if q.size else np.zeros(0)
+        best = np.fmax(best, grid[row, k])  # the zoom never loses the sample itself
+    sup = np.full(len(needs) * B, -np.inf)
+    np.maximum.at(sup, row, best)
+    unbounded = np.isinf(np.where(bt.real[None], grid.reshape(len(needs), B, N), 0.0))
+    sup = np.where(unbounded.any(axis=2).ravel(), np.inf, np.maximum(sup, 0.0))
+    k_min, s_min, inv_w2 = sup.reshape(len(needs), B)
+    n = d0.dynamics.spring_safety_factor
+    return [
+        {
+            "spring_rate_min_N_per_m": _finite(k_min[b]),
+            "preload_min_mm": _finite(s_min[b], 1e3),
+            "spring_proposal": {
+                "safety_factor": n,
+                "spring_rate_N_per_m": _finite(n * k_min[b]),
+                "preload_mm": d0.dynamics.preload_mm,
+            },
+            "jump_speed_rpm": _finite(machine._rpm(float(inv_w2[b]))),
+        }
+        for b in range(B)
+    ]
+
+
+def _group_figures(bt: Batch) -> tuple[dict | None, list[str], list[str]]:
+    """What does not depend on the geometry (nor on the grid): the elastic train's
+    figures, and the codes of the program's continuity and of the train's jump."""
     from .report import _train
 
     d0 = bt.designs[0]
-    sp = machine.spring(d0, bt.theta[0][bt.real[0]])
-    resp = train.respond(d0)
-    figures = {
-        "spring_rate_min_N_per_m": _finite(sp.rate_min),
-        "preload_min_mm": _finite(sp.preload_min, 1e3),
-        "spring_proposal": {
-            "safety_factor": sp.safety_factor,
-            "spring_rate_N_per_m": _finite(sp.proposed_rate),
-            "preload_mm": d0.dynamics.preload_mm,
-        },
-        "jump_speed_rpm": _finite(sp.jump_speed_rpm),
-        "train": _train(SimpleNamespace(train=resp, design=d0)),  # type: ignore[arg-type]
-    }
-    one = SimpleNamespace(design=d0, train=resp)
-    return figures, [v.code for v in checks._continuity(one)], [v.code for v in checks._train(one)]
+    one = SimpleNamespace(design=d0, train=train.respond(d0))  # what the checks read
+    continuity = [v.code for v in checks._continuity(one)]
+    return _train(one), continuity, [v.code for v in checks._train(one)]  # type: ignore[arg-type]
 
 
 def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list[list[str]]:
@@ -401,24 +447,22 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
         with np.errstate(invalid="ignore"):
             return np.zeros(B, bool) if c is None else test(c).any(axis=1)
 
-    codes: list[list[tuple[int, str]]] = [[] for _ in range(B)]
+    codes: list[list[str]] = [[] for _ in range(B)]  # appended in run_all's order
 
-    def add(bad: np.ndarray, rank: int, code: str) -> None:
+    def add(bad: np.ndarray, code: str) -> None:
         for b in np.flatnonzero(bad):
-            codes[b].append((rank, code))
+            codes[b].append(code)
 
     r = bt.r[:, None]  # (B, 1)
     if bt.flat:
         add(
             grid_any(on3 & (k <= 0)) | cand_any("kappa_pitch_min", lambda v: v <= 0),
-            0,
             "curvature_convex",
         )
     elif bt.r[0] > 0:
         lim = 1.0 / r
         add(
             grid_any(on3 & (k >= lim)) | cand_any("kappa_pitch_max", lambda v: v > lim),
-            0,
             "roller_undercut",
         )
     elif bt.r[0] < 0:
@@ -426,39 +470,34 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
         fold = grid_any(on3 & (k > 0) & (k <= lim)) | cand_any(
             "kappa_pitch_min", lambda v: (v > 0) & (v <= lim)
         )
-        add(fold, 0, "curvature_convex")
+        add(fold, "curvature_convex")
         add(
             grid_any(on3 & (k <= 0)) | cand_any("kappa_pitch_min", lambda v: v <= 0),
-            1,
             "curvature_face",
         )
     limit = d0.limits.max_pressure_angle_deg  # Eqs. 5, 13
-    phi = np.abs(loc.pressure_angle) * R2D
+    phi = to_deg(np.abs(loc.pressure_angle))  # as checks._pressure_angle
     bad = grid_any(on & (phi > limit)) | cand_any(
         "pressure_angle_max", lambda v: v > math.radians(limit)
     )
-    add(bad, 2, "pressure_angle")
+    add(bad, "pressure_angle")
     if bt.r[0] != 0.0:  # Eq. 42
         lim_pa = allowable_contact_stress_MPa(d0) * 1e6 / d0.limits.contact_stress_safety_factor
         stress = np.where(loc.in_contact, loc.stress, 0.0)
         add(
             grid_any(stress > lim_pa) | cand_any("stress_max", lambda v: v > lim_pa),
-            3,
             "contact_stress",
         )
     for b, (d, geo) in enumerate(zip(bt.designs, bt.geos, strict=True)):  # Eq. 28
         if F == 2:
-            codes[b] += [
-                (4, v.code) for v in checks._dwell_arcs(SimpleNamespace(geo=geo, design=d))
-            ]
+            codes[b] += [v.code for v in checks._dwell_arcs(SimpleNamespace(geo=geo, design=d))]
+        codes[b] += group[0]  # the program's continuity
     touching = loc.in_contact.any(axis=0).reshape(B, N)
     FN = loc.guide.FN.reshape(B, N)
-    add((touching & (FN <= 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), 6, "jump")
-    add((~touching).any(axis=1), 7, "contact_lost")
-    add((touching & (loc.guide.mode.reshape(B, N) < 0)).any(axis=1), 8, "guide_jam")
-    for row in codes:
-        row += [(5, c) for c in group[0]] + [(9, c) for c in group[1]]
-    return [[c for _, c in sorted(row, key=lambda t: t[0])] for row in codes]
+    add((touching & (FN <= 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
+    add((~touching).any(axis=1), "contact_lost")
+    add((touching & (loc.guide.mode.reshape(B, N) < 0)).any(axis=1), "guide_jam")
+    return [row + group[1] for row in codes]  # the elastic train's jump last
 
 
 def summaries(designs: list[Design]) -> list[dict]:
@@ -473,7 +512,8 @@ def summaries(designs: list[Design]) -> list[dict]:
     loc = local(bt, bt.theta.ravel(), np.repeat(np.arange(B), N))
     on = _on_curve(loc, bt.segs)
     worst = _refine(bt, loc, on)
-    group, continuity, dynamic = _group_figures(bt)
+    trained, continuity, dynamic = _group_figures(bt)
+    springs = _springs(bt, loc.prog)
     verdicts = _verdicts(bt, loc, on, worst, (continuity, dynamic))
 
     seg = loc.prog.segment.reshape(B, N)
@@ -492,7 +532,8 @@ def summaries(designs: list[Design]) -> list[dict]:
         r = bt.r[None, :, None]
         w = d0.cam.width_mm * MM
         fn = np.where(inc, FN[None], 0.0)
-        b_half = half_width(fn, hertz_line_stress(fn, r, rho_mm * 1e-3, w, compliance(d0)), w)
+        rho = loc.rho.reshape(F, B, N)
+        b_half = half_width(fn, hertz_line_stress(fn, r, rho, w, compliance(d0)), w)
     cols: dict[str, list[Any]] = {
         "pa_rise": _max(phi, inc & (code == RISE)),
         "pa_fall": _max(phi, inc & (code == FALL)),
@@ -552,7 +593,8 @@ def summaries(designs: list[Design]) -> list[dict]:
                 "contact_stress_safety_factor": d.limits.contact_stress_safety_factor,
                 "total_load_high_dwell_N": cols["ft_high"][b],
                 "flat_face_width_min_mm": width[b],
-                **group,
+                **springs[b],
+                "train": copy.deepcopy(trained),
                 **shaft[b],
             }
         )

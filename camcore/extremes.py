@@ -65,7 +65,7 @@ def _candidates(values: np.ndarray, mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
-def _zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Maximize f over every bracket [lo, hi] at once (f: angles -> values, row-major
     (bracket, point)); returns the best (value, angle) found.
 
@@ -118,7 +118,7 @@ def worst_values(a) -> dict[str, Worst | None]:
             )
 
         grid = sense * np.stack([get(a) for get, _ in getters])[q, face, k]
-        best, at = _zoom(f, lo, hi)
+        best, at = zoom(f, lo, hi)
         better = np.nan_to_num(best, nan=-np.inf) > grid
         best, at = np.where(better, best, grid), np.where(better, at, th[k])
     out: dict[str, Worst | None] = {}
@@ -163,7 +163,7 @@ def refine_maxes(f, theta: np.ndarray, values: list[np.ndarray]) -> list[tuple[f
             per = x.size // qa.size
             return f(x)[np.repeat(qa, per), np.arange(x.size)]
 
-        best, at = _zoom(g, lo, hi)
+        best, at = zoom(g, lo, hi)
         grid = np.array([values[j][kk] for j, kk in zip(qa, ka, strict=True)])
         best = np.fmax(best, grid)  # the zoom never loses the sample itself
         at = np.where(best > grid, at, theta[ka])

@@ -141,7 +141,7 @@ def at_(x, idx):
     return x if idx is None or np.ndim(x) == 0 else x[idx]
 
 
-def one_contact(design: Design, Ft, normal, x_c, r: float, S, V, slide=0.0) -> GuideSolution:
+def one_contact(design: Design, Ft, normal, x_c, r, S, V, slide=0.0) -> GuideSolution:
     """Eqs. 33-35 / 39-41 in the modes of Fig. 6, moments about the face centre C;
     ``slide`` = mu_c sigma tilts the contact force (contact friction, see _solve_mode)."""
     return _first_mode(design, Ft, normal, x_c, r, S, V, slide, r * slide)
@@ -155,9 +155,7 @@ def two_contacts(Ft, normal) -> GuideSolution:
     return GuideSolution(zero, zero.copy(), FN, mode, zero, zero)
 
 
-def two_contacts_with_friction(
-    design: Design, Ft, normal, x_c, r: float, S, V, slide
-) -> GuideSolution:
+def two_contacts_with_friction(design: Design, Ft, normal, x_c, r, S, V, slide) -> GuideSolution:
     """Both faces on a dwell arc with contact friction: the cam drags both faces the same
     way, so the guide must hold the follower (F1, F2 > 0). The paper's equal sharing of
     the load (Eqs. 36-38) is kept; moments about the axis point between the face
@@ -187,12 +185,14 @@ def tangential_slip(point_world, normal, V) -> np.ndarray:
 
 
 def follower_forces(
-    design: Design, Ft, in_contact, normal, x_c, r: float, S, V, slide=None
+    design: Design, Ft, in_contact, normal, x_c, r, S, V, slide=None
 ) -> GuideSolution:
     """Guide and contact forces at each cam angle for the faces in contact.
 
     in_contact, normal : (n_faces, N) and (n_faces, N, 2); x_c : (n_faces, N) [m], the
     lever of each face's contact force from the follower's axis (profile.lever_x).
+    r : the face radius to the guide arms [m], a scalar or per angle (N,) (camcore.batch
+    lays many designs along the angle axis).
     slide : (n_faces, N) mu_c sigma per face (contact friction), or None (the paper).
     Both faces touching: Eqs. 36-38. One face: Eqs. 33-35 / 39-41 with that face's
     normal and centre. No face (a broken high dwell, Eq. 28): all forces zero.

@@ -199,9 +199,10 @@ def _batch_key(point: dict, design: Design) -> tuple:
 def fast_rows(base: dict, points: list[dict]) -> list[dict]:
     """Rows of the batched core (camcore.batch): the designs that differ only in their
     geometry are analysed together. Their rows hold the report's fixed-size figures
-    (the same keys and values as ``row``) and ``profile_checked`` = False: the profile's
-    own figures and checks (area, vertices, chord error, star shape, wear, geometric
-    check) are not computed. Designs the batch cannot take (contact friction on a
+    (a subset of the keys of ``row``, with the same values), ``violations`` as
+    [{"code": ...}] and ``profile_checked`` = False: the profile's own figures and
+    checks (area, vertices, chord error, star shape, wear, geometric check) are not
+    computed. Designs the batch cannot take (contact friction on a
     sliding face) get the full analysis, with ``profile_checked`` = True."""
     from . import batch
     from .analysis import analyze

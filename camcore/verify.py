@@ -186,17 +186,16 @@ def _run(lo, width, theta, phi3):
 def _range_max(table, s0, e0):
     """max of the array under ``table`` (sparse_table) over each [s0, e0), e0 > s0."""
     k = np.floor(np.log2(np.maximum(e0 - s0, 1))).astype(int)
-    levels = np.stack(table)
-    return np.maximum(levels[k, s0], levels[k, np.maximum(e0 - (1 << k), s0)])
+    return np.maximum(table[k, s0], table[k, np.maximum(e0 - (1 << k), s0)])
 
 
-def sparse_table(x: np.ndarray) -> list[np.ndarray]:
-    """Level j holds max(x[i : i + 2^j]) (padded at the end): O(1) range maxima."""
+def sparse_table(x: np.ndarray) -> np.ndarray:
+    """Row j holds max(x[i : i + 2^j]) (padded at the end): O(1) range maxima."""
     out = [x]
     while (1 << len(out)) <= x.size:
         prev, h = out[-1], 1 << (len(out) - 1)
         out.append(np.maximum(prev, np.concatenate([prev[h:], prev[-h:]])))
-    return out
+    return np.stack(out)
 
 
 def _tighten(L, r, x_c, theta, ctr, below, above, phi3, table, M):
@@ -210,7 +209,7 @@ def _tighten(L, r, x_c, theta, ctr, below, above, phi3, table, M):
         for side in (below, above):
             ok = side < math.pi
             if not ok.any():
-                break
+                continue
             start = ctr[ok] - side[ok] if side is below else ctr[ok]
             s0, e0 = _run(start, side[ok], theta[ok], phi3)
             small = (e0 - s0 < M) & (e0 > s0)

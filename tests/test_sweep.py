@@ -229,9 +229,9 @@ def test_fast_sweep_rows_equal_the_full_rows_where_both_report(tmp_path):
         for k in shared:
             a, b = f[k], r[k]
             if isinstance(a, float):
-                assert a == pytest.approx(b, rel=1e-9), k
+                assert a == pytest.approx(b, rel=1e-15), k
             elif isinstance(a, str) and a.startswith("["):
-                assert json.loads(a) == pytest.approx(json.loads(b), rel=1e-9), k
+                assert json.loads(a) == pytest.approx(json.loads(b), rel=1e-15), k
             else:
                 assert a == b, k
     pytest.importorskip("dask.distributed")
