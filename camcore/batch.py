@@ -243,16 +243,26 @@ def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndar
     """extremes._candidates for many rows at once: (row, grid index) of the CANDIDATES
     largest local maxima of each row of ``values`` (R, N) among the samples in
     ``mask``, the larger first and, between equal ones, the earlier (a stable sort,
-    as the single analysis picks them)."""
+    as the single analysis picks them). A plateau (a dwell) is a run of maxima: the
+    C-th largest value is found by partition, then the earliest of its ties fill up."""
+    C = extremes.CANDIDATES
     v = np.where(mask, values, -np.inf)
     edge = np.full((v.shape[0], 1), -np.inf)
     left = np.concatenate([edge, v[:, :-1]], axis=1)
     right = np.concatenate([v[:, 1:], edge], axis=1)
-    row, k = np.nonzero(mask & (v >= left) & (v >= right) & np.isfinite(v))
-    order = np.lexsort((k, -v[row, k], row))  # by row, then value down, then index
+    peak = mask & (v >= left) & (v >= right) & np.isfinite(v)
+    pv = np.where(peak, v, -np.inf)
+    many = np.count_nonzero(peak) > 4 * C * v.shape[0]
+    if many and pv.shape[1] > C:  # plateaus: keep only the C largest of each row first
+        kth = np.partition(pv, pv.shape[1] - C, axis=1)[:, -C][:, None]  # C-th largest
+        above = peak & (pv > kth)
+        tie = peak & (pv == kth)
+        room = C - above.sum(axis=1, keepdims=True)
+        peak = above | (tie & (np.cumsum(tie, axis=1) <= room))
+    row, k = np.nonzero(peak)
+    order = np.lexsort((k, -pv[row, k], row))  # by row, then value down, then index
     row, k = row[order], k[order]
-    rank = np.arange(row.size) - np.searchsorted(row, row, side="left")
-    keep = rank < extremes.CANDIDATES
+    keep = np.arange(row.size) - np.searchsorted(row, row, side="left") < C
     return row[keep], k[keep]
 
 
