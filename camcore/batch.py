@@ -140,25 +140,11 @@ def make_batch(designs: list[Design]) -> Batch:
 
 def _windows(bt: Batch, prog: motion.Program, which: np.ndarray):
     """profile.contact_windows with each angle's own design (``which``)."""
-    F, M = bt.n_faces, prog.theta.size
-    part = np.repeat(prog.index[None, :], F, axis=0)
-    if F == 1:
-        return np.ones((1, M), dtype=bool), part
-    driver = np.where(prog.segment == RISE, 0, np.where(prog.segment == FALL, 1, -1))
-    windows = np.stack([driver == 0, driver == 1])
-    tol = 1e-12
-    for j, g in enumerate(bt.segs):
-        if g.is_motion:
-            continue
-        start, end, psi_j = (bt.arc[which, j, k] for k in range(3))
-        th = np.where(prog.theta < g.start - tol, prog.theta + 2 * math.pi, prog.theta)
-        inside = (th >= g.start - tol) & (th <= g.end + tol)
-        for i, side in enumerate((1.0, -1.0)):
-            c = th + side * psi_j
-            on = inside & (c >= start - tol) & (c <= end + tol)
-            windows[i] |= on
-            part[i] = np.where(on & (driver != i), j, part[i])
-    return windows, part
+
+    def arc(j: int):
+        return tuple(bt.arc[which, j, k] for k in range(3))
+
+    return profile.windows_on_arcs(prog, bt.segs, bt.n_faces, arc)
 
 
 def local(bt: Batch, theta: np.ndarray, which: np.ndarray) -> SimpleNamespace:

@@ -291,7 +291,17 @@ def contact_windows(
     beta_r + beta_h + 2 psi_h, after station 4; its own geometry - A3 = B4 and Eq. 24 -
     gives the minus sign.)
     """
-    N, F = prog.theta.size, len(geo.faces)
+
+    def arc(j: int) -> tuple[float, float, float]:
+        return (*arc_span(geo, segs, j), dwell_psi(geo, segs[j].S0))
+
+    return windows_on_arcs(prog, segs, len(geo.faces), arc)
+
+
+def windows_on_arcs(prog: Program, segs: tuple[Segment, ...], n_faces: int, arc):
+    """contact_windows given each dwell arc: ``arc(j)`` -> (start, end, psi) of segment
+    j's arc, scalars or one value per angle (camcore.batch: many designs at once)."""
+    N, F = prog.theta.size, n_faces
     part = np.repeat(prog.index[None, :], F, axis=0)
     if F == 1:
         return np.ones((1, N), dtype=bool), part
@@ -301,12 +311,11 @@ def contact_windows(
     for j, g in enumerate(segs):
         if g.is_motion:
             continue
-        start, end = arc_span(geo, segs, j)
-        psi_j = dwell_psi(geo, g.S0)
+        start, end, psi_j = arc(j)
         # the closed interval [g.start, g.end], also reached through theta = 0 (2 pi)
         th = np.where(prog.theta < g.start - tol, prog.theta + 2 * math.pi, prog.theta)
         inside = (th >= g.start - tol) & (th <= g.end + tol)
-        for i, side in enumerate(face_sides(geo)):
+        for i, side in enumerate((1.0, -1.0)):  # face_sides of a double follower
             c = th + side * psi_j
             on = inside & (c >= start - tol) & (c <= end + tol)
             windows[i] |= on
