@@ -282,11 +282,13 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     sense = np.array([s for _, s in getters])[q]
 
     def fz(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
-        per = x.size // q.size
-        at = local(bt, x, np.repeat(des, per))
+        keyed = np.concatenate([des[:, None], x.reshape(q.size, -1)], axis=1)
+        rows, inv = extremes.distinct_rows(keyed)  # (design, angles) evaluated once
+        per = rows.shape[1] - 1
+        at = local(bt, rows[:, 1:].ravel(), np.repeat(rows[:, 0].astype(int), per))
         vals = np.stack([get(at) for get, _ in getters])
-        idx = np.arange(x.size)
-        return np.repeat(sense, per) * vals[np.repeat(q, per), np.repeat(face, per), idx]
+        vals = vals.reshape(vals.shape[0], vals.shape[1], rows.shape[0], per)
+        return (sense[:, None] * vals[q, face, inv]).ravel()
 
     with np.errstate(all="ignore"):
         grid = sense * np.stack([get(loc) for get, _ in getters])[q, face, kk]

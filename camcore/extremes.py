@@ -65,6 +65,14 @@ def _candidates(values: np.ndarray, mask: np.ndarray) -> list[tuple[int, int]]:
     return out
 
 
+def distinct_rows(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The distinct rows of ``x`` (brackets, POINTS) and, per row of x, its row among
+    them: brackets of several quantities often sample the very same angles (a stress
+    peak where F_N peaks), and the closed forms need evaluating there once."""
+    rows, inv = np.unique(x, axis=0, return_inverse=True)
+    return rows, inv.reshape(-1)
+
+
 def zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Maximize f over every bracket [lo, hi] at once (f: angles -> values, row-major
     (bracket, point)); returns the best (value, angle) found.
@@ -109,13 +117,11 @@ def worst_values(a) -> dict[str, Worst | None]:
         sense = np.array([s for _, s in getters])[q]
 
         def f(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
-            loc = a.local(x)
-            per = x.size // q.size
-            vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, len(x))
-            return (
-                np.repeat(sense, per)
-                * vals[np.repeat(q, per), np.repeat(face, per), np.arange(x.size)]
-            )
+            rows, inv = distinct_rows(x.reshape(q.size, -1))
+            loc = a.local(rows.ravel())
+            vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, rows x POINTS)
+            vals = vals.reshape(vals.shape[0], vals.shape[1], rows.shape[0], -1)
+            return (sense[:, None] * vals[q, face, inv]).ravel()
 
         grid = sense * np.stack([get(a) for get, _ in getters])[q, face, k]
         best, at = zoom(f, lo, hi)
