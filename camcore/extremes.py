@@ -68,7 +68,8 @@ def _candidates(values: np.ndarray, mask: np.ndarray) -> list[tuple[int, int]]:
 def distinct_rows(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``x`` (brackets, POINTS) and, per row of x, its row among
     them: brackets of several quantities often sample the very same angles (a stress
-    peak where F_N peaks), and the closed forms need evaluating there once."""
+    peak where F_N peaks), and the closed forms need evaluating there once. (The batch
+    uses it; for one design's ~20 brackets the sort costs what it saves.)"""
     rows, inv = np.unique(x, axis=0, return_inverse=True)
     return rows, inv.reshape(-1)
 
@@ -117,11 +118,13 @@ def worst_values(a) -> dict[str, Worst | None]:
         sense = np.array([s for _, s in getters])[q]
 
         def f(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
-            rows, inv = distinct_rows(x.reshape(q.size, -1))
-            loc = a.local(rows.ravel())
-            vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, rows x POINTS)
-            vals = vals.reshape(vals.shape[0], vals.shape[1], rows.shape[0], -1)
-            return (sense[:, None] * vals[q, face, inv]).ravel()
+            loc = a.local(x)
+            per = x.size // q.size
+            vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, len(x))
+            return (
+                np.repeat(sense, per)
+                * vals[np.repeat(q, per), np.repeat(face, per), np.arange(x.size)]
+            )
 
         grid = sense * np.stack([get(a) for get, _ in getters])[q, face, k]
         best, at = zoom(f, lo, hi)
