@@ -106,9 +106,6 @@ def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> Guid
     arm1, arm2 = l1 - r, l1 + dyn.guide_length_mm * MM - r
     mu_sv = dyn.guide_friction * np.sign(V)  # no friction while the follower is at rest
     tol = 1e-9 * (np.abs(Ft) + 1.0)
-    n = Ft.shape[0]
-    out = np.zeros((3, n))
-    mode = np.full(n, -1, np.int8)
     todo = None  # the angles without a mode yet (None: all of them)
     for i, (s1, s2) in enumerate(MODES):
         mu, nrm, F, xc, a1, a2, sl, mo, tl = (
@@ -116,20 +113,25 @@ def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> Guid
         )
         F1, F2, FN = _solve_mode(s1, s2, mu, nrm, F, xc, a1, a2, d, sl, mo)
         ok = np.isfinite(FN) & (F1 >= -tl) & (F2 >= -tl)
-        idx = np.flatnonzero(ok) if todo is None else todo[ok]
-        out[:, idx] = np.stack([F1[ok], F2[ok], FN[ok]])
-        mode[idx] = i
-        todo = np.flatnonzero(~ok) if todo is None else todo[~ok]
+        if todo is None:  # mode (a) everywhere; replaced below where it does not hold
+            out, mode = [F1, F2, FN], np.where(ok, 0, -1).astype(np.int8)
+            todo = np.flatnonzero(~ok)
+        else:
+            for o, v in zip(out, (F1, F2, FN), strict=True):
+                o[todo[ok]] = v[ok]
+            mode[todo[ok]] = i
+            todo = todo[~ok]
         if not todo.size:
             break
-    if todo is not None and todo.size:
+    assert todo is not None  # (the loop ran)
+    if todo.size:
         # Self-locking guide: no mode balances with friction. Keep finite numbers (the
         # frictionless solution, whose signed guide forces pick the walls) and let the
         # checks report the violation.
-        jam = todo
-        nrm, F, xc, a1, a2 = (at_(x, jam) for x in (normal, Ft, x_c, arm1, arm2))
+        nrm, F, xc, a1, a2 = (at_(x, todo) for x in (normal, Ft, x_c, arm1, arm2))
         G1, G2, GN = _solve_mode(1.0, -1.0, 0.0, nrm, F, xc, a1, a2, d)
-        out[:, jam] = np.stack([np.abs(G1), np.abs(G2), GN])
+        for o, v in zip(out, (np.abs(G1), np.abs(G2), GN), strict=True):
+            o[todo] = v
     sides = np.array(MODES + ((0.0, 0.0),))[mode]
     return GuideSolution(
         np.maximum(out[0], 0.0), np.maximum(out[1], 0.0), out[2], mode, sides[:, 0], sides[:, 1]
