@@ -33,7 +33,6 @@ import json
 import math
 from dataclasses import dataclass
 from types import SimpleNamespace
-from typing import Any
 
 import numpy as np
 
@@ -500,102 +499,129 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     return [row + group[1] for row in codes]  # the elastic train's jump last
 
 
+def _geometry_figures(bt: Batch) -> list[dict]:
+    """Per design: the dwell radius (Eq. 20), psi (Eqs. 23, 25), the stations and the
+    arcs the dwells subtend (Eqs. 24, 26), as report.summary lists them."""
+    classic = bt.designs[0].motion.classic
+    out = []
+    for geo, st in zip(bt.geos, bt.stations, strict=True):
+        arcs: dict[str, float | None] = {"high": None, "low": None}
+        if classic is not None:
+            arcs = {
+                "high": classic.high_dwell_deg - 2 * geo.psi_h * R2D,
+                "low": classic.low_dwell_deg + 2 * geo.psi_l * R2D,
+            }
+        out.append(
+            {
+                "dwell_radius_mm": geo.dwell_radius * 1e3,
+                "psi_h_deg": geo.psi_h * R2D,
+                "psi_l_deg": geo.psi_l * R2D,
+                "stations_deg": [float(s) for s in st * R2D],
+                "dwell_arc_deg": arcs,
+            }
+        )
+    return out
+
+
+def _grid_figures(bt: Batch, loc) -> list[dict]:
+    """Per design: the report's maxima and ranges over its grid (pressure angles,
+    curvature radii, forces, stresses, the Hertz half-width, the flat face's width),
+    the same masks as report.summary."""
+    B, N = bt.theta.shape
+    F = bt.n_faces
+    d0 = bt.designs[0]
+    high = loc.prog.segment.reshape(B, N) == HIGH
+    two = high & (loc.in_contact.sum(axis=0).reshape(B, N) == 2)
+    code = np.array([g.code for g in bt.segs], dtype=np.int8)[loc.part].reshape(F, B, N)
+    inc = loc.in_contact.reshape(F, B, N)
+    rise, fall = inc & (code == RISE), inc & (code == FALL)
+    phi = (np.abs(loc.pressure_angle) * R2D).reshape(F, B, N)
+    rho = loc.rho.reshape(F, B, N)
+    FN, Ft = loc.guide.FN.reshape(B, N), loc.Ft.reshape(B, N)
+    stress = loc.stress.reshape(F, B, N)
+    if d0.follower.radius_mm == 0.0:  # knife edge: no Hertz contact (contact.hertz_validity)
+        b_half = np.zeros_like(stress)
+    else:
+        w = d0.cam.width_mm * MM
+        fn = np.where(inc, FN[None], 0.0)
+        plain = hertz_line_stress(fn, bt.r[None, :, None], rho, w, compliance(d0))
+        b_half = half_width(fn, plain, w)
+    width: list[float | None] = [None] * B
+    if bt.flat:  # report._flat_face_width_mm
+        width = list(2.0 * np.abs(-loc.prog.V.reshape(B, N) - bt.stem_x[:, None]).max(axis=1) * 1e3)
+    cols = zip(
+        _max(phi, rise),
+        _max(phi, fall),
+        _range(rho * 1e3, rise),
+        _range(rho * 1e3, fall),
+        _max(FN),
+        _max(FN, high),
+        _max(FN, two),
+        _max(loc.guide.F1.reshape(B, N)),
+        _max(loc.guide.F2.reshape(B, N)),
+        _scaled(_max(stress), 1e-6),
+        _scaled(_max(np.where(high[None], stress, np.nan)), 1e-6),
+        _scaled(_max(b_half), 1e3),
+        _max(Ft, high),
+        width,
+        high.any(axis=1),
+        strict=True,
+    )
+    return [
+        {
+            "pressure_angle_max_deg": {"rise": pa_r, "fall": pa_f},
+            "curvature_radius_mm": {"rise": rho_r, "fall": rho_f},
+            "contact_force_max_N": {
+                "cycle": fn,
+                "high_dwell": fn_h,
+                "high_dwell_two_contact": fn_2,
+            },
+            "guide_force_max_N": {"F1": f1, "F2": f2},
+            "contact_stress_max_MPa": {"cycle": s, "high_dwell": s_h if has_high else None},
+            "contact_half_width_max_mm": b,
+            "contact_stress_allowable_MPa": allowable_contact_stress_MPa(d0),
+            "contact_stress_safety_factor": d0.limits.contact_stress_safety_factor,
+            "total_load_high_dwell_N": ft_h,
+            "flat_face_width_min_mm": wid,
+        }
+        for pa_r, pa_f, rho_r, rho_f, fn, fn_h, fn_2, f1, f2, s, s_h, b, ft_h, wid, has_high in cols
+    ]
+
+
 def summaries(designs: list[Design]) -> list[dict]:
     """The report of each design (camcore.report.summary's keys, as far as they need no
     profile: see the module docstring), plus ``violations`` as a list of {"code": ...}
     in the order of checks.run_all, ``valid`` (no violation among the checks run) and
-    ``profile_checked`` = False. All designs of one group_key, all batchable."""
+    ``profile_checked`` = False. The designs must make a batch (make_batch)."""
     bt = make_batch(designs)
     B, N = bt.theta.shape
-    F = bt.n_faces
-    d0 = bt.designs[0]
     loc = local(bt, bt.theta.ravel(), np.repeat(np.arange(B), N))
     on = _on_curve(loc, bt.segs)
     worst = _refine(bt, loc, on)
     trained, continuity, dynamic = _group_figures(bt)
-    springs = _springs(bt, loc.prog)
     verdicts = _verdicts(bt, loc, on, worst, (continuity, dynamic))
-
-    seg = loc.prog.segment.reshape(B, N)
-    high = seg == HIGH
-    two = high & (loc.in_contact.sum(axis=0).reshape(B, N) == 2)
-    code = np.array([g.code for g in bt.segs], dtype=np.int8)[loc.part].reshape(F, B, N)
-    inc = loc.in_contact.reshape(F, B, N)
-    phi = (np.abs(loc.pressure_angle) * R2D).reshape(F, B, N)
-    rho_mm = loc.rho.reshape(F, B, N) * 1e3
-    FN, Ft = loc.guide.FN.reshape(B, N), loc.Ft.reshape(B, N)
-    stress = loc.stress.reshape(F, B, N)
-    stress_high = np.where(high[None], stress, np.nan)
-    if d0.follower.radius_mm == 0.0:
-        b_half = np.zeros_like(stress)
-    else:
-        r = bt.r[None, :, None]
-        w = d0.cam.width_mm * MM
-        fn = np.where(inc, FN[None], 0.0)
-        rho = loc.rho.reshape(F, B, N)
-        b_half = half_width(fn, hertz_line_stress(fn, r, rho, w, compliance(d0)), w)
-    cols: dict[str, list[Any]] = {
-        "pa_rise": _max(phi, inc & (code == RISE)),
-        "pa_fall": _max(phi, inc & (code == FALL)),
-        "rho_rise": _range(rho_mm, inc & (code == RISE)),
-        "rho_fall": _range(rho_mm, inc & (code == FALL)),
-        "fn": _max(FN),
-        "fn_high": _max(FN, high),
-        "fn_two": _max(FN, two),
-        "f1": _max(loc.guide.F1.reshape(B, N)),
-        "f2": _max(loc.guide.F2.reshape(B, N)),
-        "s": _scaled(_max(stress), 1e-6),
-        "s_high": _scaled(_max(stress_high), 1e-6),
-        "b": _scaled(_max(b_half), 1e3),
-        "ft_high": _max(Ft, high),
-    }
-    if bt.flat:
-        x = np.abs(-loc.prog.V.reshape(B, N) - bt.stem_x[:, None])
-        width: list[float | None] = list(2.0 * x.max(axis=1) * 1e3)
-    else:
-        width = [None] * B
     shaft = _shaft(bt, loc.torque.sum(axis=0).reshape(B, N), worst)
-    classic = d0.motion.classic
-    out = []
-    for b, (d, geo) in enumerate(zip(bt.designs, bt.geos, strict=True)):
-        codes = verdicts[b]
-        out.append(
-            {
-                "design": d.name,
-                "follower": d.follower.kind.value,
-                "valid": not codes,
-                "profile_checked": False,
-                "violations": [{"code": c} for c in codes],
-                "dwell_radius_mm": geo.dwell_radius * 1e3,
-                "psi_h_deg": geo.psi_h * R2D,
-                "psi_l_deg": geo.psi_l * R2D,
-                "stations_deg": [float(s) for s in bt.stations[b] * R2D],
-                "dwell_arc_deg": {
-                    "high": None
-                    if classic is None
-                    else classic.high_dwell_deg - 2 * geo.psi_h * R2D,
-                    "low": None if classic is None else classic.low_dwell_deg + 2 * geo.psi_l * R2D,
-                },
-                "pressure_angle_max_deg": {"rise": cols["pa_rise"][b], "fall": cols["pa_fall"][b]},
-                "curvature_radius_mm": {"rise": cols["rho_rise"][b], "fall": cols["rho_fall"][b]},
-                "contact_force_max_N": {
-                    "cycle": cols["fn"][b],
-                    "high_dwell": cols["fn_high"][b],
-                    "high_dwell_two_contact": cols["fn_two"][b],
-                },
-                "guide_force_max_N": {"F1": cols["f1"][b], "F2": cols["f2"][b]},
-                "contact_stress_max_MPa": {
-                    "cycle": cols["s"][b],
-                    "high_dwell": cols["s_high"][b] if high[b].any() else None,
-                },
-                "contact_half_width_max_mm": cols["b"][b],
-                "contact_stress_allowable_MPa": allowable_contact_stress_MPa(d),
-                "contact_stress_safety_factor": d.limits.contact_stress_safety_factor,
-                "total_load_high_dwell_N": cols["ft_high"][b],
-                "flat_face_width_min_mm": width[b],
-                **springs[b],
-                "train": copy.deepcopy(trained),
-                **shaft[b],
-            }
-        )
-    return out
+    parts = zip(
+        bt.designs,
+        verdicts,
+        _geometry_figures(bt),
+        _grid_figures(bt, loc),
+        _springs(bt, loc.prog),
+        shaft,
+        strict=True,
+    )
+    return [
+        {
+            "design": d.name,
+            "follower": d.follower.kind.value,
+            "valid": not codes,
+            "profile_checked": False,
+            "violations": [{"code": c} for c in codes],
+            **geometry,
+            **grid,
+            **spring,
+            "train": copy.deepcopy(trained),
+            **machine_figures,
+        }
+        for d, codes, geometry, grid, spring, machine_figures in parts
+    ]
