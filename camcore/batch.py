@@ -41,6 +41,7 @@ from .analysis import stations
 from .contact import compliance, conservative_stress, half_width, hertz_line_stress
 from .model import Design, allowable_contact_stress_MPa, omega_rad_s
 from .motion import FALL, HIGH, MOTIONS, RISE
+from .report import _finite, _train
 from .units import MM, to_deg
 
 R2D = 180.0 / math.pi
@@ -330,10 +331,6 @@ def _scaled(values: list[float | None], factor: float) -> list[float | None]:
     return [None if v is None else v * factor for v in values]
 
 
-def _finite(x: float, factor: float = 1.0) -> float | None:
-    return float(x * factor) if math.isfinite(x) else None
-
-
 def _worst(cands: np.ndarray, sense: float) -> np.ndarray:
     """The worst refined value per design (NaN where there is no candidate)."""
     with np.errstate(all="ignore"):
@@ -419,8 +416,6 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
 def _group_figures(bt: Batch) -> tuple[dict | None, list[str], list[str]]:
     """What does not depend on the geometry (nor on the grid): the elastic train's
     figures, and the codes of the program's continuity and of the train's jump."""
-    from .report import _train
-
     d0 = bt.designs[0]
     one = SimpleNamespace(design=d0, train=train.respond(d0))  # what the checks read
     continuity = [v.code for v in checks._continuity(one)]
