@@ -141,8 +141,10 @@ def _station_list(a: Analysis) -> list[dict]:
 
 
 def _finite(x: float, factor: float = 1.0) -> float | None:
-    """x * factor, or None where x is infinite (JSON has no infinity)."""
-    return float(x * factor) if math.isfinite(x) else None
+    """x * factor, or None where that is infinite (JSON has no infinity; a finite x can
+    overflow in the new unit, e.g. a preload of 1e306 m in mm)."""
+    y = x * factor
+    return float(y) if math.isfinite(y) else None
 
 
 def _machine(a: Analysis) -> dict:

@@ -338,7 +338,7 @@ def prop_valid_range(data: dict, verify: bool) -> None:
     codes = {v.code for v in a.violations}
     worst_phi = a.worst.get("pressure_angle_max")
     steep = worst_phi is not None and worst_phi.value > math.radians(89.0)
-    if verify and a.profile.is_star_shaped() and not codes & GEOMETRY_DEFECTS and not steep:
+    if verify and a.profile.is_star_shaped() and not codes & NOT_TRACED and not steep:
         # a convex, not undercut cam with a dwell arc both faces fit on: the independent
         # check must reproduce S(theta) within the export tolerance, however short the
         # segments and coarse the grid. (Beyond 89 deg of pressure angle the tolerance
@@ -389,6 +389,11 @@ GEOMETRY_DEFECTS = {
     # such) is off the exact cam by its measured chord error, not less
     "export_tolerance",
 }
+# ... and where the lift check may find more than the export tolerance: a jump in V is
+# a corner of the pitch curve, where the cam is an arc of the face around the corner
+# that the contact points of the angles either side do not trace (the chord between
+# them cuts it: ~0.2 um for a 1 mm roller on a constant-velocity fall)
+NOT_TRACED = GEOMETRY_DEFECTS | {"velocity_jump"}
 
 
 def _changed(data: dict, **parts: dict) -> dict:
@@ -484,9 +489,40 @@ STEEP_FALL = _changed(
     limits={"export_tolerance_mm": 1e-05},
 )
 
+# a spring of 1e-297 N/m: the smallest preload, 1e306 m, overflowed in mm to inf in
+# the summary (and `report --json` refused to write it)
+TINY_SPRING = _changed(
+    FLAT_CUSP,
+    motion={"fall_deg": 180.0, "lift_mm": 10.0, "rise_deg": 180.0},
+    follower={"kind": "single_roller"},
+    cam={
+        "base_radius_mm": 1.0,
+        "bore_diameter_mm": 0.0,
+        "keyway_depth_mm": 0.0,
+        "keyway_width_mm": 0.0,
+        "speed_rpm": 99559.0,
+    },
+    dynamics={"gravity_m_s2": 0.0, "mass_g": 259787.0, "spring_rate_N_per_m": 1e-297},
+)
+# a constant-velocity fall: corners in the pitch curve (NOT_TRACED)
+CV_FALL = _changed(
+    FLAT_CUSP,
+    motion={"fall_deg": 180.0, "lift_mm": 1.0, "rise_deg": 180.0, "fall_law": "constant_velocity"},
+    follower={"kind": "single_roller"},
+    cam={
+        "base_radius_mm": 11.0,
+        "bore_diameter_mm": 0.0,
+        "keyway_depth_mm": 0.0,
+        "keyway_width_mm": 0.0,
+    },
+    dynamics={"gravity_m_s2": 0.0, "mass_g": 1.0},
+    limits={"export_tolerance_mm": 1e-05},
+)
+
 
 @ci(1200)
 @given(design_dicts(resolutions=ANY_RESOLUTION))
+@example(data=TINY_SPRING).via("discovered failure")
 def test_designs_in_range_analyse_to_finite_numbers(data):
     prop_valid_range(data, verify=False)
 
@@ -494,6 +530,7 @@ def test_designs_in_range_analyse_to_finite_numbers(data):
 @ci(400)
 @given(design_dicts(resolutions=COARSE))
 @example(data=STEEP_FALL).via("discovered failure")
+@example(data=CV_FALL).via("discovered failure")
 def test_designs_in_range_pass_or_fail_the_geometric_check_finitely(data):
     prop_valid_range(data, verify=True)
 
