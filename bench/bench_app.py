@@ -9,6 +9,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from rows import row
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))  # the test helper
 
@@ -19,15 +20,7 @@ from camcore.analysis import analyze  # noqa: E402
 
 
 def _row(name, samples_s, note=""):
-    ms = np.asarray(samples_s) * 1e3
-    return {
-        "name": name,
-        "median_ms": float(np.median(ms)),
-        "p10_ms": float(np.percentile(ms, 10)),
-        "p90_ms": float(np.percentile(ms, 90)),
-        "n": int(ms.size),
-        "note": note,
-    }
+    return row(name, np.asarray(samples_s) * 1e3, note)
 
 
 def _session(app):

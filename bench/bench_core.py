@@ -11,6 +11,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from rows import row as _row
 
 from camcore.analysis import analyze, compare
 from camcore.export import dxf_bytes, stl_bytes
@@ -27,17 +28,6 @@ def _time(fn, n: int, warmup: int = 1) -> np.ndarray:
         fn()
         out[i] = time.perf_counter() - t0
     return out * 1e3
-
-
-def _row(name: str, ms: np.ndarray, note: str = "") -> dict:
-    return {
-        "name": name,
-        "median_ms": float(np.median(ms)),
-        "p10_ms": float(np.percentile(ms, 10)),
-        "p90_ms": float(np.percentile(ms, 90)),
-        "n": int(ms.size),
-        "note": note,
-    }
 
 
 def _with_resolution(design: Design, res: float) -> Design:

@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
+from rows import row as _row
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
@@ -24,28 +24,6 @@ from load_harness import (  # noqa: E402
     round_trips,
     run_load,
 )
-
-
-def _row(name: str, xs_ms, note: str) -> dict:
-    a = np.asarray(list(xs_ms), float)
-    a = a[np.isfinite(a)]
-    if a.size == 0:
-        return {
-            "name": name,
-            "median_ms": None,
-            "p10_ms": None,
-            "p90_ms": None,
-            "n": 0,
-            "note": note,
-        }
-    return {
-        "name": name,
-        "median_ms": float(np.median(a)),
-        "p10_ms": float(np.percentile(a, 10)),
-        "p90_ms": float(np.percentile(a, 90)),
-        "n": int(a.size),
-        "note": note,
-    }
 
 
 def _value(name: str, value: float, n: int, note: str) -> dict:

@@ -19,6 +19,7 @@ import time
 
 import numpy as np
 from floor import constants, floor
+from rows import row as _row
 
 from camcore.analysis import analyze
 from camcore.model import Design, load_preset
@@ -39,10 +40,6 @@ def _cpu_ms(fn) -> float:
     t0 = time.process_time()
     fn()
     return (time.process_time() - t0) * 1e3
-
-
-def _row(name, ms, note):
-    return {"name": name, "median_ms": ms, "p10_ms": ms, "p90_ms": ms, "n": 1, "note": note}
 
 
 def _res(design: Design, res: float) -> Design:
