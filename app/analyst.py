@@ -3,8 +3,8 @@
 The server is one Python process; its GUI work (scene, curves, websocket) holds the
 GIL. The analyses run in worker processes so that a 2-core machine uses both cores:
 
-- the *foreground* worker answers a tab's edit: the fast analysis and its summary
-  (~10 ms, shipped back pickled, ~1 MB);
+- the *foreground* worker answers a tab's edit: the fast analysis, its summary and
+  its curves (~10 ms, shipped back pickled, ~1 MB);
 - the *background* worker, on CPU time nobody else wants, refines a tab that has
   gone still: the verified analysis and the four-follower comparison (~0.5 s).
 
@@ -30,7 +30,7 @@ from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import summary
 from camcore.units import to_mpa
 
-from .plots import stride_index
+from .plots import CurveData, curve_data, stride_index
 
 WORKERS = {"fg": 1, "bg": 1}  # processes per pool (a second foreground one did not help
 # the class benchmark on 2 cores, and each worker holds ~130 MB)
@@ -38,10 +38,12 @@ WORKERS = {"fg": 1, "bg": 1}  # processes per pool (a second foreground one did 
 
 @dataclass(frozen=True)
 class Result:
-    """An analysis and its report summary (camcore.report.summary)."""
+    """An analysis, its report summary (camcore.report.summary) and what the Curves tab
+    shows of it (app.plots.curve_data), all computed in the worker."""
 
     analysis: Analysis
     summary: dict
+    curves: CurveData
 
 
 @dataclass(frozen=True)
@@ -55,7 +57,7 @@ class Refined(Result):
 def fast(design: Design) -> Result:
     """What a tab needs after an edit (runs in a worker)."""
     a = analyze(design, verify=False)
-    return Result(a, summary(a))
+    return Result(a, summary(a), curve_data(a))
 
 
 def refined(design: Design) -> Refined:
@@ -73,7 +75,7 @@ def refined(design: Design) -> Refined:
             "FN_N": r.guide.FN[idx],
             "stress_MPa": to_mpa(r.stress.max(axis=0))[idx],
         }
-    return Refined(a, summary(a), out)
+    return Refined(a, summary(a), curve_data(a), out)
 
 
 def _warm(background: bool) -> int:

@@ -3,10 +3,15 @@
 Every plot has the cam angle [deg] on x, units on every axis, a vertical marker
 at the current cam angle (two extra x samples at that angle carry the marker
 series) and, where a design limit is broken, red shading over those angles.
+
+What each curve shows is a function of the analysis (``curve_specs``); the values are
+computed with the analysis, in the worker (``curve_data``, via app.analyst), so the
+server only hands arrays to the widgets (``Curve.show``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -101,12 +106,10 @@ class Curve:
         self.x: np.ndarray | None = None
         self.ys: list[np.ndarray] = []
 
-    def update(self, a, k: int) -> None:
-        idx = stride_index(a.theta.size)
-        self.x = np.degrees(a.theta[idx])
-        self.ys = [np.asarray(s["fn"](a), float)[idx] for s in self.series_cfg]
-        self.shade = violation_mask(a.violations, self.x, self.codes).astype(float)
-        self.marker(float(np.degrees(a.theta[k])))
+    def show(self, x: np.ndarray, ys: tuple[np.ndarray, ...], shade: np.ndarray, at: float):
+        """New curves (from curve_data) with the marker at cam angle ``at`` [deg]."""
+        self.x, self.ys, self.shade = x, list(ys), shade
+        self.marker(at)
 
     def marker(self, theta_deg: float) -> None:
         if self.x is None:
@@ -140,8 +143,35 @@ def _train_force(a) -> np.ndarray:
     return train.on_grid(a.train, a.theta, a.train.contact_force)
 
 
+@dataclass(frozen=True)
+class CurveData:
+    """What the Curves tab shows of one analysis, on the plots' strided angles."""
+
+    x: np.ndarray  # cam angles [deg] (stride_index of the analysis grid)
+    ys: tuple[tuple[np.ndarray, ...], ...]  # per curve, per series: its values on x
+    shades: tuple[np.ndarray, ...]  # per curve: 1.0 where one of its limits is broken
+
+
+def curve_data(a) -> CurveData:
+    """The curves of ``a`` (a camcore.analysis.Analysis), as curve_specs defines them."""
+    idx = stride_index(a.theta.size)
+    x = np.degrees(a.theta[idx])
+    specs = curve_specs(a)
+    return CurveData(
+        x,
+        tuple(tuple(np.asarray(s["fn"](a), float)[idx] for s in c["series"]) for c in specs),
+        tuple(violation_mask(a.violations, x, c["codes"]).astype(float) for c in specs),
+    )
+
+
 def build_curves(gui, a) -> list[Curve]:
-    """The plots of the Curves tab."""
+    """The plots of the Curves tab (empty until the first Curve.show)."""
+    return [Curve(gui, c["title"], c["axes"], c["series"], c["codes"]) for c in curve_specs(a)]
+
+
+def curve_specs(a) -> list[dict]:
+    """Each plot: title, axes [(scale, label)], series [{label, scale, stroke, fn(a) ->
+    values on the analysis grid, ...}] and the violation codes it shades."""
     lim = a.design.limits.max_pressure_angle_deg
     ref_label, ref = rho_reference_mm(a.design)
 
@@ -154,9 +184,8 @@ def build_curves(gui, a) -> list[Curve]:
         v = rho_reference_mm(a.design)[1]
         return np.full(a.theta.size, v if which == "rho" else 0.0)
 
-    curves = [
-        Curve(
-            gui,
+    return [
+        _spec(
             "Displacement S",
             [("mm", "S [mm]")],
             [
@@ -169,8 +198,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes=None,
         ),
-        Curve(
-            gui,
+        _spec(
             "Velocity V and acceleration A (per radian of cam angle)",
             [("V", "V [mm/rad]"), ("A", "A [mm/rad²]")],
             [
@@ -189,8 +217,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes=set(),
         ),
-        Curve(
-            gui,
+        _spec(
             "Velocity, acceleration and jerk per second at the design speed",
             [("ms", "V [m/s]"), ("ms2", "A [m/s²]"), ("ms3", "J [m/s³]")],
             [
@@ -215,8 +242,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"velocity_jump", "acceleration_jump"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Pressure angle φ",
             [("deg", "φ [°]")],
             [
@@ -240,8 +266,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"pressure_angle"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Radius of curvature ρ of the cam at the contact",
             [("mm", "ρ [mm]")],
             [
@@ -257,8 +282,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"curvature_convex", "curvature_face", "roller_undercut"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Contact force F_N and guide forces F1, F2",
             [("N", "force [N]")],
             [
@@ -268,8 +292,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"jump", "guide_jam", "contact_lost"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Contact (Hertz) stress σ_H",
             [("MPa", "σ_H [MPa]")],
             [
@@ -282,8 +305,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"jump"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Spring force and the force that keeps contact (jump where it wins)",
             [("N", "force [N]")],
             [
@@ -303,8 +325,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"jump"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Axial load: rigid F_t (Eq. 29) and elastic train F_c (set its stiffness in Dynamics)",
             [("N", "force [N]")],
             [
@@ -313,8 +334,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes={"dynamic_jump"},
         ),
-        Curve(
-            gui,
+        _spec(
             "Shaft torque T (positive: the shaft drives)",
             [("Nm", "T [N·m]")],
             [
@@ -327,8 +347,7 @@ def build_curves(gui, a) -> list[Curve]:
             ],
             codes=set(),
         ),
-        Curve(
-            gui,
+        _spec(
             "Cam wear per 10⁶ cycles (Archard), at the point each face touches",
             [("um", "wear [µm]")],
             [
@@ -352,7 +371,10 @@ def build_curves(gui, a) -> list[Curve]:
             codes=set(),
         ),
     ]
-    return curves
+
+
+def _spec(title: str, axes: list, series: list[dict], codes: set[str] | None) -> dict:
+    return {"title": title, "axes": axes, "series": series, "codes": codes}
 
 
 def relabel_limits(curves: list[Curve], a) -> None:

@@ -238,6 +238,8 @@ class SceneView:
         self.builds = 0  # geometry rebuilds
         self._face_rgb: dict[int, tuple] = {}
         self._geometry: str | None = None
+        self._made: dict[str, Any] = {}  # node name -> what it was made from (see _put)
+        self._wear_at = (0.0, 0.0)  # (z, thickness) of the wear band, drawn when shown
 
     # --- build once per analysis ---------------------------------------------------
     def build(self, a) -> None:
@@ -254,8 +256,19 @@ class SceneView:
             self._build_geometry(a, w, zt, thick)
         self.fn_scale = 0.5 * a.geo.r_b / max(1e-9, float(np.max(np.abs(a.guide.FN))))
         self._build_bad(a, zt + 1e-4, thick * 2.5)
-        self._build_wear(a, zt + 3e-4, thick * 6.0)
+        self._wear_at = (zt + 3e-4, thick * 6.0)
+        self._build_wear(a)
         self.pose(self.k if self.k < a.theta.size else 0)
+
+    def _put(self, name: str, made_from: Any, make) -> bool:
+        """Add node ``name`` with ``make()`` unless the one on screen was made from the
+        same ``made_from`` (compared with ==): a new lift re-sends the cam, not the
+        follower's unchanged parts, the hub or the overlay markers. True if (re)made."""
+        if name in self.nodes and self._made.get(name) == made_from:
+            return False
+        self.nodes[name] = make()
+        self._made[name] = made_from
+        return True
 
     def _build_geometry(self, a, w, zt, thick) -> None:
         s = self.scene
@@ -281,26 +294,38 @@ class SceneView:
             EDGE_RGB,
             thickness=thick * 0.6,
         )
-        self.nodes["hub"] = s.add_line_segments(
-            "/cam/hub",
-            _polyline_segments(_flat(_circle(0.1 * a.geo.r_b, 48), zt), True),
-            EDGE_RGB,
-            thickness=thick * 0.6,
+        self._put(
+            "hub",
+            (a.geo.r_b, zt, thick),
+            lambda: s.add_line_segments(
+                "/cam/hub",
+                _polyline_segments(_flat(_circle(0.1 * a.geo.r_b, 48), zt), True),
+                EDGE_RGB,
+                thickness=thick * 0.6,
+            ),
         )
         self._build_arcs(a, zt + 2e-4, thick * 1.5)
         parts = follower_parts(a)
         self._face_meshes = [parts[f"face{i}"][0] for i in range(len(a.geo.faces))]
-        self._face_rgb = {}  # new nodes: the colour is set on the next pose
         for name, (mesh, rgb) in parts.items():
             parent = "" if name == "guide" else "/follower"
-            self.nodes[name] = s.add_mesh_simple(
-                f"{parent}/{name}",
-                np.asarray(mesh.vertices, np.float32),
-                np.asarray(mesh.faces, np.uint32),
-                color=rgb,
-                flat_shading=False,
-                opacity=0.55 if name == "guide" else None,
+            verts, faces = np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)
+            made = self._put(
+                name,
+                (verts.tobytes(), faces.tobytes(), rgb),
+                lambda name=name, verts=verts, faces=faces, rgb=rgb, parent=parent: (
+                    s.add_mesh_simple(
+                        f"{parent}/{name}",
+                        verts,
+                        faces,
+                        color=rgb,
+                        flat_shading=False,
+                        opacity=0.55 if name == "guide" else None,
+                    )
+                ),
             )
+            if made and name.startswith("face"):  # a new node: its colour is set on the next pose
+                self._face_rgb.pop(int(name[4:]), None)
         for name in [n for n in self.nodes if n.startswith(("face", "pin", "plate"))]:
             if name not in parts:  # e.g. the roller pins after a switch to concave faces
                 self.nodes.pop(name).remove()
@@ -318,9 +343,16 @@ class SceneView:
             return
         self.nodes["bad"] = self.scene.add_line_segments("/cam/bad", bad, BAD_RGB, thickness=thick)
 
-    def _build_wear(self, a, z, thick) -> None:
+    def _build_wear(self, a) -> None:
         """The cam's Archard wear along its profile as a heat band on the top face (pale:
-        none, dark red: the profile's largest), from camcore.wear.along_profile."""
+        none, dark red: the profile's largest), from camcore.wear.along_profile. Drawn
+        only while shown (off by default): it is a profile-long computation and ~40 kB
+        per redraw that a hidden band would waste; set_overlay draws it when asked."""
+        if not self.show["wear"]:
+            if "wear" in self.nodes:
+                self.nodes.pop("wear").remove()
+            return
+        z, thick = self._wear_at
         pts = _display_points(a)
         phi, depth = wear.along_profile(a)
         polar = np.mod(np.arctan2(pts[:, 1], pts[:, 0]), 2 * np.pi)
@@ -333,7 +365,6 @@ class SceneView:
             _polyline_segments(_flat(pts, z), closed=True),
             colors,
             thickness=thick,
-            visible=self.show["wear"],
         )
 
     def _build_arcs(self, a, z, thick) -> None:
@@ -370,17 +401,30 @@ class SceneView:
             y = float(mesh.bounds[1, 1])
             name = f.name.split(" ")[0] if len(a.geo.faces) == 2 else f.name
             left = i == 0 and len(a.geo.faces) == 2
-            self.nodes[key] = self.scene.add_label(
-                f"/follower/{key}",
-                name,
-                position=(lo if left else hi, y, 0.0),
-                **_label_size(a),
-                anchor="bottom-right" if left else "bottom-left",
+            pos, size = (float(lo if left else hi), y, 0.0), _label_size(a)
+            self._put(
+                key,
+                (name, pos, tuple(size.items()), left),
+                lambda key=key, name=name, pos=pos, size=size, left=left: self.scene.add_label(
+                    f"/follower/{key}",
+                    name,
+                    position=pos,
+                    **size,
+                    anchor="bottom-right" if left else "bottom-left",
+                ),
             )
 
     def _build_overlays(self, a, zt) -> None:
+        """The markers pose() moves (contact points, forces, I23, the pressure angle):
+        made again only when their size, height or number of faces changes."""
         s = self.scene
         r = 0.03 * a.geo.r_b + 0.5e-3
+        self.zt = zt + r
+        self.thin = max(3e-4, 0.006 * a.geo.r_b)
+        made_from = (r, zt, len(a.geo.faces))
+        if self._made.get("overlays") == made_from and "phi_label" in self.nodes:
+            return
+        self._made["overlays"] = made_from
         for i in range(2):
             key = f"contact{i}"
             if i < len(a.geo.faces):
@@ -389,8 +433,6 @@ class SceneView:
                 )
             elif key in self.nodes:
                 self.nodes.pop(key).remove()
-        self.zt = zt + r
-        self.thin = max(3e-4, 0.006 * a.geo.r_b)
         one = np.zeros((1, 2, 3))
         self.nodes["forces"] = s.add_line_segments(
             "/ov/forces", one, FORCE_RGB, thickness=self.thin * 1.4
@@ -503,7 +545,10 @@ class SceneView:
 
     def set_overlay(self, name: str, on: bool) -> None:
         self.show[name] = on
-        if name in ("arcs", "wear") and name in self.nodes:
+        if name == "wear":
+            if self.a is not None:
+                self._build_wear(self.a)
+        elif name == "arcs" and name in self.nodes:
             self.nodes[name].visible = on
         elif self.a is not None:
             self.pose(self.k)

@@ -191,10 +191,11 @@ class Session:
         tabs redraw meanwhile) and redraw everything. Lock held."""
         r = self.analyst.fast(design) if r is None else r
         with FOREGROUND:
-            self._redraw(design, r.analysis, r.summary, reset_camera)
+            self._redraw(design, r, reset_camera)
         self.refiner.poke()
 
-    def _redraw(self, design: Design, a: Analysis, s: dict, reset_camera: bool) -> None:
+    def _redraw(self, design: Design, r: Result, reset_camera: bool) -> None:
+        a, s = r.analysis, r.summary
         self.design, self.analysis = design, a
         self.gen += 1
         self.verified = False
@@ -203,8 +204,7 @@ class Session:
         with self.client.atomic():
             self.view.build(a)
             self.view.pose(k)
-            for c in ui.curves:
-                c.update(a, k)
+            self._show_curves(r.curves, k)
             plots.relabel_limits(ui.curves, a)
             self._enable_for_kind(design)
             ui.segments.show(design.motion.segments)
@@ -216,6 +216,11 @@ class Session:
         self._save_working()
         if reset_camera:
             self.reset_camera()
+
+    def _show_curves(self, data: plots.CurveData, k: int) -> None:
+        at = math.degrees(self.analysis.theta[k])
+        for c, ys, shade in zip(self.ui.curves, data.ys, data.shades, strict=True):
+            c.show(data.x, ys, shade, at)
 
     def _enable_for_kind(self, design: Design) -> None:
         k, c = design.follower.kind, self.ui.controls
@@ -258,8 +263,7 @@ class Session:
             self.analysis, self.verified = r.analysis, True
             if [(v.code, v.ranges_deg) for v in r.analysis.violations] != old:
                 self.view.build(r.analysis)
-                for c in self.ui.curves:
-                    c.update(r.analysis, self._index())
+                self._show_curves(r.curves, self._index())
             self._show_summary(r.summary)
             self._show_status()
             self.ui.compare_view.update(r.compare)

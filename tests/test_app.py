@@ -216,12 +216,45 @@ def test_overlays_switch(tab):
     assert not s.view.nodes["arcs"].visible
     s.ui.overlay_boxes["instant_centre"].value = False
     assert not s.view.nodes["q"].visible
-    # the wear heat band along the profile: off by default, darker where wear is larger
-    assert not s.view.nodes["wear"].visible
+    # the wear heat band along the profile: off by default (not even sent), darker where
+    # wear is larger; drawn when switched on, redrawn with the design, gone when off
+    assert "wear" not in s.view.nodes
     s.ui.overlay_boxes["wear"].value = True
-    assert s.view.nodes["wear"].visible
-    colors = np.asarray(s.view.nodes["wear"].colors, float)
+    band = s.view.nodes["wear"]
+    assert band.visible
+    colors = np.asarray(band.colors, float)
     assert colors.shape[1:] == (2, 3) and np.ptp(colors[:, 0, 0]) > 50
+    s.ui.controls["motion.lift_mm"].value = 25.0
+    assert s.view.nodes["wear"] is not band  # the new cam's band
+    s.ui.overlay_boxes["wear"].value = False
+    assert "wear" not in s.view.nodes
+
+
+def test_a_new_lift_resends_the_cam_not_the_unchanged_follower(tab):
+    """A redraw sends only the nodes whose geometry changed: a new lift reshapes the
+    cam and lengthens the stem; a roller follower's wheels, pins, yoke and guide, the
+    hub and the overlay markers stay (concave pads follow the contact's range, so they
+    are sent again)."""
+    s = tab
+    before = dict(s.view.nodes)
+    s.ui.controls["motion.lift_mm"].value = 25.0
+    after = dict(s.view.nodes)
+    for name in ("cam", "outline", "stem", "face0"):  # face0: a concave pad
+        assert after[name] is not before[name], name
+    for name in ("hub", "forces", "q", "phi", "contact0"):
+        assert after[name] is before[name], name
+    s.ui.controls["follower.kind"].value = "double_roller"  # the pins appear
+    assert {"pin0", "pin1"} <= set(s.view.nodes) and s.view.nodes["face0"] is not after["face0"]
+    before = dict(s.view.nodes)
+    s.ui.controls["motion.lift_mm"].value = 20.0
+    after = dict(s.view.nodes)
+    for name in ("cam", "outline", "stem"):
+        assert after[name] is not before[name], name
+    for name in ("face0", "face1", "pin0", "yoke", "guide", "hub", "label0", "label1", "q"):
+        assert after[name] is before[name], name
+    s.ui.controls["cam.base_radius_mm"].value = 90.0  # the follower moves out: all new
+    for name in ("face0", "pin1", "guide", "hub", "label0", "forces"):
+        assert s.view.nodes[name] is not after[name], name
 
 
 def test_compare_tab(tab):
