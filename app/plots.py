@@ -105,15 +105,30 @@ class Curve:
         )
         self.x: np.ndarray | None = None
         self.ys: list[np.ndarray] = []
+        self.shade = np.zeros(0)
+        self._at = float("nan")  # the marker's cam angle [deg]
 
     def show(self, x: np.ndarray, ys: tuple[np.ndarray, ...], shade: np.ndarray, at: float):
-        """New curves (from curve_data) with the marker at cam angle ``at`` [deg]."""
+        """New curves (from curve_data) with the marker at cam angle ``at`` [deg]. Curves
+        that did not change (S after a new speed, say) are not sent again: the data of
+        all plots is most of what a redraw sends."""
+        same = (
+            self.x is not None
+            and self._at == at
+            and np.array_equal(x, self.x)
+            and np.array_equal(shade, self.shade)
+            and len(ys) == len(self.ys)
+            and all(np.array_equal(u, v, equal_nan=True) for u, v in zip(ys, self.ys, strict=True))
+        )
+        if same:
+            return
         self.x, self.ys, self.shade = x, list(ys), shade
         self.marker(at)
 
     def marker(self, theta_deg: float) -> None:
         if self.x is None:
             return
+        self._at = theta_deg
         x = self.x
         j = int(np.searchsorted(x, theta_deg))
         xs = np.insert(x, j, [theta_deg, theta_deg])

@@ -54,6 +54,7 @@ def measure(
         "latency_max_ms": s["latency_ms"]["max"],
         "n_latency": s["n_latency"],
         "redraws_per_s": s["redraws_per_s"],
+        "kb_per_edit": s["kb_per_edit"],
         "new_tab_s": s["probe_s"],
         "server_cpu_cores": cpu,
         "rss_idle_mb": rss_idle,
@@ -92,6 +93,17 @@ def run(quick: bool = True, slow: bool = False) -> list[dict]:
                 "note": "goal < 3000 ms",
             }
         )
+    rows.append(
+        {
+            "name": "class: sent to a tab per edit",
+            "median_ms": m["kb_per_edit"],
+            "p10_ms": None,
+            "p90_ms": None,
+            "n": 1,
+            "note": "kB (not ms): the redraw, then the refinement once the tab is still; "
+            "30 tabs x 1 edit/s need 30 x this per second of the server's network",
+        }
+    )
     rows.append(
         {
             "name": "class: server RSS idle / load / after",

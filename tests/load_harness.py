@@ -190,6 +190,7 @@ class TabStats:
     final_shown: float | None = None
     final_slider: float | None = None
     gui_uuids: set[str] = field(default_factory=set)
+    bytes_in: int = 0  # received from the first edit until the last was drawn
 
 
 class Tab:
@@ -316,6 +317,9 @@ class LoadResult:
             "plot_updates_per_s": sum(t.plot_updates for t in self.tabs) / self.duration,
             "latency_ms": q,
             "n_latency": len(lat),
+            # what a tab receives per edit it makes (the redraw, and the refinement and
+            # comparison that follow once it is still), compressed as sent [kB]
+            "kb_per_edit": sum(t.bytes_in for t in self.tabs) / max(1, self.sent) / 1e3,
             "probe_s": [round(p, 3) for p in self.probe_s],
             "foreign": sum(len(t.foreign) for t in self.tabs),
             "errors": self.errors,
@@ -370,6 +374,7 @@ async def run_load(
         await asyncio.sleep(duration / 2)
         await probe_once()
 
+    start_bytes = [c.bytes_in for c in clients]
     try:
         jobs = [
             t.drag(
@@ -381,6 +386,8 @@ async def run_load(
             jobs.append(probe_mid())
         await asyncio.gather(*jobs)
         await asyncio.gather(*(t.settle() for t in tabs))
+        for t, c, b0 in zip(tabs, clients, start_bytes, strict=True):
+            t.stats.bytes_in = c.bytes_in - b0
         if probe:
             await probe_once()
         for c in clients:

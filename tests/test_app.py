@@ -57,9 +57,11 @@ def test_speed_change_redraws_forces_but_keeps_the_geometry(tab):
     builds, cam = s.view.builds, s.view.nodes["cam"]
     force_plot = next(c for c in s.ui.curves if "F_N" in c.handle.title)
     before = np.array(force_plot.handle.data[1])
+    s_data = s.ui.curves[0].handle.data
     s.ui.controls["cam.speed_rpm"].value = 600.0
     assert s.design.cam.speed_rpm == 600.0
     assert s.view.builds == builds and s.view.nodes["cam"] is cam  # nothing re-sent
+    assert s.ui.curves[0].handle.data is s_data  # S did not change: its plot not re-sent
     # a quarter of the inertia force M A omega^2 (about 53 N at 1200 rpm): F_N falls where
     # the follower accelerates and rises where it decelerates
     change = np.array(force_plot.handle.data[1]) - before
