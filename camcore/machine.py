@@ -89,7 +89,8 @@ def _preload_need(design: Design):
         D = spring_free_load(design, p)
         if k == 0.0:
             return np.where(D < 0, np.inf, 0.0)
-        return np.maximum(-D / k - p.S, 0.0)
+        with np.errstate(over="ignore"):  # a vanishing rate needs an infinite preload
+            return np.maximum(-D / k - p.S, 0.0)
 
     return need
 
