@@ -195,6 +195,14 @@ def curve_specs(a) -> list[dict]:
         cap = max(3 * rho_reference_mm(a.design)[1], 2 * a.design.cam.base_radius_mm)
         return np.clip(np.nan_to_num(r, nan=cap, posinf=cap, neginf=-cap), -cap, cap)
 
+    worn: dict[int, np.ndarray] = {}  # the wear of both faces, computed once per analysis
+
+    def wear_um(a):
+        if id(a) not in worn:
+            worn.clear()
+            worn[id(a)] = to_um_per_mcycle(wear.depth_per_pass(a))
+        return worn[id(a)]
+
     def limit(a, which):
         v = rho_reference_mm(a.design)[1]
         return np.full(a.theta.size, v if which == "rho" else 0.0)
@@ -370,17 +378,13 @@ def curve_specs(a) -> list[dict]:
                     "label": "face 1 [µm]",
                     "scale": "um",
                     "stroke": COLORS[3],
-                    "fn": lambda a: to_um_per_mcycle(wear.depth_per_pass(a)[0]),
+                    "fn": lambda a: wear_um(a)[0],
                 },
                 {
                     "label": "face 2 (double followers) [µm]",
                     "scale": "um",
                     "stroke": COLORS[4],
-                    "fn": lambda a: (
-                        to_um_per_mcycle(wear.depth_per_pass(a)[1])
-                        if a.FN.shape[0] == 2
-                        else np.zeros(a.theta.size)
-                    ),
+                    "fn": lambda a: wear_um(a)[-1] if a.FN.shape[0] == 2 else 0 * a.theta,
                 },
             ],
             codes=set(),
