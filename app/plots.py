@@ -36,7 +36,8 @@ def stride_index(n: int, max_points: int = MAX_POINTS) -> np.ndarray:
 
 
 class Curve:
-    """One uPlot: series (label, unit-scale, colour, y-array function), marker, shading."""
+    """One uPlot: series (label, unit-scale, colour; values from curve_data), marker,
+    shading."""
 
     def __init__(
         self,
@@ -44,12 +45,9 @@ class Curve:
         title: str,
         axes: list[tuple[str, str]],
         series: list[dict],
-        codes: set[str] | None = None,
         height: int = 190,
     ):
-        self.gui, self.title, self.codes = gui, title, codes
-        self.series_cfg = series  # dicts: label, scale, stroke, dash?, fn(a)->y
-        self.scale0 = axes[0][0]
+        self.gui, self.title = gui, title
         ser: list[dict[str, Any]] = [{"label": "θ [°]"}]
         for s in series:
             cfg: dict[str, Any] = {
@@ -181,7 +179,7 @@ def curve_data(a) -> CurveData:
 
 def build_curves(gui, a) -> list[Curve]:
     """The plots of the Curves tab (empty until the first Curve.show)."""
-    return [Curve(gui, c["title"], c["axes"], c["series"], c["codes"]) for c in curve_specs(a)]
+    return [Curve(gui, c["title"], c["axes"], c["series"]) for c in curve_specs(a)]
 
 
 def curve_specs(a) -> list[dict]:
@@ -195,13 +193,12 @@ def curve_specs(a) -> list[dict]:
         cap = max(3 * rho_reference_mm(a.design)[1], 2 * a.design.cam.base_radius_mm)
         return np.clip(np.nan_to_num(r, nan=cap, posinf=cap, neginf=-cap), -cap, cap)
 
-    worn: dict[int, np.ndarray] = {}  # the wear of both faces, computed once per analysis
+    worn: list = [None, None]  # (analysis, wear of both faces): computed once per analysis
 
     def wear_um(a):
-        if id(a) not in worn:
-            worn.clear()
-            worn[id(a)] = to_um_per_mcycle(wear.depth_per_pass(a))
-        return worn[id(a)]
+        if worn[0] is not a:
+            worn[:] = [a, to_um_per_mcycle(wear.depth_per_pass(a))]
+        return worn[1]
 
     def limit(a, which):
         v = rho_reference_mm(a.design)[1]

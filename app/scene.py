@@ -1,9 +1,9 @@
 """The 3D view of one tab: cam solid, follower body, guide, teaching overlays.
 
 Scene units are metres; the cam axis is the scene Z axis and the paper's world X-Y
-plane is the scene X-Y plane (Y up, along the follower's motion). ``build`` makes
-the meshes once per analysis; ``pose`` only moves them (cam frame rotation,
-follower frame translation) and updates the small overlay lines.
+plane is the scene X-Y plane (Y up, along the follower's motion). ``build`` shows an
+analysis, re-sending only the nodes whose geometry changed; ``pose`` only moves them
+(cam frame rotation, follower frame translation) and updates the small overlay lines.
 """
 
 from __future__ import annotations
@@ -240,6 +240,7 @@ class SceneView:
         self._geometry: str | None = None
         self._made: dict[str, Any] = {}  # node name -> what it was made from (see _put)
         self._wear_at = (0.0, 0.0)  # (z, thickness) of the wear band, drawn when shown
+        self._wear_of: Any = None  # the analysis the band on screen was drawn for
 
     # --- build once per analysis ---------------------------------------------------
     def build(self, a) -> None:
@@ -312,7 +313,9 @@ class SceneView:
             verts, faces = np.asarray(mesh.vertices, np.float32), np.asarray(mesh.faces, np.uint32)
             made = self._put(
                 name,
-                (verts.tobytes(), faces.tobytes(), rgb),
+                # the number of faces too: a single roller where a double's face was
+                # must not keep that face's dimmed colour (_highlight_faces is for two)
+                (verts.tobytes(), faces.tobytes(), rgb, len(a.geo.faces)),
                 lambda name=name, verts=verts, faces=faces, rgb=rgb, parent=parent: (
                     s.add_mesh_simple(
                         f"{parent}/{name}",
@@ -352,6 +355,9 @@ class SceneView:
             if "wear" in self.nodes:
                 self.nodes.pop("wear").remove()
             return
+        if self._wear_of is a and "wear" in self.nodes:  # already drawn for this analysis
+            return
+        self._wear_of = a
         z, thick = self._wear_at
         pts = _display_points(a)
         phi, depth = wear.along_profile(a)

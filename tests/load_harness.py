@@ -177,6 +177,9 @@ def _plot(c: ViserClient) -> GuiElement | None:
     return None
 
 
+REFINE_WAIT_S = 1.5  # a still tab is refined after app.session.SETTLE_S (0.6 s) + ~0.5 s
+
+
 @dataclass
 class TabStats:
     name: str
@@ -386,6 +389,7 @@ async def run_load(
             jobs.append(probe_mid())
         await asyncio.gather(*jobs)
         await asyncio.gather(*(t.settle() for t in tabs))
+        await asyncio.sleep(REFINE_WAIT_S)  # the last edit's refinement is sent too
         for t, c, b0 in zip(tabs, clients, start_bytes, strict=True):
             t.stats.bytes_in = c.bytes_in - b0
         if probe:

@@ -15,6 +15,7 @@ from conftest import wait_for
 from fake_tab import FakeTab
 from viser._gui_handles import GuiEvent, UploadedFile
 
+from app import scene
 from camcore.model import Design, design_to_json, load_preset
 
 
@@ -257,6 +258,21 @@ def test_a_new_lift_resends_the_cam_not_the_unchanged_follower(tab):
     s.ui.controls["cam.base_radius_mm"].value = 90.0  # the follower moves out: all new
     for name in ("face0", "pin1", "guide", "hub", "label0", "forces"):
         assert s.view.nodes[name] is not after[name], name
+
+
+def test_a_single_roller_where_a_double_ones_idle_face_was_is_not_dimmed(tab):
+    """A double follower dims its idle face; a single roller at the same place (its
+    offset e_s equal to the double's e) must be drawn in full colour, not keep the dimmed
+    node (a review found the reused node)."""
+    s = tab
+    s.ui.controls["follower.kind"].value = "double_roller"
+    s.ui.controls["follower.single_offset_mm"].value = s.design.follower.offset_mm
+    a = s.analysis
+    k = int(np.flatnonzero(~a.in_contact[0])[0])  # S1 idle: face0 dimmed
+    s.ui.angle_slider.value = float(np.degrees(a.theta[k]))
+    assert tuple(s.view.nodes["face0"].color) == scene.IDLE_FACE_RGB
+    s.ui.controls["follower.kind"].value = "single_roller"
+    assert tuple(s.view.nodes["face0"].color) == scene.FOLLOWER_RGB
 
 
 def test_compare_tab(tab):
