@@ -401,6 +401,8 @@ def _changed(data: dict, **parts: dict) -> dict:
     return {k: {**v, **parts.get(k, {})} for k, v in data.items()}
 
 
+NO_BORE = {"bore_diameter_mm": 0.0, "keyway_depth_mm": 0.0, "keyway_width_mm": 0.0}
+
 # a flat face on a 2 mm base circle with a cusp (kept since a resolution once hid it)
 FLAT_CUSP = {
     "motion": {
@@ -479,12 +481,7 @@ STEEP_FALL = _changed(
         "rise_deg": 359.04255319148933,
     },
     follower={"kind": "single_roller", "roller_radius_mm": 0.001},
-    cam={
-        "base_radius_mm": 0.75,
-        "bore_diameter_mm": 0.0,
-        "keyway_depth_mm": 0.0,
-        "keyway_width_mm": 0.0,
-    },
+    cam={**NO_BORE, "base_radius_mm": 0.75},
     dynamics={"gravity_m_s2": 0.0, "mass_g": 1.0},
     limits={"export_tolerance_mm": 1e-05},
 )
@@ -495,13 +492,7 @@ TINY_SPRING = _changed(
     FLAT_CUSP,
     motion={"fall_deg": 180.0, "lift_mm": 10.0, "rise_deg": 180.0},
     follower={"kind": "single_roller"},
-    cam={
-        "base_radius_mm": 1.0,
-        "bore_diameter_mm": 0.0,
-        "keyway_depth_mm": 0.0,
-        "keyway_width_mm": 0.0,
-        "speed_rpm": 99559.0,
-    },
+    cam={**NO_BORE, "base_radius_mm": 1.0, "speed_rpm": 99559.0},
     dynamics={"gravity_m_s2": 0.0, "mass_g": 259787.0, "spring_rate_N_per_m": 1e-297},
 )
 # a constant-velocity fall: corners in the pitch curve (NOT_TRACED)
@@ -509,12 +500,7 @@ CV_FALL = _changed(
     FLAT_CUSP,
     motion={"fall_deg": 180.0, "lift_mm": 1.0, "rise_deg": 180.0, "fall_law": "constant_velocity"},
     follower={"kind": "single_roller"},
-    cam={
-        "base_radius_mm": 11.0,
-        "bore_diameter_mm": 0.0,
-        "keyway_depth_mm": 0.0,
-        "keyway_width_mm": 0.0,
-    },
+    cam={**NO_BORE, "base_radius_mm": 11.0},
     dynamics={"gravity_m_s2": 0.0, "mass_g": 1.0},
     limits={"export_tolerance_mm": 1e-05},
 )
