@@ -98,11 +98,11 @@ class CompareView:
         ok = [r for r in results.values() if not isinstance(r, str)]
         if not ok:
             return
-        x = ok[0]["theta_deg"]
+        x = ok[0]["theta_deg"]  # camcore's compare puts every follower on one grid
         nan = np.full(x.shape, np.nan)
         fn, st = [x], [x]
         for r in results.values():
-            fn.append(nan if isinstance(r, str) else np.interp(x, r["theta_deg"], r["FN_N"]))
-            st.append(nan if isinstance(r, str) else np.interp(x, r["theta_deg"], r["stress_MPa"]))
+            fn.append(nan if isinstance(r, str) else r["FN_N"])
+            st.append(nan if isinstance(r, str) else r["stress_MPa"])
         self.fn.data = tuple(fn)
         self.stress.data = tuple(st)

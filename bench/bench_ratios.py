@@ -6,6 +6,8 @@ Rows (median ms, and the ratio with its goal in the note):
 * analyze(verify=False) / floor (goal <= 3);
 * geometric check / analysis (goal <= 3) and its growth exponent from 0.1 to 0.02 deg
   (goal: 1, i.e. O(N));
+* the four-follower comparison (one grid, one motion program) against four separate
+  analyses;
 * a sweep's designs per CPU-second against the floor's rate (goal >= 0.5): one full
   analysis per design, and the batched core (``camcore sweep --fast``, camcore.batch)
   on chunks of 32 designs.
@@ -72,6 +74,20 @@ def run(quick: bool = False) -> list[dict]:
     rows.append(
         _row(
             "geometric check at 0.02 deg", t2, f"N {n1} -> {n2}: grows as N^{slope:.2f} (goal: N^1)"
+        )
+    )
+    from camcore.analysis import compare
+
+    kinds = ("single_roller", "double_roller", "single_concave", "double_concave")
+    t_cmp = _median_ms(lambda: compare(d), max(3, n // 2))
+    t_four = _median_ms(
+        lambda: [analyze(d.with_kind(k), verify=False) for k in kinds], max(3, n // 2)
+    )
+    rows.append(
+        _row(
+            "compare: 4 followers, one grid",
+            t_cmp,
+            f"{t_cmp / t_four:.2f}x four separate analyses ({t_four:.1f} ms)",
         )
     )
     from camcore import sweep

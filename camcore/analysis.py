@@ -67,10 +67,16 @@ class Contacts:
 
 
 def contacts(
-    design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...], theta: np.ndarray
+    design: Design,
+    geo: profile.Geometry,
+    segs: tuple[motion.Segment, ...],
+    theta: np.ndarray,
+    prog: motion.Program | None = None,
 ) -> Contacts:
-    """The contact geometry (Eqs. 1-19) at the cam angles ``theta`` [rad]."""
-    prog = motion.program(design, theta, segs)
+    """The contact geometry (Eqs. 1-19) at the cam angles ``theta`` [rad]; ``prog``:
+    the motion program there if the caller has it (``motion.program(design, theta)``)."""
+    if prog is None:
+        prog = motion.program(design, theta, segs)
     faces = [profile.face_contact(geo, f, prog) for f in geo.faces]
     windows, part = profile.contact_windows(geo, prog, segs)
     body = np.stack([profile.to_body(prog.theta, c.point) for c in faces])
@@ -78,10 +84,15 @@ def contacts(
 
 
 def evaluate(
-    design: Design, geo: profile.Geometry, segs: tuple[motion.Segment, ...], theta: np.ndarray
+    design: Design,
+    geo: profile.Geometry,
+    segs: tuple[motion.Segment, ...],
+    theta: np.ndarray,
+    prog: motion.Program | None = None,
 ) -> Local:
-    """The per-angle results (Eqs. 1-19, 21, 29-42) at the cam angles ``theta`` [rad]."""
-    c = contacts(design, geo, segs, theta)
+    """The per-angle results (Eqs. 1-19, 21, 29-42) at the cam angles ``theta`` [rad]
+    (``prog`` as in ``contacts``)."""
+    c = contacts(design, geo, segs, theta, prog)
     prog, windows, part, point_body = c.prog, c.in_contact, c.part, c.point_body
     normal = np.stack([f.normal for f in c.faces])
     point_world = np.stack([f.point for f in c.faces])
@@ -208,10 +219,23 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
         resolved by motion.MIN_MOTION_STEPS samples at least).
     """
     geo = profile.geometry(design)
-    segs = motion.segments(design)
     st = stations(design, geo)
     th = motion.theta_grid(design, tuple(st)) if theta is None else np.asarray(theta, float)
-    loc = evaluate(design, geo, segs, th)
+    return _analyze(design, geo, st, th, verify)
+
+
+def _analyze(
+    design: Design,
+    geo: profile.Geometry,
+    st: np.ndarray,
+    th: np.ndarray,
+    verify: bool,
+    prog: motion.Program | None = None,
+) -> Analysis:
+    """analyze on the grid ``th`` with the stations ``st`` [rad]; ``prog``: the motion
+    program on ``th`` if the caller has it (compare shares one between followers)."""
+    segs = motion.segments(design)
+    loc = evaluate(design, geo, segs, th, prog)
     breaks = np.mod([*(g.start for g in segs), *st], 2 * np.pi)
     cuts = np.unique(np.clip(np.searchsorted(th, breaks), 0, th.size - 1))
     made = sampling.sample_profile(
@@ -250,17 +274,34 @@ def compare(
     """The same design with each follower in ``kinds`` (default: the paper's four,
     Table 1, Figs. 11-13). ``errors``: a follower for which the design is not valid
     input (e.g. a face radius a roller cannot take) gets the reason as a string instead
-    of raising."""
+    of raising.
+
+    The followers share one grid and one evaluation of the motion program (issue 12):
+    the design's grid with every follower's stations on it, so each curve is compared
+    at the same angles and each follower's contact changes are sampled exactly. A
+    follower's numbers differ from its own ``analyze`` only by where the grid samples
+    fall (its grid has fewer stations; the worst values between samples agree).
+    """
     from pydantic import ValidationError
 
     from .model import format_validation_error
 
     out: dict[FollowerKind, Analysis | str] = {}
+    made: dict[FollowerKind, tuple[Design, profile.Geometry, np.ndarray]] = {}
     for k in kinds:
         try:
-            out[k] = analyze(design.with_kind(k), verify=verify)
+            d = design.with_kind(k)
         except ValidationError as exc:
             if not errors:
                 raise
             out[k] = format_validation_error(exc)
-    return out
+            continue
+        geo = profile.geometry(d)
+        made[k] = (d, geo, stations(d, geo))
+    if made:
+        every = np.concatenate([st for _, _, st in made.values()])
+        grid = motion.theta_grid(design, tuple(np.unique(every)))
+        prog = motion.program(design, grid)
+        for k, (d, geo, st) in made.items():
+            out[k] = _analyze(d, geo, st, grid, verify, prog)
+    return {k: out[k] for k in kinds}

@@ -209,3 +209,33 @@ def test_compare_reports_followers_the_design_cannot_take():
     assert isinstance(kinds["double_concave"], str) and "face_radius_mm" in kinds["double_concave"]
     with pytest.raises(ValidationError):
         compare(d)
+
+
+def test_compare_shares_one_grid_and_one_program():
+    """Issue 12: the four followers are compared at the same angles, with the motion
+    program evaluated once; every follower's stations are on that grid; each result is
+    its own analysis on that grid, and agrees with its stand-alone analysis (on the
+    paper example the double followers' stations add no sample the singles' grid has
+    not: the worst values between samples agree to the last bit)."""
+    from camcore.analysis import compare
+
+    res = compare(PAPER)
+    first = next(iter(res.values()))
+    assert not isinstance(first, str)
+    for kind, a in res.items():
+        assert not isinstance(a, str)
+        assert a.theta is first.theta and a.prog is first.prog
+        assert np.all(np.isin(a.stations, a.theta)), kind
+        own = analyze(PAPER.with_kind(kind), verify=False, theta=a.theta)
+        np.testing.assert_array_equal(own.guide.FN, a.guide.FN)
+        np.testing.assert_array_equal(own.stress, a.stress)
+        alone = analyze(PAPER.with_kind(kind), verify=False)
+        for name, w in a.worst.items():
+            assert (w is None) == (alone.worst[name] is None)
+            if w is not None:
+                assert w.value == pytest.approx(alone.worst[name].value, rel=1e-12), name
+    # a double follower's stations (beta_r + 2 psi_h, ...) are on the singles' grid too
+    doubles = [a.stations for k, a in res.items() if k.is_double and not isinstance(a, str)]
+    assert np.all(np.isin(np.concatenate(doubles), first.theta))
+    single_grid = analyze(PAPER.with_kind("single_roller"), verify=False).theta
+    assert not np.all(np.isin(doubles[0], single_grid))
