@@ -10,7 +10,7 @@ import math
 import numpy as np
 
 from . import checks, machine, train, wear
-from .analysis import Analysis, analyze, compare
+from .analysis import Analysis, analyze, compare, contacts
 from .contact import hertz_validity
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
 from .motion import FALL, HIGH, RISE, SEGMENT_NAMES
@@ -116,7 +116,8 @@ def _station_list(a: Analysis) -> list[dict]:
     names = [f.name.split(" ")[0] for f in a.geo.faces]
     two_pi = 2 * math.pi
     st, n = a.stations, a.stations.size
-    both = a.local(np.mod(np.concatenate([st - 1e-7, st + 1e-7]), two_pi))  # one evaluation
+    x = np.mod(np.concatenate([st - 1e-7, st + 1e-7]), two_pi)
+    both = contacts(a.design, a.geo, a.segments, x)  # the geometry alone, once
     before_in, after_in = both.in_contact[:, :n], both.in_contact[:, n:]
     before_seg, after_seg = both.prog.segment[:n], both.prog.segment[n:]
     return [
