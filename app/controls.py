@@ -30,6 +30,7 @@ class Spec:
     hint: str | None = None
     extra: dict = field(default_factory=dict)
     zero_is_none: bool = False  # an optional field: the control shows 0 for "not set"
+    scale: float = 1.0  # design value = control value x scale (see control_value)
 
 
 LAWS = tuple(m.value for m in MotionLaw)
@@ -165,10 +166,11 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         (
             Spec(
                 "wear.coefficient_mm3_per_N_m",
-                "Archard k [mm³/(N·m)]",
+                "Archard k [10⁻⁹ mm³/(N·m)]",
                 "number",
-                step=1e-9,
-                hint="lubricated hardened steel ~1e-9…1e-7; dry steel ~1e-5",
+                step=1,
+                hint="lubricated hardened steel ~1…100 (1e-9…1e-7 mm³/(N·m)); dry steel ~1e4",
+                scale=1e-9,
             ),
             Spec("wear.pitting_reference_cycles", "Pitting N_ref [cycles]", "number", step=1e7),
             Spec("wear.pitting_exponent", "Pitting exponent m", "number", step=0.1),
@@ -190,6 +192,7 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
 
 SPECS: tuple[Spec, ...] = tuple(s for _, _, specs in FOLDERS for s in specs)
 NONE_AS_ZERO = frozenset(s.path for s in SPECS if s.zero_is_none)
+SCALES = {s.path: s.scale for s in SPECS if s.scale != 1.0}
 
 
 def get_path(design: Design, path: str):
@@ -206,6 +209,27 @@ def get_path(design: Design, path: str):
     return obj.value if hasattr(obj, "value") else obj
 
 
+def control_value(design: Design, spec: Spec):
+    """What the control of ``spec`` shows for ``design``: get_path in the control's
+    unit. A scaled control (a tiny quantity such as Archard's k, which the browser's
+    number box would round to 0 at its 7 decimals) shows 12 significant digits."""
+    v = get_path(design, spec.path)
+    if spec.scale == 1.0 or not isinstance(v, int | float):
+        return v
+    return float(f"{v / spec.scale:.12g}")
+
+
+def _unscaled(path: str, v: object, current: object) -> object:
+    """A scaled control's value in the design's unit; the design's own value while the
+    control still shows it (10 x 1e-9 is not 1e-8 to the last bit: no drift)."""
+    scale = SCALES.get(path)
+    if scale is None or not isinstance(v, int | float):
+        return v
+    if isinstance(current, int | float) and v == float(f"{current / scale:.12g}"):
+        return current
+    return v * scale
+
+
 def merged(base: Design, values: dict[str, object]) -> dict:
     """The design dict of ``base`` with control values (by path) written in. The
     classic motion sliders only edit a classic program; another program keeps its
@@ -216,6 +240,7 @@ def merged(base: Design, values: dict[str, object]) -> dict:
         group, key = path.split(".")
         if group == "motion" and not classic:
             continue
+        v = _unscaled(path, v, data[group].get(key))
         data[group][key] = None if path in NONE_AS_ZERO and v == 0 else v
     return data
 

@@ -57,6 +57,7 @@ class Layout:
     status: Any
     wide_css: Any  # holds WIDE_PANEL_CSS while the wide panel is on
     quick_stl_btn: Any
+    quick_md: Any
     # animation
     play_btn: Any
     speed_slider: Any
@@ -98,6 +99,7 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     analysis is ``first`` (the curves take their series from it)."""
     h: dict[str, Any] = {"status": gui.add_html(""), "wide_css": gui.add_html("")}
     h["quick_stl_btn"] = gui.add_button("⬇ Download the cam (STL, mm)")
+    h["quick_md"] = gui.add_markdown("")  # that button's answer (sent, or why not)
     with gui.add_folder("Animation", expand_by_default=True):
         h["play_btn"] = gui.add_button("▶ Play", color="green")
         h["speed_slider"] = gui.add_slider("Speed [°/s]", 5, 360, 5, speed_deg_s)
@@ -141,9 +143,9 @@ def _design_tab(gui, base: Design, h: dict) -> None:
 
 
 def _control(gui, spec: controls.Spec, base: Design):
-    v = controls.get_path(base, spec.path)
+    v = controls.control_value(base, spec)
     if v is None:  # e.g. a classic slider on another program: the default's value
-        v = controls.get_path(Design(), spec.path)
+        v = controls.control_value(Design(), spec)
     if spec.widget == "slider":
         lo, hi = min(spec.lo, v), max(spec.hi, v)
         return gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)

@@ -69,6 +69,9 @@ class Session:
         first = self.analyst.fast(self.base)
         self.analysis: Analysis = first.analysis
         self.error: str | None = None  # the input's error; the last valid design stays
+        # a file (upload, preset) that could not be opened: shown like an input error,
+        # but the controls still describe the design on screen, so downloads go on
+        self.file_error: str | None = None
         self.verified = False  # self.analysis is the geometrically checked one
         self.gen = 0  # bumped by every new design: background results of older ones drop
         self.theta_deg = 0.0
@@ -98,7 +101,7 @@ class Session:
 
     def _wire(self, ui: Layout) -> None:
         """Connect the widgets to the session's actions."""
-        ui.quick_stl_btn.on_click(lambda _: self.download("stl"))
+        ui.quick_stl_btn.on_click(lambda _: self.download("stl", quick=True))
         ui.play_btn.on_click(lambda _: self.toggle_play())
         ui.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
         ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
@@ -135,13 +138,14 @@ class Session:
         with self.lock:
             if self._syncing or self.closed.is_set() or mine != self._ticket:
                 return  # (a newer change came while this one waited its turn)
+            self._widen_sliders()
             values = self._values()
             design, err = controls.try_design(self.base, values)
             if design is None:
                 self._show_error(err)
                 self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
                 return
-            self.error = None
+            self.error = self.file_error = None
             self._apply(design)
 
     def on_segments(self, segs: list[dict]) -> None:
@@ -162,9 +166,22 @@ class Session:
     def set_design(self, design: Design, reset_camera: bool = True) -> None:
         """Replace the whole design (preset, upload, program table): controls follow."""
         with self.lock:
-            self.base, self.error = design, None
+            self.base, self.error, self.file_error = design, None, None
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
+
+    def _widen_sliders(self) -> None:
+        """A value typed into a slider's box beyond its range widens the range: the
+        browser would otherwise cut it back to the end at its next redraw and send that,
+        changing the design silently (70 mm typed for a 60 mm slider became 60 mm at
+        the next, unrelated edit). The same rule as for a loaded design (_sync_controls)."""
+        for spec in controls.SPECS:
+            h = self.ui.controls[spec.path]
+            if spec.widget == "slider" and isinstance(h.value, (int, float)):
+                if h.value > h.max:
+                    h.max = h.value
+                if h.value < h.min:
+                    h.min = h.value
 
     def _values(self) -> dict[str, object]:
         return {p: h.value for p, h in self.ui.controls.items()}
@@ -175,7 +192,7 @@ class Session:
         try:
             classic = design.motion.classic is not None
             for spec in controls.SPECS:
-                h, v = self.ui.controls[spec.path], controls.get_path(design, spec.path)
+                h, v = self.ui.controls[spec.path], controls.control_value(design, spec)
                 if spec.path.startswith("motion."):
                     h.disabled = not classic  # other programs: edited as segments
                 if v is None:
@@ -210,6 +227,8 @@ class Session:
             ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
+            if ui.quick_md.content:  # it spoke of the design before this one
+                ui.quick_md.content = ""
             self._show_summary(s)
             ui.where_md.content = where_markdown(a, k, self.station_events)
             self._show_status()
@@ -233,10 +252,18 @@ class Session:
         self.error = err
         self._show_status()
 
+    def _show_file_error(self, err: str) -> None:
+        self.file_error = err
+        self._show_status()
+
     def _show_status(self) -> None:
         a = self.analysis
         self.ui.status.content = status_html(
-            self.error, list(a.violations), a.lift_error, self.verified, self.view.mesh_error
+            self.error or self.file_error,
+            list(a.violations),
+            a.lift_error,
+            self.verified,
+            self.view.mesh_error,
         )
 
     def _show_summary(self, s: dict) -> None:
@@ -282,7 +309,7 @@ class Session:
             d = load_preset_design(name)
         except DesignError as exc:
             with self.lock:
-                return self._show_error(f"preset {name}: {exc}")
+                return self._show_file_error(f"preset {name}: {exc}")
         self.set_design(d)
         self._say(f"Loaded preset **{esc(name)}**.")
 
@@ -291,7 +318,9 @@ class Session:
             d = design_from_json(content)
         except DesignError as exc:
             with self.lock:
-                self._show_error(f"file {name or 'upload'}: {exc} (the current design is kept)")
+                self._show_file_error(
+                    f"file {name or 'upload'}: {exc} (the current design is kept)"
+                )
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
         self.set_design(d)
         self._say(f"Opened **{esc(name)}** ({esc(d.name)}).")
@@ -303,11 +332,15 @@ class Session:
             f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB)."
         )
 
-    def download(self, kind: str) -> None:
+    def download(self, kind: str, quick: bool = False) -> None:
+        """Send the export ``kind`` of the design on screen, or say why not: under the
+        Files tab's buttons, or (``quick``: the button above the tabs) under that button,
+        where the user is looking."""
+        say = self._say_quick if quick else self._say
         with self.lock:
             a, d = self.analysis, self.design
             if self.error is not None:  # the controls no longer describe d: say so
-                return self._say(
+                return say(
                     "✖ Download refused: the input is invalid (see the red "
                     "panel). Fix it, or load a design, and the files will hold "
                     "what you see."
@@ -316,8 +349,8 @@ class Session:
                 spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
                 name, data = f"{file_stem(d)}{spec.suffix}", spec.write(a)
             except (KeyError, export.ExportError) as exc:
-                return self._say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
-            self._say(
+                return say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
+            say(
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
                 f"{d.follower.kind.label}."
             )
@@ -327,6 +360,11 @@ class Session:
         """A line under the Files tab's buttons (user strings already escaped)."""
         with self.lock:
             self.ui.files_md.content = markdown
+
+    def _say_quick(self, markdown: str) -> None:
+        """The quick download's answer, under its button (cleared at the next redraw)."""
+        with self.lock:
+            self.ui.quick_md.content = markdown
 
     # --- the browser's storage ---------------------------------------------------------
     def _restore(self) -> None:

@@ -133,6 +133,56 @@ def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     assert s.ui.controls["follower.kind"].value == other.follower.kind.value
 
 
+def test_a_file_that_cannot_be_opened_does_not_block_downloads(tab, downloads):
+    """A failed upload is said in the status panel, but the controls still describe the
+    design on screen: its files download. An invalid control value still refuses them,
+    and the quick button above the tabs answers under itself, where the user looks."""
+    s = tab
+    fire_upload(s.ui.upload_btn, "broken.json", b"{not json")
+    assert "not a JSON document" in s.ui.status.content
+    s.ui.download_btns["stl"].value = True
+    assert downloads and downloads[-1][0].endswith(".stl")
+    assert "Sent" in s.ui.files_md.content
+    s.ui.controls["follower.face_radius_mm"].value = -50.0  # |r_f| < r_b: invalid input
+    n, files = len(downloads), s.ui.files_md.content
+    s.ui.quick_stl_btn.value = True
+    assert len(downloads) == n and "Download refused" in s.ui.quick_md.content
+    assert s.ui.files_md.content == files
+    s.ui.controls["follower.face_radius_mm"].value = -250.0
+    assert s.ui.quick_md.content == ""  # the answer spoke of the input before
+    s.ui.quick_stl_btn.value = True
+    assert len(downloads) == n + 1 and "Sent" in s.ui.quick_md.content
+
+
+def test_a_value_typed_beyond_a_slider_widens_it(tab):
+    """A slider's box takes values beyond the slider's range: the range widens, so the
+    browser does not cut the value back at its next redraw (tests/test_browser.py shows
+    that it would), and the design keeps what was typed."""
+    s = tab
+    lift = s.ui.controls["motion.lift_mm"]
+    lift.value = 70.0  # the slider ends at 60
+    assert s.design.motion.lift_mm == 70.0 and lift.max >= 70.0
+    base = s.ui.controls["cam.base_radius_mm"]
+    base.value = -5.0  # below the slider's 10: widened too (the design refuses it)
+    assert base.min <= -5.0 and s.error is not None
+    base.value = 90.0
+    assert s.error is None and s.design.motion.lift_mm == 70.0
+
+
+def test_archard_k_is_entered_in_its_own_scale(tab):
+    """Archard's k (~1e-8 mm^3/(N m)) is below what the browser's number box keeps (7
+    decimals: it became 0, switching wear off): the control is in 1e-9 mm^3/(N m). The
+    design's value is kept to the last bit while the control still shows it."""
+    s = tab
+    k = s.ui.controls["wear.coefficient_mm3_per_N_m"]
+    assert s.design.wear.coefficient_mm3_per_N_m == 1e-8 and k.value == 10.0
+    s.ui.controls["cam.width_mm"].value = 20.0  # another edit: k is not re-rounded
+    assert s.design.wear.coefficient_mm3_per_N_m == 1e-8
+    k.value = 2.0
+    assert s.design.wear.coefficient_mm3_per_N_m == pytest.approx(2e-9, rel=1e-15)
+    assert "wear depth max 0.0000" not in s.ui.summary_md.content
+
+
 @pytest.mark.parametrize(
     "name, content, message",
     [

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import os
+import time
 
 import numpy as np
 import pytest
@@ -32,6 +33,24 @@ def drawn_fraction(png: bytes) -> float:
     img = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
     bg = np.median(img.reshape(-1, 3), axis=0)
     return float((np.abs(img - bg).sum(axis=-1) > 40).mean())
+
+
+def _field(page, label: str):
+    """The number box of the control whose label starts with ``label``."""
+    return page.evaluate_handle(
+        """(p) => { const l = [...document.querySelectorAll('label')]
+              .find(e => e.innerText.replace(/\\s+/g, ' ').startsWith(p));
+            if (!l) return null; let e = l; for (let i = 0; i < 4; i++) e = e.parentElement;
+            return [...e.querySelectorAll('input')].find(i => i.type != 'hidden') }""",
+        label,
+    ).as_element()
+
+
+def _wait(pred, timeout_s: float = 60.0) -> None:
+    t0 = time.monotonic()
+    while not pred():
+        assert time.monotonic() - t0 < timeout_s, "timed out"
+        time.sleep(0.1)
 
 
 @pytest.mark.browser
@@ -187,6 +206,19 @@ def test_trust_in_the_browser(tmp_path):
             (session,) = [s for s in app.sessions.values() if not s.closed.is_set()]
             assert session.design == design_from_json(json.dumps(design))
             assert "my cam" in session.saved
+
+            # a value typed beyond a slider's range is kept, not cut back to the range's
+            # end by the browser at the next, unrelated edit
+            page.get_by_role("tab", name="Design").click()
+            _field(page, "Lift h").fill("70")
+            _field(page, "Lift h").press("Enter")
+            _wait(lambda: session.design.motion.lift_mm == 70.0)
+            _field(page, "Width w").fill("20")
+            _field(page, "Width w").press("Enter")
+            _wait(lambda: session.design.cam.width_mm == 20.0)
+            page.wait_for_timeout(1500)  # the browser's redraw of every control
+            assert session.design.motion.lift_mm == 70.0
+            assert _field(page, "Lift h").input_value() == "70"
 
             # invalid input: the download is refused and says why
             session.ui.controls["follower.face_radius_mm"].value = -70.0  # |r_f| < r_b
