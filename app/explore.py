@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from camcore.explore import FIGURES, pareto
+from camcore.explore import FIGURES, distinct, pareto
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError
 from camcore.sweep import design_at
 
@@ -197,10 +197,16 @@ class ExplorePanel:
                     self.image = self.gui.add_image(_decode(png), format="png")
             else:
                 self.image.image = _decode(png)
-        ok = sum(bool(r.get("valid")) for r in rows)
+        first = distinct(rows)
+        ok = sum(bool(r.get("valid")) for r, f in zip(rows, first, strict=True) if f)
         done = "" if len(rows) == total else f" (cancelled after {len(rows)} of {total})"
+        same = (
+            ""
+            if first.all()
+            else f" ({int(first.sum())} distinct: a follower ignores a field it does not use)"
+        )
         self.progress.content = (
-            f"**{len(rows)} designs**{done}: {ok} valid, {len(front)} on the Pareto front."
+            f"**{len(rows)} designs**{done}{same}: {ok} valid, {len(front)} on the Pareto front."
         )
 
     def load(self, label: str) -> None:

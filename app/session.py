@@ -243,10 +243,8 @@ class Session:
 
     def _enable_for_kind(self, design: Design) -> None:
         k, c = design.follower.kind, self.ui.controls
-        c["follower.face_radius_mm"].disabled = not k.is_concave
-        c["follower.roller_radius_mm"].disabled = not k.is_roller
-        c["follower.offset_mm"].disabled = not k.is_double
-        c["follower.single_offset_mm"].disabled = k.is_double
+        for name in ("face_radius_mm", "roller_radius_mm", "offset_mm", "single_offset_mm"):
+            c[f"follower.{name}"].disabled = not k.uses(name)
 
     def _show_error(self, err: str | None) -> None:
         self.error = err

@@ -65,12 +65,40 @@ def figure_values(rows: list[dict], names: list[str]) -> np.ndarray:
     return out
 
 
+def ignored_fields(row: dict) -> list[str]:
+    """The grid paths of ``row`` its follower does not use (FollowerKind.uses): a single
+    follower swept over the double follower's offset e is one design, many times."""
+    kind = _try_kind(_kind(row))
+    if kind is None:
+        return []
+    return [
+        k[5:]
+        for k in row
+        if k.startswith("grid.follower.") and not kind.uses(k[len("grid.follower.") :])
+    ]
+
+
+def distinct(rows: list[dict]) -> np.ndarray:
+    """True for the first row of each distinct design: rows that differ only in grid
+    fields their follower does not use are the same design."""
+    seen: set[tuple] = set()
+    out = np.zeros(len(rows), dtype=bool)
+    for i, r in enumerate(rows):
+        drop = {f"grid.{p}" for p in ignored_fields(r)}
+        key = tuple(
+            sorted((k, repr(v)) for k, v in r.items() if k.startswith("grid.") and k not in drop)
+        )
+        out[i] = key not in seen
+        seen.add(key)
+    return out
+
+
 def pareto(rows: list[dict], names: list[str]) -> np.ndarray:
     """Indices of the valid rows on the Pareto front of FIGURES[names] (all minimized),
-    ordered by the first figure."""
+    ordered by the first figure; a design swept several times (``distinct``) once."""
     v = figure_values(rows, names)
     valid = np.array([bool(r.get("valid")) for r in rows], dtype=bool)
-    v[~valid] = np.nan
+    v[~(valid & distinct(rows))] = np.nan
     idx = np.flatnonzero(pareto_mask(v))
     return idx[np.argsort(v[idx, 0], kind="stable")]
 
@@ -121,7 +149,10 @@ def explore_png(
             s=38,
             edgecolors="none",
         )
-        ax.set_title(_label(kind), fontsize=9)
+        unused = {p for r in rows if _kind(r) == kind for p in ignored_fields(r)}
+        note = [lab for path, lab in (x, y) if path in unused]
+        title = _label(kind) + (f" (does not use {' or '.join(note)})" if note else "")
+        ax.set_title(title, fontsize=9)
         ax.set_xlabel(x[1], fontsize=8)
         ax.set_ylabel(y[1], fontsize=8)
         ax.tick_params(labelsize=7)

@@ -68,6 +68,21 @@ class FollowerKind(StrEnum):
     def label(self) -> str:
         return self.value.replace("_", " ")
 
+    def uses(self, field: str) -> bool:
+        """Whether the Follower field ``field`` ("offset_mm", ...) shapes a design with
+        this follower: a double follower's offset e means nothing to a single one (which
+        uses the axis offset e_s instead), a roller radius nothing to a face, a face
+        radius nothing to a roller. Fields not named here shape every follower."""
+        if field == "offset_mm":
+            return self.is_double
+        if field == "single_offset_mm":
+            return not self.is_double
+        if field == "roller_radius_mm":
+            return self.is_roller
+        if field == "face_radius_mm":
+            return self.is_concave
+        return True
+
 
 # The paper's four followers (Fig. 9, Table 1): the default set of the comparison.
 PAPER_FOLLOWERS = (

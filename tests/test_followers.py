@@ -239,3 +239,29 @@ def test_compare_shares_one_grid_and_one_program():
     assert np.all(np.isin(np.concatenate(doubles), first.theta))
     single_grid = analyze(PAPER.with_kind("single_roller"), verify=False).theta
     assert not np.all(np.isin(doubles[0], single_grid))
+
+
+@pytest.mark.parametrize("kind", list(FollowerKind))
+def test_a_follower_uses_exactly_the_fields_it_says(kind):
+    """FollowerKind.uses (the app greys out, and Explore counts once, what a follower
+    does not use): a field it does not use leaves the analysis as it was, bit for bit;
+    a field it uses changes the cam or its forces."""
+    base = PAPER.with_kind(kind).model_dump()
+    changes = {
+        "offset_mm": 25.0,
+        "single_offset_mm": 4.0,
+        "roller_radius_mm": 14.0,
+        "face_radius_mm": -300.0,
+    }
+    a0 = analyze(Design.model_validate(base), verify=False)
+    for name, value in changes.items():
+        data = PAPER.with_kind(kind).model_dump()
+        data["follower"][name] = value
+        a = analyze(Design.model_validate(data), verify=False)
+        same = (
+            a.profile.points.shape == a0.profile.points.shape
+            and np.array_equal(a.profile.points, a0.profile.points)
+            and np.array_equal(a.guide.FN, a0.guide.FN)
+            and np.array_equal(a.stress, a0.stress, equal_nan=True)
+        )
+        assert same == (not kind.uses(name)), (kind, name)

@@ -260,3 +260,38 @@ def test_cli_fast_sweep(tmp_path):
     rows = rows_of(out)
     assert len(rows) == 7 and not any(r["profile_checked"] for r in rows)
     assert [r["grid.cam.base_radius_mm"] for r in rows] == [60, 65, 70, 75, 80, 85, 90]
+
+
+def test_explore_counts_a_design_swept_over_a_field_it_ignores_once():
+    """Sweeping the double follower's offset e over a single follower repeats one design:
+    ``distinct`` keeps the first of them, the Pareto front lists it once, and the map
+    says which field a follower does not use."""
+    from camcore.explore import distinct, explore_png, ignored_fields, pareto
+
+    spec = sweep.parse_spec(
+        json.dumps(
+            {
+                "base": {"preset": "paper_example"},
+                "grid": {
+                    "follower.kind": ["single_concave", "double_concave"],
+                    "cam.base_radius_mm": [80, 90],
+                    "follower.offset_mm": [20, 30],
+                },
+            }
+        )
+    )
+    rows = sweep.run_chunk(spec.base, list(spec.points()), fast=True)
+    first = distinct(rows)
+    assert len(rows) == 8 and int(first.sum()) == 6  # 2 single (e ignored) + 4 double
+    singles = [r for r in rows if r["grid.follower.kind"] == "single_concave"]
+    assert all(ignored_fields(r) == ["follower.offset_mm"] for r in singles)
+    names = ["cam_size", "stress"]
+    front = pareto(rows, names)
+    keys = [(rows[i]["grid.follower.kind"], rows[i]["grid.cam.base_radius_mm"]) for i in front]
+    single = [k for k in keys if k[0] == "single_concave"]
+    assert single and len(single) == len(set(single))  # each single design once
+    assert all(first[i] for i in front)
+    png = explore_png(
+        rows, ("cam.base_radius_mm", "r_b"), ("follower.offset_mm", "e"), names, front
+    )
+    assert png.startswith(b"\x89PNG")
