@@ -23,7 +23,7 @@ from camcore.explore import FIGURES, distinct, pareto
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError
 from camcore.sweep import design_at
 
-from .controls import get_path
+from .controls import SPECS, get_path
 from .panels import esc
 
 # label -> design path of the fields a sweep may vary (numbers only)
@@ -93,6 +93,7 @@ class ExplorePanel:
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
         self._offers: dict[str, dict] = {}  # dropdown label -> grid point
+        self._armed: str | None = None  # the offer a second click loads despite edits
         self._base: dict = {}
 
     def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
@@ -188,7 +189,7 @@ class ExplorePanel:
             pars = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in point.values())
             offers[f"{n}. {pars} → {figs}"] = point
         with self._lock:
-            self._base, self._offers = base, offers
+            self._base, self._offers, self._armed = base, offers, None
             self.front_dd.options = tuple(offers) or ("–",)
             self.front_dd.value = self.front_dd.options[0]
             self.load_btn.disabled = not offers
@@ -210,20 +211,50 @@ class ExplorePanel:
         )
 
     def load(self, label: str) -> None:
-        """Load a design of the front (the dropdown's value; anything else is ignored)."""
+        """Load a design of the front (the dropdown's value; anything else is ignored).
+
+        The sweep ran around the design on screen when it started; if that design was
+        edited since, loading replaces those edits: the first click says which fields
+        would change, a second click on the same design loads it."""
         with self._lock:
             point, base = self._offers.get(label) if isinstance(label, str) else None, self._base
-        if point is None or self._load is None:
+        if point is None or self._load is None or self._design is None:
             return
         try:
             design = design_at(base, point)
         except DesignError as exc:
             self.progress.content = f"✖ {esc(exc)}"
             return
+        edits = edited_since(Design.model_validate(base), self._design(), point)
+        if edits and self._armed != label:
+            self._armed = label
+            self.progress.content = (
+                "⚠ This sweep ran on an earlier design. Loading its design replaces your "
+                f"later edits ({esc(', '.join(edits))}): click *Load this design* again "
+                "to load it, or run the sweep again."
+            )
+            return
+        self._armed = None
         self._load(design)
+        number = label.split(" ", 1)[0].rstrip(".")
+        self.progress.content = f"Loaded design {esc(number)} of the Pareto front."
 
     def close(self) -> None:
         self._cancel.set()
+
+
+def edited_since(base: Design, now: Design, point: dict, most: int = 4) -> list[str]:
+    """How the design ``now`` differs from the sweep's ``base`` outside the swept fields
+    (``point``'s paths), in the controls' words ("Lift h [mm]: 15 → 25"), up to
+    ``most`` of them; a program edited as segments is named as such."""
+    out = []
+    for spec in SPECS:
+        a, b = get_path(base, spec.path), get_path(now, spec.path)
+        if spec.path not in point and a != b:
+            out.append(f"{spec.label}: {a} → {b}")
+    if base.motion.classic is None and base.motion.segments != now.motion.segments:
+        out.append("the program's segments")
+    return out[:most] + ([f"{len(out) - most} more"] if len(out) > most else [])
 
 
 def _finite_pair(value) -> tuple[float, float]:

@@ -648,6 +648,16 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     e.front_dd.value = offers[-1]
     e.load_btn.value = True
     assert wait_for(lambda: s.design.cam.base_radius_mm in (70.0, 90.0), 10.0)
+    assert "Loaded design" in e.progress.content
+    # an edit after the sweep: loading would undo it, so the first click says so
+    s.ui.controls["motion.lift_mm"].value = 25.0
+    e.front_dd.value = offers[0]
+    e.load_btn.value = True
+    assert "earlier design" in e.progress.content
+    assert "Lift h \\[mm\\]: 15.0 → 25.0" in e.progress.content  # (markdown-escaped)
+    assert s.design.motion.lift_mm == 25.0
+    e.load_btn.value = True  # the second click loads it
+    assert wait_for(lambda: s.design.motion.lift_mm == 15.0, 10.0)
     e.load("not an offer")  # a hostile value is ignored
     e.x.value = e.y.value
     e.run_btn.value = True
