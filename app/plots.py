@@ -368,9 +368,16 @@ def curve_specs(a) -> list[dict]:
             codes=set(),
         ),
         _spec(
-            "Cam wear per 10⁶ cycles (Archard), at the point each face touches",
+            "Cam wear per 10⁶ cycles (Archard): each face's passes, and the cam point's "
+            "total (both faces; its peak is Key numbers' wear max)",
             [("um", "wear [µm]")],
             [
+                {
+                    "label": "total at the touched point [µm]",
+                    "scale": "um",
+                    "stroke": COLORS[0],
+                    "fn": lambda a: to_um_per_mcycle(wear.total_at_contacts(a)),
+                },
                 {
                     "label": "face 1 [µm]",
                     "scale": "um",

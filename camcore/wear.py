@@ -83,19 +83,33 @@ def pitting_life_cycles(a) -> float:
     return float(wm.pitting_reference_cycles * (allow / s_max) ** wm.pitting_exponent)
 
 
+def total_at_contacts(a, bins: int = 720) -> np.ndarray:
+    """Per cam angle, the cam's total wear depth per cycle [m] (``along_profile``: all
+    faces' passes) at the cam point a face touches there, the larger where two touch;
+    0 where none does. Its maximum over the angles is ``along_profile``'s maximum (every
+    worn bin is one that a face touches), so a curve of it reaches the reported peak."""
+    _, total = along_profile(a, bins)
+    return np.where(a.in_contact, total[_bins(a, bins)], 0.0).max(axis=0)
+
+
+def _bins(a, bins: int) -> np.ndarray:
+    """(F, N) the bin of the cam point each face touches, by its polar angle."""
+    phi = np.mod(np.arctan2(a.point_body[..., 1], a.point_body[..., 0]), 2 * np.pi)
+    edges = np.linspace(0.0, 2 * np.pi, bins + 1)
+    return np.minimum(np.searchsorted(edges, phi, side="right") - 1, bins - 1)
+
+
 def along_profile(a, bins: int = 720) -> tuple[np.ndarray, np.ndarray]:
     """Wear depth per cycle [m] at the cam's surface, by polar angle of the cam point in
     the cam frame: (polar angles [rad] of the bin centres, depth). Each face's passes are
     added where they land, so a dwell arc that both faces of a double follower slide on
     counts both. The depth of a bin is the largest of the passes that land in it."""
-    h = depth_per_pass(a)
-    phi = np.mod(np.arctan2(a.point_body[..., 1], a.point_body[..., 0]), 2 * np.pi)
+    h, where = depth_per_pass(a), _bins(a, bins)
     edges = np.linspace(0.0, 2 * np.pi, bins + 1)
     out = np.zeros(bins)
     for f in range(h.shape[0]):
         on = a.in_contact[f]
-        idx = np.minimum(np.searchsorted(edges, phi[f][on], side="right") - 1, bins - 1)
         per = np.zeros(bins)
-        np.maximum.at(per, idx, h[f][on])
+        np.maximum.at(per, where[f][on], h[f][on])
         out += per
     return 0.5 * (edges[1:] + edges[:-1]), out

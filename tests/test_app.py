@@ -705,3 +705,14 @@ def test_hostile_animation_speed_is_ignored(tab):
         assert tab.speed == 90.0
     tab._set_speed("fast")
     assert tab.speed == 90.0
+
+
+def test_the_wear_curve_reaches_the_wear_maximum_of_the_key_numbers(tab):
+    """The wear plot shows the cam point's total (both faces' passes) beside each face's
+    pass: its peak is the maximum Key numbers report (a reviewer saw 0.11 on the plot
+    and 0.139 in the numbers)."""
+    s = tab
+    plot = next(c for c in s.ui.curves if c.handle.title.startswith("Cam wear"))
+    total = np.nanmax(plot.handle.data[1])
+    assert "0.1391" in s.ui.summary_md.content
+    assert total == pytest.approx(0.13914, rel=1e-4)

@@ -268,6 +268,12 @@ def test_rollers_roll_and_passes_add_up_along_the_profile():
     phi, depth = wear.along_profile(a, bins=360)
     assert depth.max() > h.max()  # two passes on the arc beat any single pass
     assert depth.max() <= h[0].max() + h[1].max() + 1e-30
+    # the curve of the total at the touched point (the app's wear plot) reaches the
+    # reported peak, and is never below a single pass where that face touches
+    total = wear.total_at_contacts(a, bins=360)
+    assert total.max() == depth.max()
+    assert np.all(total >= np.where(a.in_contact, h, 0.0).max(axis=0))
+    assert np.all(total[~a.in_contact.any(axis=0)] == 0.0)
 
 
 def test_pitting_life_follows_the_stress_life_curve():
