@@ -253,11 +253,28 @@ def _contact_stress(a) -> list[Violation]:
             "Eq. 42",
             f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = {top * sf / 1e6:.1f} MPa "
             f"exceeds the allowable {allow / 1e6:g} MPa by {(top * sf - allow) / 1e6:.1f} MPa "
-            f"at {_where(ranges)}",
+            f"at {_where(ranges)}{_near_cusp(a, stress, top, allow)}",
             ranges,
             (top * sf - allow) / 1e6,
         )
     ]
+
+
+def _near_cusp(a, stress: np.ndarray, top: float, allow: float) -> str:
+    """Where the stress is many times the allowable because the cam's radius of
+    curvature nears zero (a cusp: Eq. 42 grows without bound as rho -> 0), say so: the
+    number is the formula's, not a stress the part could carry, and the curvature limit
+    (Eqs. 21-22) is what to fix."""
+    if top < 10 * allow:
+        return ""
+    f, k = np.unravel_index(int(np.argmax(stress)), stress.shape)
+    rho = abs(float(a.rho[f, k]))
+    if not rho < 0.01 * a.design.cam.base_radius_mm * 1e-3:
+        return ""
+    return (
+        f" (there the cam's radius of curvature is only {rho * 1e3:.3g} mm, Eq. 21: a near "
+        "cusp, where Eq. 42 grows without bound; fix the curvature first)"
+    )
 
 
 def _dwell_arcs(a) -> list[Violation]:

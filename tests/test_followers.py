@@ -265,3 +265,19 @@ def test_a_follower_uses_exactly_the_fields_it_says(kind):
             and np.array_equal(a.stress, a0.stress, equal_nan=True)
         )
         assert same == (not kind.uses(name)), (kind, name)
+
+
+def test_a_stress_from_a_near_cusp_says_so():
+    """A cam whose radius of curvature nears zero gets Hertz stresses of millions of MPa
+    from Eq. 42: the message says it comes from the curvature (Eq. 21), which is what to
+    fix; a stress that is simply too high (a roller against a low allowable) does not."""
+    data = PAPER.model_dump()
+    data["cam"]["base_radius_mm"] = 20.0
+    a = analyze(Design.model_validate(data), verify=False)
+    (v,) = [v for v in a.violations if v.code == "contact_stress"]
+    assert "near cusp" in v.message and "Eq. 21" in v.message
+    data = PAPER.with_kind("double_roller").model_dump()
+    data["limits"]["allowable_contact_stress_MPa"] = 10.0
+    a = analyze(Design.model_validate(data), verify=False)
+    (v,) = [v for v in a.violations if v.code == "contact_stress"]
+    assert v.amount > 10 * 10.0 and "cusp" not in v.message
