@@ -193,15 +193,17 @@ def _curvature_rules(a) -> list[Violation]:
         worst_rho = float(finite.max()) if finite.size else math.inf
         ranges = runs_deg(a.theta, flat.any(0), extra)
         how = (
-            f"rho reaches {to_mm(worst_rho):.4g} mm"
+            f"its radius of curvature reaches {to_mm(worst_rho):.4g} mm"
             if math.isfinite(worst_rho)
-            else "the cam is straight or concave"
+            else "it is straight or concave"
         )
         out.append(
             Violation(
                 "curvature_face",
                 "Eq. 22",
-                f"{how}, not below |r_f| = {to_mm(rf):g} mm, at {_where(ranges)}",
+                f"the cam is flatter than the concave face: {how}, where it must stay "
+                f"below |r_f| = {to_mm(rf):g} mm (else the face bears on its edges, not on "
+                f"one line of contact) at {_where(ranges)}",
                 ranges,
                 to_mm(worst_rho - rf) if math.isfinite(worst_rho) else to_mm(rf),
             )
