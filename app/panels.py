@@ -77,18 +77,49 @@ def esc(text: object) -> str:
     return _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
 
 
+# The status box stays at the top of the panel while the panel scrolls (its wrapper is
+# made sticky; viser nests it in a box with overflow: hidden, which would make that box
+# the one it sticks in, so the boxes around it clip instead: the same look, no scroll
+# container), and scrolls inside itself past a third of the window: a long list of
+# violations never hides the controls.
+STATUS_CSS = (
+    "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important}"
+    "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff;"
+    "overflow:visible!important}"
+    "#cam-status{max-height:32vh;overflow-y:auto}</style>"
+)
+
+
 def status_html(
     error: str | None,
     violations,
     lift_error: float | None,
     verified: bool,
     mesh_error: str | None = None,
+    file_error: str | None = None,
 ) -> str:
-    """The always-visible panel: input errors (red), limit violations (amber), or OK.
+    """The always-visible panel (STATUS_CSS): input errors (red), limit violations
+    (amber), or OK; a file that could not be opened (``file_error``) above them.
 
     With an input error the panel says so and nothing green: the limits shown below it
     are those of the last valid design, which stays on screen (and in the downloads'
-    refusal) until the input is fixed."""
+    refusal) until the input is fixed. A file that could not be opened changes nothing:
+    the design on screen is still the one the controls describe."""
+    file_box = (
+        _BOX.format(
+            bg="#fde2e2",
+            fg="#d62728",
+            body="<b>✖ Could not open the file — the design on screen is unchanged</b>"
+            f"<br>{html.escape(file_error)}",
+        )
+        if file_error
+        else ""
+    )
+    boxes = _status_boxes(error, violations, lift_error, verified, mesh_error)
+    return f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}</div>"
+
+
+def _status_boxes(error, violations, lift_error, verified, mesh_error) -> str:
     parts = []
     if error:
         items = "".join(

@@ -257,11 +257,12 @@ class Session:
     def _show_status(self) -> None:
         a = self.analysis
         self.ui.status.content = status_html(
-            self.error or self.file_error,
+            self.error,
             list(a.violations),
             a.lift_error,
             self.verified,
             self.view.mesh_error,
+            self.file_error,
         )
 
     def _show_summary(self, s: dict) -> None:

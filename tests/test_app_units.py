@@ -43,6 +43,11 @@ def test_status_panel_states():
     bad = panels.status_html("cam.base_radius_mm: <script>", [], None, False)
     assert "Invalid input" in bad and "<script>" not in bad and "All design" not in bad
     assert "No solid" in panels.status_html(None, [], None, True, "self-intersecting")
+    # a file that could not be opened: said above the design's own (unchanged) state,
+    # with no refusal of downloads
+    f = panels.status_html(None, [], 1e-7, True, file_error="file <b>x</b>.json: not JSON")
+    assert "Could not open" in f and "All design limits met" in f
+    assert "<b>x</b>" not in f and "refused" not in f
 
 
 def test_segment_sums_flag_a_program_that_does_not_close():

@@ -219,6 +219,12 @@ def test_trust_in_the_browser(tmp_path):
             page.wait_for_timeout(1500)  # the browser's redraw of every control
             assert session.design.motion.lift_mm == 70.0
             assert _field(page, "Lift h").input_value() == "70"
+            # the status box stays in sight while the panel scrolls to a lower control
+            top = page.locator("#cam-status").bounding_box()
+            _field(page, "Cutter diameter").scroll_into_view_if_needed()
+            page.wait_for_timeout(500)
+            box = page.locator("#cam-status").bounding_box()
+            assert box is not None and top is not None and 0 <= box["y"] <= top["y"] + 5
 
             # invalid input: the download is refused and says why
             session.ui.controls["follower.face_radius_mm"].value = -70.0  # |r_f| < r_b
