@@ -256,8 +256,16 @@ def where_markdown(a, k: int, events: list[str]) -> str:
         )
     faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
     seg = SEGMENT_NAMES[int(a.prog.segment[k])]
-    if a.prog.index[k] != a.prog.index[k - 1]:  # a boundary: say both (k - 1 wraps)
-        seg = f"{SEGMENT_NAMES[int(a.prog.segment[k - 1])]} ends, {seg} begins"
+    j, n = int(a.prog.index[k]), len(a.segments)
+
+    def here(angle: float) -> bool:
+        return abs(math.remainder(angle - a.theta[k], 2 * math.pi)) < 1e-9
+
+    # a boundary belongs to one of its segments (motion.segment_index): say both
+    if here(a.segments[j].start):
+        seg = f"{SEGMENT_NAMES[a.segments[(j - 1) % n].code]} ends, {seg} begins"
+    elif here(a.segments[j].end):
+        seg = f"{seg} ends, {SEGMENT_NAMES[a.segments[(j + 1) % n].code]} begins"
     return (
         f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
         f"In contact: **{', '.join(faces) if faces else 'none'}** · "

@@ -32,6 +32,16 @@ def test_where_says_station_event_faces_and_segment_boundary(paper_analysis):
     assert "at station 2" in text and "In contact:" in text
     assert "&lt;b&gt;" in text  # event text escaped (viser renders raw HTML)
     assert "low dwell ends, rise begins" in panels.where_markdown(a, 0, [])
+
+    def seg_at(deg):
+        line = panels.where_markdown(a, panels.nearest_index(a.theta, deg), [])
+        return line.split(" · ")[1]
+
+    # a boundary is said at its own angle, whichever segment it belongs to, and only there
+    assert seg_at(100.0) == "rise ends, high dwell begins"  # (it belongs to the rise)
+    assert seg_at(100.1) == "high dwell" and seg_at(169.9) == "high dwell"
+    assert seg_at(170.0) == "high dwell ends, fall begins"  # (it belongs to the fall)
+    assert seg_at(300.0) == "fall ends, low dwell begins"
     mid = panels.nearest_index(a.theta, 30.0)
     assert "between stations" in panels.where_markdown(a, mid, [])
 
