@@ -21,7 +21,7 @@ def table_markdown(results: dict) -> str:
         return "–" if x is None else f"{x:.{nd}f}"
 
     lines = [
-        "| Follower | F_N high dwell, both faces touching [N] | paper's Table 1 [N] "
+        "| Follower | F_N high dwell [N] (a double: while both faces touch) | paper's Table 1 [N] "
         "| F_N max cycle [N] | σ_H max [MPa] "
         "| wear max [µm/10⁶ cycles] | limits |",
         "|---|---|---|---|---|---|---|",

@@ -182,6 +182,16 @@ def _mesh_box(mesh_error: str | None) -> str:
     )
 
 
+_ASCII_UNITS = ((" um ", " µm "), (" N m", " N·m"), (" kg m2", " kg·m²"))
+
+
+def _typeset_units(text: str) -> str:
+    """The text report's ASCII units (a terminal's) as the curves and Compare write them."""
+    for a, b in _ASCII_UNITS:
+        text = text.replace(a, b)
+    return text
+
+
 def summary_markdown(s: dict) -> str:
     """Key numbers of camcore.report.summary as a compact table."""
 
@@ -212,7 +222,7 @@ def summary_markdown(s: dict) -> str:
         ),
         ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / {f(s['guide_force_max_N']['F2'])} N"),
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
-        *machine_rows(s),
+        *((k, _typeset_units(v)) for k, v in machine_rows(s)),
         (
             "Contact half-width max",
             f"{f(s['contact_half_width_max_mm'], 4)} mm"

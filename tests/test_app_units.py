@@ -180,3 +180,12 @@ def test_concave_pad_mesh_is_closed_and_outward_either_way_round():
         # outward: the signed volume is the ring sector's, 0.5 (R^2 - r^2) |a1 - a0| w
         expect = 0.5 * (0.256**2 - 0.25**2) * abs(a1 - a0) * 0.015
         assert m.volume == pytest.approx(expect, rel=1e-3)
+
+
+def test_key_numbers_typeset_units_as_the_curves_do(paper_analysis):
+    """The text report's ASCII units (um, N m, kg m2) read as the curves write them."""
+    from camcore.report import summary
+
+    text = panels.summary_markdown(summary(paper_analysis))
+    assert "µm per million" in text and "N·m" in text and "kg·m²" in text
+    assert " um " not in text and " N m " not in text
