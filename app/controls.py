@@ -22,7 +22,7 @@ class Spec:
 
     path: str
     label: str
-    widget: str  # slider | number | dropdown | checkbox
+    widget: str  # slider | number | dropdown | checkbox | text
     lo: float | None = None
     hi: float | None = None
     step: float | None = None
@@ -38,6 +38,18 @@ KINDS = tuple(k.value for k in FollowerKind)
 
 # folder title, expanded?, specs
 FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
+    (
+        "Name",
+        False,
+        (
+            Spec(
+                "name",
+                "Design name",
+                "text",
+                hint="names the downloads and the report (up to 200 characters)",
+            ),
+        ),
+    ),
     (
         "Motion program",
         True,
@@ -237,6 +249,9 @@ def merged(base: Design, values: dict[str, object]) -> dict:
     data = base.model_dump(mode="json")
     classic = base.motion.classic is not None
     for path, v in values.items():
+        if "." not in path:  # a top-level field (the name)
+            data[path] = v
+            continue
         group, key = path.split(".")
         if group == "motion" and not classic:
             continue

@@ -717,3 +717,20 @@ def test_the_wear_curve_reaches_the_wear_maximum_of_the_key_numbers(tab):
     total = np.nanmax(plot.handle.data[1])
     assert "0.1391" in s.ui.summary_md.content
     assert total == pytest.approx(0.13914, rel=1e-4)
+
+
+def test_the_design_name_is_edited_in_the_tab_and_names_the_downloads(tab, downloads):
+    """An edited design can be named (a preset's name no longer labels every edit of
+    it); the name is the user's text: escaped where shown, made safe in file names,
+    and bounded by the model (200 characters)."""
+    s = tab
+    name = s.ui.controls["name"]
+    assert name.value == s.design.name
+    name.value = "Press <b>cam</b> 3"
+    assert s.design.name == "Press <b>cam</b> 3" and s.error is None
+    s.ui.download_btns["stl"].value = True
+    assert downloads[-1][0].startswith("press_b_cam_b_3-")  # panels.slug
+    assert "<b>cam</b>" not in s.ui.files_md.content
+    name.value = "x" * 201
+    assert s.error is not None and "name" in s.ui.status.content
+    assert s.design.name == "Press <b>cam</b> 3"
