@@ -570,9 +570,10 @@ def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
     Front: straight along -z with a long lens, the whole mechanism in frame. Contact
     close-up: the same lens on the contact region, following the follower's lift (call
     again as the cam turns). 3D: the perspective view from above and to the side."""
-    d = a.design
-    top = a.geo.r_b + a.geo.h + from_mm(d.dynamics.overhang_mm + d.dynamics.guide_length_mm)
-    bottom = -a.geo.r_b
+    # in frame: the follower's highest part at full lift (the stem's end) and the cam's
+    # widest radius below its axis (any point of the cam passes there as it turns)
+    top = max(float(m.bounds[1, 1]) for m, _ in follower_parts(a).values()) + a.geo.h
+    bottom = -float(np.hypot(*a.profile.points.T).max())
     H = top - bottom
     cy = (top + bottom) / 2
     if view == "3D":
