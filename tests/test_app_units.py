@@ -189,3 +189,19 @@ def test_key_numbers_typeset_units_as_the_curves_do(paper_analysis):
     text = panels.summary_markdown(summary(paper_analysis))
     assert "µm per million" in text and "N·m" in text and "kg·m²" in text
     assert " um " not in text and " N m " not in text
+
+
+@pytest.mark.parametrize("preset", ["paper_example", "valve_lift_roller"])
+def test_the_front_view_frames_the_whole_mechanism(preset):
+    """The Front view's lens sees from below the cam's widest radius to above the
+    follower's stem at full lift (a reviewer saw both cut off)."""
+    from app.scene import camera_for, follower_parts
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+
+    a = analyze(load_preset(preset), verify=False)
+    pos, look, fov = camera_for("Front", a, 0)
+    half = pos[2] * math.tan(fov / 2)  # half the visible height at the cam's plane
+    stem_top = max(m.bounds[1, 1] for m, _ in follower_parts(a).values()) + a.prog.S.max()
+    cam_bottom = -np.hypot(*a.profile.points.T).max()
+    assert look[1] + half >= stem_top and look[1] - half <= cam_bottom
