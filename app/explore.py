@@ -71,9 +71,9 @@ class ExplorePanel:
             "design)."
         )
         self.x = gui.add_dropdown("x field", labels, initial_value=labels[0])
-        self.x_range = gui.add_vector2("x from, to", (60.0, 110.0), step=0.5)
+        self.x_range = gui.add_vector2(_range_label("x", labels[0]), (60.0, 110.0), step=0.5)
         self.y = gui.add_dropdown("y field", labels, initial_value=labels[1])
-        self.y_range = gui.add_vector2("y from, to", (20.0, 40.0), step=0.5)
+        self.y_range = gui.add_vector2(_range_label("y", labels[1]), (20.0, 40.0), step=0.5)
         self.steps = gui.add_slider("Steps per field", 2, MAX_STEPS, 1, 8)
         self.all_kinds = gui.add_checkbox("All four followers (the paper's claim)", True)
         figs = tuple(FIGURE_LABELS)
@@ -101,14 +101,16 @@ class ExplorePanel:
         self.run_btn.on_click(lambda _: self.start())
         self.cancel_btn.on_click(lambda _: self._cancel.set())
         self.load_btn.on_click(lambda _: self.load(self.front_dd.value))
-        self.x.on_update(lambda _: self._suggest(self.x, self.x_range))
-        self.y.on_update(lambda _: self._suggest(self.y, self.y_range))
+        self.x.on_update(lambda _: self._suggest(self.x, self.x_range, "x"))
+        self.y.on_update(lambda _: self._suggest(self.y, self.y_range, "y"))
 
-    def _suggest(self, dd, rng) -> None:
-        """A range around the design's value of a newly chosen field (±30 %)."""
+    def _suggest(self, dd, rng, axis: str) -> None:
+        """A range around the design's value of a newly chosen field (±30 %), labelled
+        with the field's unit."""
         path = PARAMETERS.get(dd.value)
         if path is None or self._design is None:
             return
+        rng.label = _range_label(axis, dd.value)
         v = get_path(self._design(), path)
         if isinstance(v, int | float):
             lo, hi = sorted((0.7 * v, 1.3 * v)) if v else (0.0, 10.0)
@@ -255,6 +257,12 @@ def edited_since(base: Design, now: Design, point: dict, most: int = 4) -> list[
     if base.motion.classic is None and base.motion.segments != now.motion.segments:
         out.append("the program's segments")
     return out[:most] + ([f"{len(out) - most} more"] if len(out) > most else [])
+
+
+def _range_label(axis: str, field_label: str) -> str:
+    """ "x from, to [mm]": the range's label with the unit of its field's label."""
+    unit = field_label[field_label.rfind("[") :] if field_label.endswith("]") else ""
+    return f"{axis} from, to {unit}".rstrip()
 
 
 def _finite_pair(value) -> tuple[float, float]:

@@ -102,7 +102,7 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     h["quick_md"] = gui.add_markdown("")  # that button's answer (sent, or why not)
     with gui.add_folder("Animation", expand_by_default=True):
         h["play_btn"] = gui.add_button("▶ Play", color="green")
-        h["speed_slider"] = gui.add_slider("Speed [°/s]", 5, 360, 5, speed_deg_s)
+        h["speed_slider"] = gui.add_slider("Play speed [°/s]", 5, 360, 5, speed_deg_s)
         h["angle_slider"] = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
         h["stations_btn"] = gui.add_button_group("Go to station", STATION_NAMES)
         h["where_md"] = gui.add_markdown("")

@@ -631,6 +631,11 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     s, e = tab, tab.ui.explore
     e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
     e.x_range.value, e.y_range.value = (70.0, 90.0), (25.0, 35.0)
+    assert e.y_range.label == "y from, to [mm]"
+    e.x.value = "Rise β_r [°]"
+    assert e.x_range.label == "x from, to [°]"  # the range says its field's unit
+    e.x.value = "Base radius r_b [mm]"
+    e.x_range.value = (70.0, 90.0)
     e.steps.value = 2
     e.all_kinds.value = True
     e.fig_a.value, e.fig_b.value = (
