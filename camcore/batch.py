@@ -577,7 +577,7 @@ def _grid_figures(bt: Batch, loc) -> list[dict]:
             "contact_stress_allowable_MPa": allowable_contact_stress_MPa(d0),
             "contact_stress_safety_factor": d0.limits.contact_stress_safety_factor,
             "total_load_high_dwell_N": ft_h,
-            "flat_face_width_min_mm": wid,
+            "flat_face_width_min_mm": None if wid is None else float(wid),
         }
         for pa_r, pa_f, rho_r, rho_f, fn, fn_h, fn_2, f1, f2, s, s_h, b, ft_h, wid, has_high in cols
     ]

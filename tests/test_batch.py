@@ -252,3 +252,23 @@ def test_explore_reads_the_same_map_and_front_from_batched_rows():
     assert any(sweep.first_violation(r) for r in fast)  # the grid breaks limits too
     for pair in (["cam_size", "stress"], ["pressure_angle", "torque"]):
         assert list(pareto(fast, pair)) == list(pareto(full, pair))
+
+
+def test_fast_rows_hold_plain_python_values():
+    """Rows are data for JSON and Parquet: plain floats, ints, strings, booleans or None,
+    as the single analysis' rows are (a numpy float slipped into one figure)."""
+    from camcore import sweep
+
+    spec = sweep.parse_spec(
+        json.dumps(
+            {
+                "base": {"preset": "paper_example"},
+                "grid": {"follower.kind": ["flat_face", "double_concave"]},
+            }
+        )
+    )
+    for r in sweep.run_chunk(spec.base, list(spec.points()), fast=True):
+        bad = {
+            k: type(v) for k, v in r.items() if type(v) not in (float, int, str, bool, type(None))
+        }
+        assert not bad, bad
