@@ -152,6 +152,10 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {to_mm(bound):.3g} mm of the exact offset, climb, clockwise"),
+        _comment(
+            f"one pass, full depth, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"
+        ),
+        _comment("check them, and set the spindle speed: M3 carries no S word"),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
         f"G0 X{lead[0]:.4f} Y{lead[1]:.4f}",

@@ -100,3 +100,15 @@ def test_design_name_cannot_break_out_of_a_gcode_comment():
             assert line.count("(") == 1 and line.count(")") == 1 and line.endswith(")")
     code = [line for line in text.splitlines() if not line.startswith("(")]
     assert not any("Z-50" in line for line in code)  # the name stays inside its comment
+
+
+def test_gcode_header_says_what_the_operator_must_set():
+    """The feeds are fixed defaults and the spindle speed is the operator's: the header
+    says so, whole (a comment is cut at 80 characters)."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.toolpath import gcode
+
+    head = gcode(analyze(load_preset("paper_example"), verify=False)).splitlines()[:8]
+    assert "(one pass, full depth, feed 200 plunge 50 mm/min)" in head
+    assert "(check them, and set the spindle speed: M3 carries no S word)" in head
