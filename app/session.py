@@ -504,10 +504,13 @@ class Session:
         with self.lock:
             if self.closed.is_set():
                 return
-            slow = n % 3 == 0  # angle slider and label at 10 Hz
+            slow = n % 3 == 0  # angle slider and the line under it at 10 Hz, together
             self._goto(self.theta_deg + self.speed * dt, markers=False, slider=slow)
+            k = self._index()
             if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
-                self._show_markers(self._index())
+                self._show_markers(k)
+            elif slow:
+                self.ui.where_md.content = where_markdown(self.analysis, k, self.station_events)
 
     # --- view ----------------------------------------------------------------------
     def show_stations_diagram(self) -> None:

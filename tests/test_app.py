@@ -739,3 +739,13 @@ def test_the_design_name_is_edited_in_the_tab_and_names_the_downloads(tab, downl
     name.value = "x" * 201
     assert s.error is not None and "name" in s.ui.status.content
     assert s.design.name == "Press <b>cam</b> 3"
+
+
+def test_while_playing_the_slider_and_the_line_under_it_agree(tab):
+    """The animation updates the angle slider and the text under it in the same frames
+    (a reviewer saw 147.7 on the slider beside 'θ = 143.1°')."""
+    s = tab
+    for n in range(1, 30):  # frames driven by hand, without the ticker
+        s.frame(0.033, n)
+        if n % 3 == 0:
+            assert f"θ = {s.ui.angle_slider.value:.1f}°" in s.ui.where_md.content, n
