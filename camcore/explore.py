@@ -134,7 +134,7 @@ def explore_png(
     n = max(1, len(kinds))
     cols = min(n, 2)
     maps = math.ceil(n / cols)
-    fig = MplFigure(figsize=(width_px / 100, 2.6 * maps + 3.6), dpi=100, layout="constrained")
+    fig = MplFigure(figsize=(width_px / 100, 3.0 * maps + 4.2), dpi=100, layout="constrained")
     grid = fig.add_gridspec(maps + 1, cols, height_ratios=[1.0] * maps + [1.35])
     xs = np.array([float(r.get(f"grid.{x[0]}", np.nan)) for r in rows])
     ys = np.array([float(r.get(f"grid.{y[0]}", np.nan)) for r in rows])
@@ -150,20 +150,20 @@ def explore_png(
             edgecolors="none",
         )
         unused = {p for r in rows if _kind(r) == kind for p in ignored_fields(r)}
-        note = [lab for path, lab in (x, y) if path in unused]
+        note = [axis for axis, (path, _) in zip("xy", (x, y), strict=True) if path in unused]
         title = _label(kind) + (f" (does not use {' or '.join(note)})" if note else "")
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel(x[1], fontsize=8)
-        ax.set_ylabel(y[1], fontsize=8)
-        ax.tick_params(labelsize=7)
+        ax.set_title(title, fontsize=12)
+        ax.set_xlabel(x[1], fontsize=11)
+        ax.set_ylabel(y[1], fontsize=11)
+        ax.tick_params(labelsize=10)
     handles = [_patch(cmap[c], c) for c in legend]
     fig.legend(
         handles=handles,
         loc="outside upper center",
         ncols=min(4, len(handles)),
-        fontsize=7,
+        fontsize=10,
         title="first limit broken",
-        title_fontsize=7,
+        title_fontsize=10,
     )
     _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front)
     buf = io.BytesIO()
@@ -187,18 +187,25 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> 
         )
     if front.size:
         ax.plot(v[front, 0], v[front, 1], "k-", lw=0.8, alpha=0.6)
-        for n, i in enumerate(front[:30], start=1):
+        span = np.nanmax(v[front], axis=0) - np.nanmin(v[front], axis=0)
+        span = np.where(span > 0, span, 1.0)
+        shown: list[np.ndarray] = []  # numbers closer than 4 % of the front's extent
+        for n, i in enumerate(front[:30], start=1):  # would print over each other
+            at = v[i, :2] / span
+            if any(np.hypot(*(at - p)) < 0.04 for p in shown):
+                continue
+            shown.append(at)
             ax.annotate(
-                str(n), (v[i, 0], v[i, 1]), fontsize=7, xytext=(3, 3), textcoords="offset points"
+                str(n), (v[i, 0], v[i, 1]), fontsize=10, xytext=(3, 3), textcoords="offset points"
             )
-    ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=8)
-    ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=8)
+    ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=11)
+    ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=11)
     ax.set_title(
-        "valid designs; the numbered line is the Pareto front (smaller is better)", fontsize=9
+        "valid designs; the numbered line is the Pareto front (smaller is better)", fontsize=12
     )
-    ax.tick_params(labelsize=7)
+    ax.tick_params(labelsize=10)
     if valid.any():
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=10)
 
 
 def _try_kind(value: str) -> FollowerKind | None:
