@@ -31,10 +31,14 @@ class Spec:
     extra: dict = field(default_factory=dict)
     zero_is_none: bool = False  # an optional field: the control shows 0 for "not set"
     scale: float = 1.0  # design value = control value x scale (see control_value)
+    labels: tuple[str, ...] = ()  # a dropdown's words for its options, in their order
 
 
 LAWS = tuple(m.value for m in MotionLaw)
 KINDS = tuple(k.value for k in FollowerKind)
+_LAW_WORDS = {"poly_345": "3-4-5 polynomial", "poly_4567": "4-5-6-7 polynomial"}
+LAW_LABELS = tuple(_LAW_WORDS.get(v, v.replace("_", " ")) for v in LAWS)
+KIND_LABELS = tuple(FollowerKind(k).label for k in KINDS)
 
 # folder title, expanded?, specs
 FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
@@ -58,15 +62,15 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
             Spec("motion.rise_deg", "Rise β_r [°]", "slider", 5, 300, 1),
             Spec("motion.high_dwell_deg", "High dwell β_h [°]", "slider", 0, 300, 1),
             Spec("motion.fall_deg", "Fall β_f [°]", "slider", 5, 300, 1),
-            Spec("motion.rise_law", "Rise law", "dropdown", options=LAWS),
-            Spec("motion.fall_law", "Fall law", "dropdown", options=LAWS),
+            Spec("motion.rise_law", "Rise law", "dropdown", options=LAWS, labels=LAW_LABELS),
+            Spec("motion.fall_law", "Fall law", "dropdown", options=LAWS, labels=LAW_LABELS),
         ),
     ),
     (
         "Follower",
         True,
         (
-            Spec("follower.kind", "Kind", "dropdown", options=KINDS),
+            Spec("follower.kind", "Kind", "dropdown", options=KINDS, labels=KIND_LABELS),
             Spec(
                 "follower.offset_mm",
                 "Offset e [mm]",
@@ -205,6 +209,8 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
 SPECS: tuple[Spec, ...] = tuple(s for _, _, specs in FOLDERS for s in specs)
 NONE_AS_ZERO = frozenset(s.path for s in SPECS if s.zero_is_none)
 SCALES = {s.path: s.scale for s in SPECS if s.scale != 1.0}
+# a dropdown's word -> the design's value (a value itself is taken as it is)
+VALUE_OF = {s.path: dict(zip(s.labels, s.options, strict=True)) for s in SPECS if s.labels}
 
 
 def get_path(design: Design, path: str):
@@ -223,9 +229,12 @@ def get_path(design: Design, path: str):
 
 def control_value(design: Design, spec: Spec):
     """What the control of ``spec`` shows for ``design``: get_path in the control's
-    unit. A scaled control (a tiny quantity such as Archard's k, which the browser's
-    number box would round to 0 at its 7 decimals) shows 12 significant digits."""
+    unit, or a dropdown's word for it. A scaled control (a tiny quantity such as
+    Archard's k, which the browser's number box would round to 0 at its 7 decimals)
+    shows 12 significant digits."""
     v = get_path(design, spec.path)
+    if spec.labels and v in spec.options:
+        return spec.labels[spec.options.index(v)]
     if spec.scale == 1.0 or not isinstance(v, int | float):
         return v
     return float(f"{v / spec.scale:.12g}")
@@ -256,6 +265,8 @@ def merged(base: Design, values: dict[str, object]) -> dict:
         if group == "motion" and not classic:
             continue
         v = _unscaled(path, v, data[group].get(key))
+        if path in VALUE_OF and isinstance(v, str):
+            v = VALUE_OF[path].get(v, v)
         data[group][key] = None if path in NONE_AS_ZERO and v == 0 else v
     return data
 

@@ -152,7 +152,9 @@ def _control(gui, spec: controls.Spec, base: Design):
     if spec.widget == "number":
         return gui.add_number(spec.label, float(v), step=spec.step, hint=spec.hint)
     if spec.widget == "dropdown":
-        return gui.add_dropdown(spec.label, spec.options, initial_value=v, hint=spec.hint)
+        return gui.add_dropdown(
+            spec.label, spec.labels or spec.options, initial_value=v, hint=spec.hint
+        )
     if spec.widget == "text":
         return gui.add_text(spec.label, str(v), hint=spec.hint)
     return gui.add_checkbox(spec.label, bool(v), hint=spec.hint)

@@ -130,7 +130,7 @@ def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     fire_upload(s.ui.upload_btn, "valve.json", design_to_json(other).encode())
     assert s.design == other and s.error is None
     assert s.ui.controls["cam.base_radius_mm"].value == other.cam.base_radius_mm
-    assert s.ui.controls["follower.kind"].value == other.follower.kind.value
+    assert s.ui.controls["follower.kind"].value == other.follower.kind.label
 
 
 def test_a_file_that_cannot_be_opened_does_not_block_downloads(tab, downloads):
@@ -749,3 +749,22 @@ def test_while_playing_the_slider_and_the_line_under_it_agree(tab):
         s.frame(0.033, n)
         if n % 3 == 0:
             assert f"θ = {s.ui.angle_slider.value:.1f}°" in s.ui.where_md.content, n
+
+
+def test_dropdowns_show_words_and_take_them(tab):
+    """The follower and law dropdowns show words ("double concave", "3-4-5 polynomial"),
+    not identifiers; a word picks its value, an identifier is taken as it is, and
+    anything else a client sends is refused by the model with its reason."""
+    s = tab
+    kind, law = s.ui.controls["follower.kind"], s.ui.controls["motion.rise_law"]
+    assert kind.value == "double concave" and "single roller" in kind.options
+    assert "3-4-5 polynomial" in law.options and "poly_345" not in law.options
+    kind.value = "single roller"
+    assert s.design.follower.kind.value == "single_roller" and s.error is None
+    law.value = "3-4-5 polynomial"
+    assert s.design.motion.rise_law.value == "poly_345"
+    kind.value = "double_roller"  # an identifier still works (scripts, tests)
+    assert s.design.follower.kind.value == "double_roller"
+    kind.value = "<b>tri-roller</b>"
+    assert s.error is not None and "<b>tri-roller</b>" not in s.ui.status.content
+    assert s.design.follower.kind.value == "double_roller"

@@ -107,11 +107,11 @@ def test_app_in_headless_chromium(tmp_path):
             # change a control: follower kind -> single roller, and see the change
             kind_input = page.evaluate_handle(
                 "() => [...document.querySelectorAll('input')]"
-                ".find(e => e.value === 'double_concave')"
+                ".find(e => e.value === 'double concave')"
             ).as_element()
             assert kind_input is not None
             kind_input.click()
-            page.get_by_role("option", name="single_roller").click()
+            page.get_by_role("option", name="single roller").click()
             page.get_by_text("In contact: roller").first.wait_for()
             assert session.design.follower.kind.value == "single_roller"
             # a station button moves the mechanism and says where it is
