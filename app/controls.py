@@ -184,7 +184,7 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "wear.coefficient_mm3_per_N_m",
                 "Archard k [10⁻⁹ mm³/(N·m)]",
                 "number",
-                step=1,
+                step=0.01,  # viser fixes the box's decimals from the step at creation
                 hint="lubricated hardened steel ~1…100 (1e-9…1e-7 mm³/(N·m)); dry steel ~1e4",
                 scale=1e-9,
             ),
@@ -248,7 +248,7 @@ def _unscaled(path: str, v: object, current: object) -> object:
         return v
     if isinstance(current, int | float) and v == float(f"{current / scale:.12g}"):
         return current
-    return v * scale
+    return float(f"{v * scale:.15g}")  # the decimal typed (3 x 1e-9 is 3.0000000000000004e-09)
 
 
 def merged(base: Design, values: dict[str, object]) -> dict:

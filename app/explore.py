@@ -23,7 +23,7 @@ from camcore.explore import FIGURES, distinct, pareto
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError
 from camcore.sweep import design_at
 
-from .controls import SPECS, get_path
+from .controls import SPECS, control_value, get_path
 from .panels import esc
 
 # label -> design path of the fields a sweep may vary (numbers only)
@@ -167,7 +167,7 @@ class ExplorePanel:
                     break
                 batched = not PROFILE_FIGURES & set(names)
                 rows += self._analyst.sweep_chunk(base, points[i : i + CHUNK], batched)
-                ok = sum(bool(r.get("valid")) for r in rows)
+                ok = _valid_designs(rows)
                 self.progress.content = (
                     f"Running: **{len(rows)} / {len(points)}** designs, {ok} valid so far…"
                 )
@@ -201,7 +201,7 @@ class ExplorePanel:
             else:
                 self.image.image = _decode(png)
         first = distinct(rows)
-        ok = sum(bool(r.get("valid")) for r, f in zip(rows, first, strict=True) if f)
+        ok = _valid_designs(rows)
         done = "" if len(rows) == total else f" (cancelled after {len(rows)} of {total})"
         same = (
             ""
@@ -247,16 +247,24 @@ class ExplorePanel:
 
 def edited_since(base: Design, now: Design, point: dict, most: int = 4) -> list[str]:
     """How the design ``now`` differs from the sweep's ``base`` outside the swept fields
-    (``point``'s paths), in the controls' words ("Lift h [mm]: 15 → 25"), up to
-    ``most`` of them; a program edited as segments is named as such."""
+    (``point``'s paths), as the controls show them ("Lift h [mm]: 15 → 25"), up to
+    ``most`` of them; a program that is (or was) edited as segments is named as such."""
+    classic = base.motion.classic is not None and now.motion.classic is not None
     out = []
     for spec in SPECS:
-        a, b = get_path(base, spec.path), get_path(now, spec.path)
-        if spec.path not in point and a != b:
+        if spec.path in point or (spec.path.startswith("motion.") and not classic):
+            continue
+        a, b = control_value(base, spec), control_value(now, spec)
+        if a != b:
             out.append(f"{spec.label}: {a} → {b}")
-    if base.motion.classic is None and base.motion.segments != now.motion.segments:
+    if not classic and base.motion.segments != now.motion.segments:
         out.append("the program's segments")
     return out[:most] + ([f"{len(out) - most} more"] if len(out) > most else [])
+
+
+def _valid_designs(rows: list[dict]) -> int:
+    """Valid designs among the rows, each distinct design once (camcore.explore)."""
+    return sum(bool(r.get("valid")) for r, f in zip(rows, distinct(rows), strict=True) if f)
 
 
 def _range_label(axis: str, field_label: str) -> str:

@@ -79,13 +79,12 @@ def esc(text: object) -> str:
 
 # The status box stays at the top of the panel while the panel scrolls (its wrapper is
 # made sticky; viser nests it in a box with overflow: hidden, which would make that box
-# the one it sticks in, so the boxes around it clip instead: the same look, no scroll
-# container), and scrolls inside itself past a third of the window: a long list of
-# violations never hides the controls.
+# the one it sticks in, so every box around it clips instead: the same look, and
+# "clip" makes no scroll container), and scrolls inside itself past a third of the
+# window: a long list of violations never hides the controls.
 STATUS_CSS = (
     "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important}"
-    "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff;"
-    "overflow:visible!important}"
+    "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff}"
     "#cam-status{max-height:32vh;overflow-y:auto}</style>"
 )
 
@@ -271,11 +270,17 @@ def where_markdown(a, k: int, events: list[str]) -> str:
     def here(angle: float) -> bool:
         return abs(math.remainder(angle - a.theta[k], 2 * math.pi)) < 1e-9
 
+    def neighbour(step: int) -> str:  # the next segment that has a length (a fall
+        i = (j + step) % n  # meets a rise through an empty dwell, motion.segments)
+        while a.segments[i].length <= 1e-12 and i != j:
+            i = (i + step) % n
+        return SEGMENT_NAMES[a.segments[i].code]
+
     # a boundary belongs to one of its segments (motion.segment_index): say both
     if here(a.segments[j].start):
-        seg = f"{SEGMENT_NAMES[a.segments[(j - 1) % n].code]} ends, {seg} begins"
+        seg = f"{neighbour(-1)} ends, {seg} begins"
     elif here(a.segments[j].end):
-        seg = f"{seg} ends, {SEGMENT_NAMES[a.segments[(j + 1) % n].code]} begins"
+        seg = f"{seg} ends, {neighbour(1)} begins"
     return (
         f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
         f"In contact: **{', '.join(faces) if faces else 'none'}** · "

@@ -570,6 +570,11 @@ def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
     Front: straight along -z with a long lens, the whole mechanism in frame. Contact
     close-up: the same lens on the contact region, following the follower's lift (call
     again as the cam turns). 3D: the perspective view from above and to the side."""
+    if view == "Contact close-up":  # (called every frame while playing: cheap)
+        y = a.geo.r_b + float(a.prog.S[k])  # the contacts sit near the top of the cam
+        span = 0.8 * a.geo.r_b  # both faces of a double follower and the flanks in frame
+        dist = span / (2 * math.tan(FRONT_FOV / 2))
+        return (0.0, y, dist), (0.0, y, 0.0), FRONT_FOV
     # in frame: the follower's highest part at full lift (the stem's end) and the cam's
     # widest radius below its axis (any point of the cam passes there as it turns)
     top = max(float(m.bounds[1, 1]) for m, _ in follower_parts(a).values()) + a.geo.h
@@ -580,10 +585,5 @@ def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
         look = np.array([0.18 * H, cy, 0.0])
         pos = look + np.array([0.18 * H, 0.12 * H, 0.95 * H])
         return tuple(pos), tuple(look), math.radians(50.0)
-    if view == "Contact close-up":
-        y = a.geo.r_b + float(a.prog.S[k])  # the contacts sit near the top of the cam
-        span = 0.8 * a.geo.r_b  # both faces of a double follower and the flanks in frame
-        dist = span / (2 * math.tan(FRONT_FOV / 2))
-        return (0.0, y, dist), (0.0, y, 0.0), FRONT_FOV
     dist = 1.15 * H / (2 * math.tan(FRONT_FOV / 2))
     return (0.0, cy, dist), (0.0, cy, 0.0), FRONT_FOV

@@ -176,12 +176,13 @@ class Session:
         changing the design silently (70 mm typed for a 60 mm slider became 60 mm at
         the next, unrelated edit). The same rule as for a loaded design (_sync_controls)."""
         for spec in controls.SPECS:
-            h = self.ui.controls[spec.path]
-            if spec.widget == "slider" and isinstance(h.value, (int, float)):
-                if h.value > h.max:
-                    h.max = h.value
-                if h.value < h.min:
-                    h.min = h.value
+            h, v = self.ui.controls[spec.path], self.ui.controls[spec.path].value
+            if spec.widget != "slider" or not isinstance(v, int | float) or not math.isfinite(v):
+                continue
+            assert spec.lo is not None and spec.hi is not None  # (every slider has a range)
+            lo, hi = min(spec.lo, v), max(spec.hi, v)  # back to its own range once fixed
+            if (h.min, h.max) != (lo, hi):
+                h.min, h.max = lo, hi
 
     def _values(self) -> dict[str, object]:
         return {p: h.value for p, h in self.ui.controls.items()}

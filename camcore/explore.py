@@ -79,17 +79,22 @@ def ignored_fields(row: dict) -> list[str]:
 
 
 def distinct(rows: list[dict]) -> np.ndarray:
-    """True for the first row of each distinct design: rows that differ only in grid
-    fields their follower does not use are the same design."""
-    seen: set[tuple] = set()
-    out = np.zeros(len(rows), dtype=bool)
+    """True for one row of each distinct design (the first that is a design at all):
+    rows that differ only in grid fields their follower does not use are the same
+    design."""
+    kept: dict[tuple, int] = {}  # design key -> the row that stands for it
     for i, r in enumerate(rows):
         drop = {f"grid.{p}" for p in ignored_fields(r)}
         key = tuple(
             sorted((k, repr(v)) for k, v in r.items() if k.startswith("grid.") and k not in drop)
         )
-        out[i] = key not in seen
-        seen.add(key)
+        j = kept.get(key)
+        # an ignored field is still checked against its own limits (a roller radius of 0
+        # for a concave face): a row refused for it must not hide a valid copy
+        if j is None or (rows[j].get("error") is not None and r.get("error") is None):
+            kept[key] = i
+    out = np.zeros(len(rows), dtype=bool)
+    out[list(kept.values())] = True
     return out
 
 

@@ -168,6 +168,11 @@ def test_a_value_typed_beyond_a_slider_widens_it(tab):
     assert base.min <= -5.0 and s.error is not None
     base.value = 90.0
     assert s.error is None and s.design.motion.lift_mm == 70.0
+    assert base.min == 10  # back to its own range once the value is back in it
+    lift.value = float("inf")  # refused, and not a range to keep
+    assert s.error is not None and lift.max == 70.0
+    lift.value = 20.0
+    assert s.error is None and lift.max == 60
 
 
 def test_archard_k_is_entered_in_its_own_scale(tab):
@@ -181,7 +186,13 @@ def test_archard_k_is_entered_in_its_own_scale(tab):
     assert s.design.wear.coefficient_mm3_per_N_m == 1e-8
     k.value = 2.0
     assert s.design.wear.coefficient_mm3_per_N_m == pytest.approx(2e-9, rel=1e-15)
-    assert "wear depth max 0.0000" not in s.ui.summary_md.content
+    assert "| wear depth max (Archard) | 0.0000 " not in s.ui.summary_md.content
+    k.value = 0.0
+    assert "| wear depth max (Archard) | 0.0000 " in s.ui.summary_md.content  # (can fail)
+    k.value = 3.0
+    assert s.design.wear.coefficient_mm3_per_N_m == 3e-9  # the decimal typed, exactly
+    k.value = 2.5  # decimals are kept (the box's precision comes from its step)
+    assert s.design.wear.coefficient_mm3_per_N_m == 2.5e-9 and k.precision >= 2
 
 
 @pytest.mark.parametrize(

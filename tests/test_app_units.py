@@ -205,3 +205,51 @@ def test_the_front_view_frames_the_whole_mechanism(preset):
     stem_top = max(m.bounds[1, 1] for m, _ in follower_parts(a).values()) + a.prog.S.max()
     cam_bottom = -np.hypot(*a.profile.points.T).max()
     assert look[1] + half >= stem_top and look[1] - half <= cam_bottom
+
+
+def test_where_names_the_segments_around_an_empty_dwell():
+    """A fall straight into a rise meets it through an empty dwell (motion.segments):
+    the line says 'fall ends, rise begins', not the empty dwell's name."""
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+
+    data = load_preset("paper_example").with_kind("single_roller").model_dump()
+    data["motion"] = {
+        "segments": [
+            {"kind": "rise", "lift_mm": 15, "law": "cycloidal", "angle_deg": 120},
+            {"kind": "dwell", "angle_deg": 60},
+            {"kind": "fall", "lift_mm": 15, "law": "cycloidal", "angle_deg": 180},
+        ]
+    }
+    a = analyze(Design.model_validate(data), verify=False)
+    line = panels.where_markdown(a, 0, []).split(" · ")[1]
+    assert line == "fall ends, rise begins"
+    k = panels.nearest_index(a.theta, 120.0)
+    assert panels.where_markdown(a, k, []).split(" · ")[1] == "rise ends, high dwell begins"
+
+
+def test_edited_since_speaks_as_the_controls_do():
+    """Explore's list of the edits a load would replace: in the controls' units (Archard
+    k in 1e-9), and a program edited as segments is named, not listed as None values."""
+    from app.explore import edited_since
+    from camcore.model import Design, load_preset
+
+    base = load_preset("paper_example")
+    data = base.model_dump()
+    data["wear"]["coefficient_mm3_per_N_m"] = 2e-9
+    assert edited_since(base, Design.model_validate(data), {}) == [
+        "Archard k [10⁻⁹ mm³/(N·m)]: 10.0 → 2.0"
+    ]
+    data = base.model_dump()
+    data["motion"] = {
+        "segments": [
+            {"kind": "rise", "lift_mm": 10, "law": "cycloidal", "angle_deg": 90},
+            {"kind": "fall", "lift_mm": 10, "law": "cycloidal", "angle_deg": 90},
+            {"kind": "rise", "lift_mm": 10, "law": "cycloidal", "angle_deg": 90},
+            {"kind": "fall", "lift_mm": 10, "law": "cycloidal", "angle_deg": 90},
+        ]
+    }
+    edited = Design.model_validate(data)
+    assert edited.motion.classic is None  # two cycles: no rise-dwell-fall-dwell sliders
+    assert edited_since(base, edited, {}) == ["the program's segments"]
+    assert edited_since(base, base, {}) == []

@@ -221,8 +221,10 @@ def test_trust_in_the_browser(tmp_path):
             assert _field(page, "Lift h").input_value() == "70"
             # the status box stays in sight while the panel scrolls to a lower control
             top = page.locator("#cam-status").bounding_box()
+            lift_y = _field(page, "Lift h").bounding_box()["y"]
             _field(page, "Cutter diameter").scroll_into_view_if_needed()
             page.wait_for_timeout(500)
+            assert _field(page, "Lift h").bounding_box()["y"] < lift_y - 100  # it scrolled
             box = page.locator("#cam-status").bounding_box()
             assert box is not None and top is not None and 0 <= box["y"] <= top["y"] + 5
 

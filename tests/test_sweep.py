@@ -290,8 +290,32 @@ def test_explore_counts_a_design_swept_over_a_field_it_ignores_once():
     keys = [(rows[i]["grid.follower.kind"], rows[i]["grid.cam.base_radius_mm"]) for i in front]
     single = [k for k in keys if k[0] == "single_concave"]
     assert single and len(single) == len(set(single))  # each single design once
-    assert all(first[i] for i in front)
     png = explore_png(
         rows, ("cam.base_radius_mm", "r_b"), ("follower.offset_mm", "e"), names, front
     )
     assert png.startswith(b"\x89PNG")
+
+
+def test_a_refused_copy_does_not_hide_a_valid_design():
+    """A field a follower ignores is still checked against its own limits: a concave
+    face swept over roller radius 0 (refused) and 10 is one design, and the valid row
+    stands for it (the refused one came first and hid the concave faces)."""
+    from camcore.explore import distinct, pareto
+
+    spec = sweep.parse_spec(
+        json.dumps(
+            {
+                "base": {"preset": "paper_example"},
+                "grid": {
+                    "follower.kind": ["single_roller", "double_concave"],
+                    "follower.roller_radius_mm": [0, 10],
+                },
+            }
+        )
+    )
+    rows = sweep.run_chunk(spec.base, list(spec.points()), fast=True)
+    first = distinct(rows)
+    concave = [i for i, r in enumerate(rows) if r["grid.follower.kind"] == "double_concave"]
+    assert [rows[i].get("error") is None for i in concave] == [False, True]
+    assert first[concave].tolist() == [False, True]
+    assert concave[1] in pareto(rows, ["cam_size", "stress"])
