@@ -247,8 +247,9 @@ def segments(design: Design) -> tuple[Segment, ...]:
             kept.append(g)
         elif before.code == FALL and after.code == RISE:
             kept.append(g)  # the empty dwell of a fall into a rise: it has an arc
-    for i, g in enumerate(list(kept)):  # a fall straight into a rise: add the empty dwell
-        after = kept[(i + 1) % len(kept)]
+    given = list(kept)  # (read the neighbours here: kept grows below)
+    for i, g in enumerate(given):  # a fall straight into a rise: add the empty dwell
+        after = given[(i + 1) % len(given)]
         if g.code == FALL and after.code == RISE:
             code = LOW if abs(g.S1) <= 1e-15 else HIGH
             kept.insert(kept.index(g) + 1, Segment(code, g.end, g.end, g.S1, g.S1))

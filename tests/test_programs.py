@@ -230,3 +230,26 @@ def test_stations_figure_has_a_panel_per_station():
     assert drawn[2].get_title().startswith("station 2: theta = ")
     assert drawn[2].get_xlabel() == summary(a)["stations"][2]["event"].split(": ", 1)[1]
     assert "Stations (the paper's Fig. 4" in document.html_report(a)
+
+
+def test_every_fall_into_a_rise_gets_its_empty_dwell():
+    """A program that repeats (rise, fall) twice: both fall -> rise boundaries carry the
+    empty dwell arc on which a double follower's faces meet (the second was skipped:
+    the list grew while it was read), so the contact at 0 and at 180 deg is the same."""
+    from camcore import motion
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+
+    data = load_preset("paper_example").model_dump()
+    cycle = [
+        {"kind": "rise", "lift_mm": 10, "law": "cycloidal", "angle_deg": 90},
+        {"kind": "fall", "lift_mm": 10, "law": "cycloidal", "angle_deg": 90},
+    ]
+    data["motion"] = {"segments": cycle * 2}
+    d = Design.model_validate(data)
+    codes = [g.code for g in motion.segments(d)]
+    assert codes == [motion.RISE, motion.FALL, motion.LOW] * 2
+    a = analyze(d, verify=False)
+    k0, k180 = 0, int(np.argmin(np.abs(a.theta - np.pi)))
+    assert abs(a.theta[k180] - np.pi) < 1e-12  # a segment boundary: on the grid
+    np.testing.assert_array_equal(a.in_contact[:, k0], a.in_contact[:, k180])
