@@ -262,25 +262,25 @@ def test_cli_fast_sweep(tmp_path):
     assert [r["grid.cam.base_radius_mm"] for r in rows] == [60, 65, 70, 75, 80, 85, 90]
 
 
+def _paper_rows(grid: dict) -> list[dict]:
+    """The batched rows of a sweep of ``grid`` around the paper's example."""
+    spec = sweep.parse_spec(json.dumps({"base": {"preset": "paper_example"}, "grid": grid}))
+    return sweep.run_chunk(spec.base, list(spec.points()), fast=True)
+
+
 def test_explore_counts_a_design_swept_over_a_field_it_ignores_once():
     """Sweeping the double follower's offset e over a single follower repeats one design:
     ``distinct`` keeps the first of them, the Pareto front lists it once, and the map
     says which field a follower does not use."""
     from camcore.explore import distinct, explore_png, ignored_fields, pareto
 
-    spec = sweep.parse_spec(
-        json.dumps(
-            {
-                "base": {"preset": "paper_example"},
-                "grid": {
-                    "follower.kind": ["single_concave", "double_concave"],
-                    "cam.base_radius_mm": [80, 90],
-                    "follower.offset_mm": [20, 30],
-                },
-            }
-        )
+    rows = _paper_rows(
+        {
+            "follower.kind": ["single_concave", "double_concave"],
+            "cam.base_radius_mm": [80, 90],
+            "follower.offset_mm": [20, 30],
+        }
     )
-    rows = sweep.run_chunk(spec.base, list(spec.points()), fast=True)
     first = distinct(rows)
     assert len(rows) == 8 and int(first.sum()) == 6  # 2 single (e ignored) + 4 double
     singles = [r for r in rows if r["grid.follower.kind"] == "single_concave"]
@@ -302,18 +302,9 @@ def test_a_refused_copy_does_not_hide_a_valid_design():
     stands for it (the refused one came first and hid the concave faces)."""
     from camcore.explore import distinct, pareto
 
-    spec = sweep.parse_spec(
-        json.dumps(
-            {
-                "base": {"preset": "paper_example"},
-                "grid": {
-                    "follower.kind": ["single_roller", "double_concave"],
-                    "follower.roller_radius_mm": [0, 10],
-                },
-            }
-        )
+    rows = _paper_rows(
+        {"follower.kind": ["single_roller", "double_concave"], "follower.roller_radius_mm": [0, 10]}
     )
-    rows = sweep.run_chunk(spec.base, list(spec.points()), fast=True)
     first = distinct(rows)
     concave = [i for i, r in enumerate(rows) if r["grid.follower.kind"] == "double_concave"]
     assert [rows[i].get("error") is None for i in concave] == [False, True]
