@@ -174,7 +174,8 @@ class Session:
         """A value typed into a slider's box beyond its range widens the range: the
         browser would otherwise cut it back to the end at its next redraw and send that,
         changing the design silently (70 mm typed for a 60 mm slider became 60 mm at
-        the next, unrelated edit). The same rule as for a loaded design (_sync_controls)."""
+        the next, unrelated edit). The same rule as for a loaded design (_sync_controls);
+        once the value is back inside, the slider returns to its own range."""
         for spec in controls.SPECS:
             h, v = self.ui.controls[spec.path], self.ui.controls[spec.path].value
             if spec.widget != "slider" or not isinstance(v, int | float) or not math.isfinite(v):
