@@ -11,7 +11,7 @@ from camcore.model import PAPER_FOLLOWERS
 from camcore.report import PAPER_TABLE1_N
 
 from .panels import esc
-from .plots import COLORS
+from .plots import COLORS, wire
 
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
@@ -104,5 +104,5 @@ class CompareView:
         for r in results.values():
             fn.append(nan if isinstance(r, str) else r["FN_N"])
             st.append(nan if isinstance(r, str) else r["stress_MPa"])
-        self.fn.data = tuple(fn)
-        self.stress.data = tuple(st)
+        self.fn.data = wire(fn)
+        self.stress.data = wire(st)

@@ -348,7 +348,7 @@ def test_compare_tab(tab):
     assert len(data) == 5 and data[0].size > 100
     # one grid for the four followers: their curves are drawn at the same angles
     xs = [r["theta_deg"] for r in s.ui.compare_view.results.values()]
-    assert all(np.array_equal(x, data[0]) for x in xs)
+    assert all(np.array_equal(x.astype(np.float32), data[0]) for x in xs)  # sent as float32
     assert all(d.shape == data[0].shape for d in data)
     assert np.all(np.isfinite(data[1])) and s.verified
     assert "geometric check max" in s.ui.status.content

@@ -253,3 +253,51 @@ def test_edited_since_speaks_as_the_controls_do():
     assert edited.motion.classic is None  # two cycles: no rise-dwell-fall-dwell sliders
     assert edited_since(base, edited, {}) == ["the program's segments"]
     assert edited_since(base, base, {}) == []
+
+
+def test_viser_cast_patch_equals_viser_except_float32_plot_data():
+    """app.viser_speedups replaces viser's prop cast (hints built once): for every kind
+    of prop it must cast as viser 1.1.1 does, except float32 uPlot ``data``, which it
+    keeps (half the bytes a tab receives per edit)."""
+    import numpy.typing as npt
+    from viser import _assignable_props_api as props_api
+
+    from app import viser_speedups
+
+    original = viser_speedups.VISER_CAST
+    assert original is not viser_speedups._cast_value_recursive
+    assert props_api.AssignablePropsBase._cast_value_recursive in (
+        original,
+        viser_speedups._cast_value_recursive,  # installed by an App earlier in this run
+    )
+
+    class Viser:  # viser's own cast recurses through self
+        _cast_value_recursive = original
+
+    f64, f32, u8 = npt.NDArray[np.float64], npt.NDArray[np.float32], npt.NDArray[np.uint8]
+    cases = [
+        (f64, [1, 2, 3], "position"),
+        (f64, np.arange(3, dtype=np.float32), "position"),  # not plot data: cast
+        (f32, np.arange(3.0), "vertices"),
+        (npt.NDArray[np.float16], np.arange(3.0), "x"),
+        (u8, np.array([[0.5, 1.0, 0.0]]), "colors"),
+        (u8, np.array([1, 2], np.int64), "faces"),
+        (tuple[f64, ...], (np.arange(2.0), np.arange(2)), "data"),
+        (tuple[int, ...], (1, 2), "order"),
+        (str, "text", "content"),
+        (float, 1.5, "value"),
+    ]
+    for hint, value, name in cases:
+        want = Viser()._cast_value_recursive(hint, value, name)
+        got = viser_speedups._cast_value_recursive(None, hint, value, name)
+        assert type(got) is type(want)
+        for g, w in zip(
+            got if isinstance(got, tuple) else (got,),
+            want if isinstance(want, tuple) else (want,),
+            strict=True,
+        ):
+            assert np.asarray(g).dtype == np.asarray(w).dtype and np.array_equal(g, w)
+    plot = (np.arange(3, dtype=np.float32), np.ones(3, np.float32))
+    kept = viser_speedups._cast_value_recursive(None, tuple[f64, ...], plot, "data")
+    assert all(k is p for k, p in zip(kept, plot, strict=True))
+    assert Viser()._cast_value_recursive(tuple[f64, ...], plot, "data")[0].dtype == np.float64

@@ -35,6 +35,16 @@ def drawn_fraction(png: bytes) -> float:
     return float((np.abs(img - bg).sum(axis=-1) > 40).mean())
 
 
+# JS: pixels of the S curve's colour (COLORS[0], #1f77b4) on the first uPlot's canvas
+S_CURVE_PIXELS = """() => { const c = document.querySelector('.uplot canvas');
+    if (!c) return 0; let n = 0;
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    for (let i = 0; i < d.length; i += 4)
+      if (Math.abs(d[i] - 31) + Math.abs(d[i + 1] - 119) + Math.abs(d[i + 2] - 180) < 60
+          && d[i + 3] > 200) n++;
+    return n }"""
+
+
 def _field(page, label: str):
     """The number box of the control whose label starts with ``label``."""
     return page.evaluate_handle(
@@ -122,6 +132,9 @@ def test_app_in_headless_chromium(tmp_path):
             panel = page.locator("[data-testid=floating-panel]")
             narrow = panel.bounding_box()["width"]
             page.get_by_role("tab", name="Curves").click()
+            # the curves arrive as float32 (app.viser_speedups) and uPlot draws them: the
+            # first plot's canvas carries its blue S curve
+            page.wait_for_function(f"() => ({S_CURVE_PIXELS})() > 100")
             page.get_by_text("Wide panel").first.click()
             page.wait_for_function(
                 "() => document.querySelector('[data-testid=floating-panel]')"
