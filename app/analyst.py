@@ -142,6 +142,10 @@ class Analyst:
         (camcore.sweep.row), or ``batched`` the batched core (camcore.batch)."""
         return self._run("bg", sweep.run_chunk, base, points, False, batched)
 
+    def same_designs(self, base: dict, points: list[dict]) -> list[int]:
+        """camcore.sweep.same_designs (validates every point), in the background worker."""
+        return self._run("bg", sweep.same_designs, base, points)
+
     def explore_png(self, rows, x, y, names, front) -> bytes:
         """camcore.explore.explore_png, drawn in the background worker."""
         return self._run("bg", explore.explore_png, rows, x, y, names, front)

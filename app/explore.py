@@ -21,7 +21,7 @@ import numpy as np
 
 from camcore.explore import FIGURES, distinct, pareto
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError
-from camcore.sweep import design_at
+from camcore.sweep import design_at, with_point
 
 from .controls import SPECS, control_value, get_path
 from .panels import esc
@@ -160,17 +160,30 @@ class ExplorePanel:
         return base, points, (px, self.x.value), (py, self.y.value), [fa, fb]
 
     def _sweep(self, base, points, x, y, names) -> None:
-        rows: list[dict] = []
+        """Analyse each distinct design once (points that differ only in a field their
+        follower ignores make one design: camcore.sweep.same_designs), in chunks."""
+        done: dict[int, dict] = {}  # point index -> its row, for the points analysed
+        batched = not PROFILE_FIGURES & set(names)
         try:
-            for i in range(0, len(points), CHUNK):
+            same = self._analyst.same_designs(base, points)
+            own = [i for i, j in enumerate(same) if i == j]
+            repeats = len(points) - len(own)
+            note = f" ({repeats} more points repeat one of them)" if repeats else ""
+            for c in range(0, len(own), CHUNK):
                 if self._cancel.is_set():
                     break
-                batched = not PROFILE_FIGURES & set(names)
-                rows += self._analyst.sweep_chunk(base, points[i : i + CHUNK], batched)
-                ok = _valid_designs(rows)
+                idx = own[c : c + CHUNK]
+                rows = self._analyst.sweep_chunk(base, [points[i] for i in idx], batched)
+                done.update(zip(idx, rows, strict=True))
+                ok = _valid_designs(list(done.values()))
                 self.progress.content = (
-                    f"Running: **{len(rows)} / {len(points)}** designs, {ok} valid so far…"
+                    f"Running: **{len(done)} / {len(own)}** designs{note}, {ok} valid so far…"
                 )
+            rows = [
+                done[i] if i == j else with_point(done[j], p)
+                for i, (j, p) in enumerate(zip(same, points, strict=True))
+                if j in done
+            ]
             self._show(base, rows, len(points), x, y, names)
         except Exception as exc:  # a worker lost: say so, keep the tab
             self.progress.content = f"✖ The sweep stopped: {esc(exc)}"

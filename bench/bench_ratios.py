@@ -107,9 +107,25 @@ def run(quick: bool = False) -> list[dict]:
             f"{rate / floor_rate:.3f} of it (goal >= 0.5)",
         )
     )
-    fast_points = list(spec.points()) * (4 if quick else 2)  # 32 or 64 designs
-    sweep.run_chunk(spec.base, fast_points[:8], fast=True)
-    cpu = min(_cpu_ms(lambda: sweep.run_chunk(spec.base, fast_points, fast=True)) for _ in range(3))
+    fast_spec = sweep.parse_spec(  # 32 or 64 distinct designs (a repeated point is
+        # analysed once: camcore.sweep.same_designs)
+        json.dumps(
+            {
+                "grid": {
+                    "cam.base_radius_mm": {
+                        "from": 70,
+                        "to": 90,
+                        "num": 4 * num if quick else 2 * num,
+                    }
+                }
+            }
+        )
+    )
+    fast_points = list(fast_spec.points())
+    sweep.run_chunk(fast_spec.base, fast_points[:8], fast=True)
+    cpu = min(
+        _cpu_ms(lambda: sweep.run_chunk(fast_spec.base, fast_points, fast=True)) for _ in range(3)
+    )
     rate = len(fast_points) / (cpu / 1e3)
     rows.append(
         _row(

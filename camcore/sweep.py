@@ -151,49 +151,92 @@ def design_at(base: dict, point: dict) -> Design:
     return design_from_json(json.dumps(data))
 
 
-def row(base: dict, point: dict, verify: bool = True) -> dict:
-    """One design's row: the grid values, valid, error and the flattened summary."""
-    from .report import analyze_summary, summary
-
-    out = {
+def _grid_values(point: dict) -> dict:
+    """The row's ``grid.`` columns: the point's values (a list or object as JSON text)."""
+    return {
         f"grid.{k}": v if isinstance(v, int | float | str | bool) or v is None else json.dumps(v)
         for k, v in point.items()
-    }  # a list or object as JSON text
-    try:
-        design = design_at(base, point)
-    except DesignError as exc:
-        return {**out, "valid": False, "error": str(exc)}
+    }
+
+
+def _made(base: dict, points: list[dict]) -> list[Design | str]:
+    """Each point's design, or why it is none (the DesignError's text)."""
+    out: list[Design | str] = []
+    for p in points:
+        try:
+            out.append(design_at(base, p))
+        except DesignError as exc:
+            out.append(str(exc))
+    return out
+
+
+def design_key(design: Design) -> str:
+    """Designs with the same key are analysed alike: they differ at most in follower
+    fields their kind does not use (FollowerKind.uses), e.g. a roller radius swept for
+    a concave face."""
+    data = design.model_dump(mode="json")
+    kind = design.follower.kind
+    data["follower"] = {k: v for k, v in data["follower"].items() if kind.uses(k)}
+    return json.dumps(data, sort_keys=True)
+
+
+def _same(made: list[Design | str]) -> list[int]:
+    first: dict[str, int] = {}
+    return [
+        i if isinstance(d, str) else first.setdefault(design_key(d), i) for i, d in enumerate(made)
+    ]
+
+
+def same_designs(base: dict, points: list[dict]) -> list[int]:
+    """For each point, the first point that makes the same design (design_key): its
+    own index if none before it does, or if the point makes no design at all (its row
+    says why)."""
+    return _same(_made(base, points))
+
+
+def with_point(row: dict, point: dict) -> dict:
+    """The row of a design, for another point that makes the same design."""
+    return {**_grid_values(point), **{k: v for k, v in row.items() if not k.startswith("grid.")}}
+
+
+def _row(point: dict, design: Design | str, verify: bool) -> dict:
+    from .report import analyze_summary, summary
+
+    if isinstance(design, str):
+        return {**_grid_values(point), "valid": False, "error": design}
     if verify:
         s = analyze_summary(design)
     else:
         from .analysis import analyze
 
         s = summary(analyze(design, verify=False))
-    return {**out, **flatten(s), "valid": s["valid"], "error": None}
+    return {**_grid_values(point), **flatten(s), "valid": s["valid"], "error": None}
+
+
+def row(base: dict, point: dict, verify: bool = True) -> dict:
+    """One design's row: the grid values, valid, error and the flattened summary."""
+    return _row(point, _made(base, [point])[0], verify)
 
 
 def run_chunk(
     base: dict, points: list[dict], verify: bool = True, fast: bool = False
 ) -> list[dict]:
-    """Rows of a batch of designs (the unit of work sent to a worker). ``fast``: the
-    batched core (fast_rows), else one full analysis per design (row)."""
+    """Rows of a batch of designs (the unit of work sent to a worker). Points that make
+    the same design (same_designs) are analysed once and share its figures, each with
+    its own grid values. ``fast``: the batched core (fast_rows), else one full
+    analysis per design (row)."""
+    made = _made(base, points)
+    same = _same(made)
+    own = [i for i, j in enumerate(same) if i == j]
     if fast:
-        return fast_rows(base, points)
-    return [row(base, p, verify) for p in points]
-
-
-def _batch_key(point: dict, design: Design) -> tuple:
-    """Designs of a chunk that one batch can hold: the same values of every grid field
-    the batched core does not vary, and the same number of faces (e = 0 makes a double
-    follower's two faces one)."""
-    from . import batch, profile
-
-    fixed = tuple(
-        (k, json.dumps(v))
-        for k, v in point.items()
-        if tuple(k.split(".")) not in batch.BATCHED_FIELDS
-    )
-    return fixed, len(profile.geometry(design).faces), batch.batchable(design)
+        done = _fast_rows([points[i] for i in own], [made[i] for i in own])
+    else:
+        done = [_row(points[i], made[i], verify) for i in own]
+    rows = dict(zip(own, done, strict=True))
+    return [
+        rows[i] if i == j else with_point(rows[j], p)
+        for i, (j, p) in enumerate(zip(same, points, strict=True))
+    ]
 
 
 def fast_rows(base: dict, points: list[dict]) -> list[dict]:
@@ -204,35 +247,31 @@ def fast_rows(base: dict, points: list[dict]) -> list[dict]:
     checks (area, vertices, chord error, star shape, wear, geometric check) are not
     computed. Designs the batch cannot take (contact friction on a
     sliding face) get the full analysis, with ``profile_checked`` = True."""
-    from . import batch
+    return _fast_rows(points, _made(base, points))
+
+
+def _fast_rows(points: list[dict], made: list[Design | str]) -> list[dict]:
+    from . import batch, profile
     from .analysis import analyze
     from .report import summary
 
-    rows: list[dict | None] = [None] * len(points)
+    rows = [_grid_values(p) for p in points]
     groups: dict[tuple, list[tuple[int, Design]]] = {}
-    for i, p in enumerate(points):
-        grid = {
-            f"grid.{k}": v
-            if isinstance(v, int | float | str | bool) or v is None
-            else json.dumps(v)
-            for k, v in p.items()
-        }
-        try:
-            design = design_at(base, p)
-        except DesignError as exc:
-            rows[i] = {**grid, "valid": False, "error": str(exc)}
+    for i, design in enumerate(made):
+        if isinstance(design, str):
+            rows[i] = {**rows[i], "valid": False, "error": design}
             continue
-        rows[i] = grid
-        groups.setdefault(_batch_key(p, design), []).append((i, design))
-    for (_, _, ok), members in groups.items():
+        key = (batch.group_key(design), len(profile.geometry(design).faces))
+        groups.setdefault((*key, batch.batchable(design)), []).append((i, design))
+    for (*_, ok), members in groups.items():
         designs = [d for _, d in members]
         if ok:
             sums = batch.summaries(designs)
         else:
             sums = [{**summary(analyze(d, verify=False)), "profile_checked": True} for d in designs]
         for (i, _), s in zip(members, sums, strict=True):
-            rows[i] = {**rows[i], **flatten(s), "valid": s["valid"], "error": None}  # type: ignore[dict-item]
-    return rows  # type: ignore[return-value]
+            rows[i] = {**rows[i], **flatten(s), "valid": s["valid"], "error": None}
+    return rows
 
 
 def _table(rows: list[dict]):

@@ -653,10 +653,14 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
         "cam size R (high-dwell radius)",
         "max contact stress σ_H",
     )
+    sent: list[dict] = []  # the points analysed
+    real = e._analyst.sweep_chunk
+    e._analyst.sweep_chunk = lambda base, pts, *a: sent.extend(pts) or real(base, pts, *a)
     e.run_btn.value = True  # click
     assert wait_for(lambda: "on the Pareto front" in e.progress.content, 120.0), e.progress.content
     assert "**16 designs**" in e.progress.content
     assert "(12 distinct" in e.progress.content  # single followers ignore the offset e
+    assert len(sent) == 12  # ... so each of them is analysed once
     assert e.image is not None and e.image.image.shape[2] == 3
     offers = e.front_dd.options
     assert offers and offers[0].startswith("1. ") and not e.load_btn.disabled

@@ -310,3 +310,48 @@ def test_a_refused_copy_does_not_hide_a_valid_design():
     assert [rows[i].get("error") is None for i in concave] == [False, True]
     assert first[concave].tolist() == [False, True]
     assert concave[1] in pareto(rows, ["cam_size", "stress"])
+
+
+@pytest.mark.parametrize("fast", [False, True])
+def test_points_that_make_one_design_are_analysed_once(monkeypatch, fast):
+    """The four followers over roller radius x face radius (the paper's claim as a
+    design space): a roller ignores the face radius and a face the roller radius, so
+    18 points make 6 designs (and 6 refusals, face radius 0). Each design is analysed
+    once, and every row still equals the row of its point computed alone (its own
+    grid values, the shared figures)."""
+    spec = sweep.parse_spec(
+        json.dumps(
+            {
+                "grid": {
+                    "follower.kind": ["single_roller", "double_concave", "single_concave"],
+                    "follower.roller_radius_mm": [8, 12],
+                    "follower.face_radius_mm": [-250, -300, 0],  # 0: refused, a row that says why
+                }
+            }
+        )
+    )
+    points = list(spec.points())
+    same = sweep.same_designs(spec.base, points)
+    assert len(set(same)) == 3 * 2 + 6  # each follower twice; each refused point alone
+    analysed: list = []
+    if fast:
+        from camcore import batch
+
+        real = batch.summaries
+        monkeypatch.setattr(batch, "summaries", lambda ds: analysed.extend(ds) or real(ds))
+    else:
+        from camcore import analysis
+
+        real_an = analysis.analyze
+        monkeypatch.setattr(
+            analysis, "analyze", lambda d, **k: analysed.append(d) or real_an(d, **k)
+        )
+    rows = sweep.run_chunk(spec.base, points, verify=False, fast=fast)
+    monkeypatch.undo()
+    assert len(analysed) == 6
+    alone = (
+        sweep.fast_rows(spec.base, [p]) if fast else [sweep.row(spec.base, p, False)]
+        for p in points
+    )
+    assert rows == [r for (r,) in alone]
+    assert sum(r["error"] is not None for r in rows) == 6  # face radius 0, for every follower
