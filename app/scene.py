@@ -532,8 +532,11 @@ class SceneView:
         touching = bool(on.any())
         self.nodes["phi"].visible = self.show["pressure_angle"] and touching
         lab = self.nodes["phi_label"]
-        side = -1.0 if p[0] <= 0 else 1.0  # outside the driving face, clear of the yoke
-        lab.position = (p[0] + side * 0.35 * L, p[1] - 0.05 * L, z)
+        # below the contact, on the cam and outward of the driving face: clear of the
+        # follower (pad, roller, plate and yoke all lie above the contact), of the angle
+        # arc (above it too) and of the normals to Q (they run inward, down to the axis)
+        side = -1.0 if p[0] <= 0 else 1.0
+        lab.position = (p[0] + side * 0.3 * L, p[1] - 0.2 * L, z)
         lab.text = f"φ = {math.degrees(phi):.1f}°"
         lab.visible = self.show["pressure_angle"] and touching
 

@@ -787,3 +787,48 @@ def test_dropdowns_show_words_and_take_them(tab):
     kind.value = "<b>tri-roller</b>"
     assert s.error is not None and "<b>tri-roller</b>" not in s.ui.status.content
     assert s.design.follower.kind.value == "double_roller"
+
+
+def _inside_any(points: np.ndarray, meshes) -> bool:
+    """Whether any of the XY ``points`` lies in the XY shadow of one of the meshes."""
+    for m in meshes:
+        tri = np.asarray(m.vertices)[np.asarray(m.faces)][:, :, :2]  # (T, 3, 2)
+        a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+        d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
+        ok = np.abs(d) > 1e-18  # triangles seen edge-on cast no shadow
+        a, b, c, d = a[ok], b[ok], c[ok], d[ok]
+        p = points[:, None, :]
+        w1 = (
+            (b[:, 1] - c[:, 1]) * (p[..., 0] - c[:, 0])
+            + (c[:, 0] - b[:, 0]) * (p[..., 1] - c[:, 1])
+        ) / d
+        w2 = (
+            (c[:, 1] - a[:, 1]) * (p[..., 0] - c[:, 0])
+            + (a[:, 0] - c[:, 0]) * (p[..., 1] - c[:, 1])
+        ) / d
+        if np.any((w1 > 0) & (w2 > 0) & (1 - w1 - w2 > 0)):
+            return True
+    return False
+
+
+@pytest.mark.parametrize("kind", ["double_concave", "single_concave", "double_roller", "flat_face"])
+def test_the_pressure_angle_label_is_clear_of_the_follower(tab, kind):
+    """The φ label of the pressure-angle construction stands on the cam, not on the
+    follower (a teacher's close-up showed it over the S1 pad): its box, about 0.55 em per
+    character, never overlaps the follower's parts where they are at that angle."""
+    from app.scene import follower_parts
+
+    s = tab
+    s.ui.controls["follower.kind"].value = kind
+    a = s.analysis
+    parts = [m for name, (m, _) in follower_parts(a).items() if name != "guide"]
+    lab = s.view.nodes["phi_label"]
+    for deg in (0.0, 30.0, 50.0, 99.0, 101.0, 120.0, 200.0, 240.0, 300.0):
+        s.ui.angle_slider.value = deg
+        k = s.view.k
+        x, y, _ = lab.position
+        h = lab.font_scene_height
+        half_w = 0.55 * h * len(lab.text) / 2
+        u, v = np.meshgrid(np.linspace(-half_w, half_w, 15), np.linspace(-h / 2, h / 2, 5))
+        box = np.column_stack([x + u.ravel(), y - float(a.prog.S[k]) + v.ravel()])
+        assert not _inside_any(box, parts), (kind, deg, lab.text)
