@@ -378,8 +378,10 @@ class Follower(_Part):
         le=1000,
         description="offset e_s of a single follower's axis from the cam centre [mm]: "
         "positive to the left (-X in Fig. 2), the side that lowers the rise's pressure "
-        "angle for the clockwise cam (and raises the fall's); 0 = on the centreline, "
-        "as in the paper. Double followers use offset_mm",
+        "angle for the clockwise cam (and raises the fall's) while e_s stays below "
+        "about the rise's largest V (beyond, the resting follower's lean "
+        "atan(e_s / Y_C) raises it again); 0 = on the centreline, as in the paper. "
+        "Double followers use offset_mm",
     )
 
     @field_validator("offset_mm", "single_offset_mm")

@@ -1,0 +1,87 @@
+"""The README's Section 6 results (its table of the four followers and the dwell
+ratios) are what camcore computes now, to their printed digits: an independent review
+found three of them a digit off after the code had moved on."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from camcore.analysis import compare
+from camcore.model import FollowerKind, load_preset
+from camcore.report import summary
+
+README = Path(__file__).resolve().parents[1] / "README.md"
+ROWS = {
+    "single roller": FollowerKind.single_roller,
+    "double rollers": FollowerKind.double_roller,
+    "single concave face": FollowerKind.single_concave,
+    "double concave faces": FollowerKind.double_concave,
+}
+
+
+def _table() -> dict[str, list[str]]:
+    """Follower label -> the cells of its row in the README's Section 6 table."""
+    out = {}
+    for line in README.read_text(encoding="utf-8").splitlines():
+        cells = [c.strip().strip("*") for c in line.strip().strip("|").split("|")]
+        if cells and cells[0] in ROWS and len(cells) == 6:
+            out[cells[0]] = cells
+    return out
+
+
+@pytest.fixture(scope="module")
+def sums():
+    return {k: summary(a) for k, a in compare(load_preset("paper_example")).items()}
+
+
+def test_the_section_6_table_is_what_camcore_computes(sums):
+    table = _table()
+    assert set(table) == set(ROWS)
+    for label, kind in ROWS.items():
+        s = sums[kind]
+        two, whole, _paper, stress = table[label][1:5]
+        fn = s["contact_force_max_N"]
+        assert two == (
+            "—" if fn["high_dwell_two_contact"] is None else f"{fn['high_dwell_two_contact']:.3f}"
+        )
+        assert whole == f"{fn['high_dwell']:.3f}", label
+        assert stress == f"{s['contact_stress_max_MPa']['cycle']:.2f}", label
+
+
+def test_the_dwell_ratios_are_what_camcore_computes(sums):
+    text = README.read_text(encoding="utf-8")
+    m = re.search(
+        r"Ratios double/single in the dwell: ([0-9.]+) % \(rollers.*?and ([0-9.]+) %", text, re.S
+    )
+    assert m is not None
+    for printed, double, single in (
+        (m.group(1), FollowerKind.double_roller, FollowerKind.single_roller),
+        (m.group(2), FollowerKind.double_concave, FollowerKind.single_concave),
+    ):
+        ratio = (
+            sums[double]["contact_force_max_N"]["high_dwell_two_contact"]
+            / sums[single]["contact_force_max_N"]["high_dwell"]
+        )
+        assert printed == f"{100 * ratio:.2f}"
+
+
+def test_the_section_6_geometry_is_what_camcore_computes(sums):
+    text = " ".join(README.read_text(encoding="utf-8").split())
+    m = re.search(
+        r"Geometry: R = ([0-9.]+) mm, psi_h = ([0-9.]+) deg, psi_l = ([0-9.]+) deg, .*?"
+        r"max pressure angle ([0-9.]+) deg rise, ([0-9.]+) deg fall",
+        text,
+    )
+    assert m is not None
+    s = sums[FollowerKind.double_concave]
+    pa = s["pressure_angle_max_deg"]
+    assert m.groups() == (
+        f"{s['dwell_radius_mm']:.4f}",
+        f"{s['psi_h_deg']:.4f}",
+        f"{s['psi_l_deg']:.4f}",
+        f"{pa['rise']:.2f}",
+        f"{pa['fall']:.2f}",
+    )
