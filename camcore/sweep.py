@@ -46,6 +46,7 @@ MAX_SPEC_BYTES = 1_000_000
 MAX_DESIGNS = 1_000_000  # designs per sweep
 MAX_VALUES = 100_000  # values per grid axis
 DEFAULT_CHUNK = 32
+MEMO_ROWS = 1024  # designs an in-process run remembers across its chunks (~10 kB a row)
 
 
 @dataclass(frozen=True)
@@ -180,18 +181,20 @@ def design_key(design: Design) -> str:
     return json.dumps(data, sort_keys=True)
 
 
-def _same(made: list[Design | str]) -> list[int]:
+def _keys(made: list[Design | str]) -> list[str | None]:
+    return [None if isinstance(d, str) else design_key(d) for d in made]
+
+
+def _same(keys: list[str | None]) -> list[int]:
     first: dict[str, int] = {}
-    return [
-        i if isinstance(d, str) else first.setdefault(design_key(d), i) for i, d in enumerate(made)
-    ]
+    return [i if k is None else first.setdefault(k, i) for i, k in enumerate(keys)]
 
 
 def same_designs(base: dict, points: list[dict]) -> list[int]:
     """For each point, the first point that makes the same design (design_key): its
     own index if none before it does, or if the point makes no design at all (its row
     says why)."""
-    return _same(_made(base, points))
+    return _same(_keys(_made(base, points)))
 
 
 def with_point(row: dict, point: dict) -> dict:
@@ -219,24 +222,42 @@ def row(base: dict, point: dict, verify: bool = True) -> dict:
 
 
 def run_chunk(
-    base: dict, points: list[dict], verify: bool = True, fast: bool = False
+    base: dict,
+    points: list[dict],
+    verify: bool = True,
+    fast: bool = False,
+    memo: dict[str, dict] | None = None,
 ) -> list[dict]:
     """Rows of a batch of designs (the unit of work sent to a worker). Points that make
     the same design (same_designs) are analysed once and share its figures, each with
     its own grid values. ``fast``: the batched core (fast_rows), else one full
-    analysis per design (row)."""
+    analysis per design (row). ``memo`` (design_key -> row, added to here): the rows
+    of designs earlier chunks of the same run analysed, to be reused; ``run`` passes
+    one, bounded to MEMO_ROWS, when the chunks run in this process."""
     made = _made(base, points)
-    same = _same(made)
-    own = [i for i, j in enumerate(same) if i == j]
-    if fast:
-        done = _fast_rows([points[i] for i in own], [made[i] for i in own])
-    else:
-        done = [_row(points[i], made[i], verify) for i in own]
-    rows = dict(zip(own, done, strict=True))
-    return [
-        rows[i] if i == j else with_point(rows[j], p)
-        for i, (j, p) in enumerate(zip(same, points, strict=True))
+    keys = _keys(made)
+    memo = {} if memo is None else memo
+    todo = [
+        i for i, j in enumerate(_same(keys)) if i == j and (keys[i] is None or keys[i] not in memo)
     ]
+    if fast:
+        done = _fast_rows([points[i] for i in todo], [made[i] for i in todo])
+    else:
+        done = [_row(points[i], made[i], verify) for i in todo]
+    refused = {}  # the rows of points that make no design
+    for i, r in zip(todo, done, strict=True):
+        key = keys[i]
+        if key is None:
+            refused[i] = r
+        else:
+            memo[key] = r
+    rows = [
+        refused[i] if k is None else with_point(memo[k], p)
+        for i, (k, p) in enumerate(zip(keys, points, strict=True))
+    ]
+    while len(memo) > MEMO_ROWS:  # the oldest first
+        memo.pop(next(iter(memo)))
+    return rows
 
 
 def fast_rows(base: dict, points: list[dict]) -> list[dict]:
@@ -338,8 +359,9 @@ def run(
             progress(done, total, t0)
 
     if workers is None and scheduler is None:
+        memo: dict[str, dict] = {}  # a design repeated in a later chunk is not redone
         for i in todo:
-            keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify, fast))
+            keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify, fast, memo))
     else:
         _run_dask(spec, chunk, todo, (verify, fast), workers, scheduler, keep)
     if progress:

@@ -355,3 +355,29 @@ def test_points_that_make_one_design_are_analysed_once(monkeypatch, fast):
     )
     assert rows == [r for (r,) in alone]
     assert sum(r["error"] is not None for r in rows) == 6  # face radius 0, for every follower
+
+
+def test_a_design_repeated_in_a_later_chunk_is_not_analysed_again(tmp_path, monkeypatch):
+    """A concave face swept over roller radius (which it ignores) x base radius, two
+    points per chunk: the repeats fall in later chunks, and the run in this process
+    reuses the rows it has (3 chunks, 2 designs analysed); every row still equals the
+    row of its own point."""
+    from camcore import analysis
+
+    grid = {
+        "follower.kind": ["double_concave"],
+        "follower.roller_radius_mm": [8, 10, 12],
+        "cam.base_radius_mm": [75, 80],
+    }
+    spec = sweep.parse_spec(json.dumps({"grid": grid}))
+    analysed: list = []
+    real = analysis.analyze
+    monkeypatch.setattr(analysis, "analyze", lambda d, **k: analysed.append(d) or real(d, **k))
+    n = sweep.run(spec, tmp_path / "r.parquet", chunk=2, verify=False, progress=None)
+    monkeypatch.undo()
+    assert n == 6 and len(analysed) == 2
+    rows = rows_of(tmp_path / "r.parquet")
+    alone = [sweep.row(spec.base, p, verify=False) for p in spec.points()]
+    assert [r["grid.follower.roller_radius_mm"] for r in rows] == [8, 8, 10, 10, 12, 12]
+    for r, a in zip(rows, alone, strict=True):
+        assert {k: r[k] for k in a} == a
