@@ -94,16 +94,17 @@ def _report(args) -> int:
 
 
 def _write(a, outputs: dict[str, str]) -> None:
-    """Build every requested file first (all or none), then write each atomically."""
+    """Build every requested file first, then write them all or none (a path that
+    cannot be written leaves every file, old or new, as it was)."""
     from .export import EXPORTS
-    from .files import FileError, write_atomic
+    from .files import FileError, write_all_atomic
 
     blobs = {kind: EXPORTS[kind].write(a) for kind in outputs}
+    try:
+        write_all_atomic([(path, blobs[kind]) for kind, path in outputs.items()])
+    except FileError as exc:
+        raise DesignError(str(exc)) from None
     for kind, path in outputs.items():
-        try:
-            write_atomic(path, blobs[kind])
-        except FileError as exc:
-            raise DesignError(str(exc)) from None
         print(f"wrote {path} ({len(blobs[kind])} bytes)", file=sys.stderr)
 
 

@@ -70,7 +70,31 @@ def write_atomic(path: str | Path, data: bytes) -> None:
     the disk is full, or *path* is a directory. An existing file at *path* is
     left untouched unless the whole write succeeded.
     """
-    path = Path(path)
+    write_all_atomic([(path, data)])
+
+
+def write_all_atomic(files: list[tuple[str | Path, bytes]]) -> None:
+    """Write several files all or none: every one is written to a temporary file beside
+    its target first, and only when all of them are on disk are they renamed into
+    place (a missing directory for the third file leaves the first two untouched).
+    Raises FileError naming the path that could not be written."""
+    staged: list[tuple[str, Path]] = []
+    try:
+        for path, data in files:
+            staged.append((_stage(Path(path), data), Path(path)))
+        for tmp, path in staged:
+            try:
+                os.replace(tmp, path)
+            except OSError as exc:
+                raise FileError(f"cannot write {path}: {exc.strerror}") from None
+    finally:
+        for tmp, _ in staged:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+
+
+def _stage(path: Path, data: bytes) -> str:
+    """*data* in a flushed temporary file beside *path*; returns its name."""
     directory = path.parent if str(path.parent) else Path(".")
     if path.is_dir():
         raise FileError(f"cannot write {path}: it is a directory")
@@ -84,13 +108,10 @@ def write_atomic(path: str | Path, data: bytes) -> None:
             f.flush()
             os.fsync(f.fileno())
         os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
     except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
+        os.unlink(tmp)
         raise FileError(f"cannot write {path}: {exc.strerror}") from None
+    return tmp
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:

@@ -76,6 +76,24 @@ def test_disk_full_through_the_cli(tmp_path, monkeypatch, capsys):
     assert "No space" in capsys.readouterr().err and not out.exists()
 
 
+def test_one_unwritable_output_leaves_every_file_as_it_was(tmp_path, capsys):
+    """All or none across the files of one export (a maker's review found the STL of
+    one cam replaced beside the CSV of another after an exit 2): the DXF's directory is
+    missing, so neither the STL before it nor the CSV after it is touched."""
+    stl, csv = tmp_path / "cam.stl", tmp_path / "cam.csv"
+    stl.write_bytes(b"the old cam's STL")
+    csv.write_bytes(b"the old cam's profile")
+    args = ["export", "--preset", "paper_example", "--stl", str(stl)]
+    args += ["--dxf", str(tmp_path / "typo" / "cam.dxf"), "--csv", str(csv)]
+    assert cli.main(args) == 2
+    err = capsys.readouterr().err
+    assert "typo" in err and "wrote" not in err
+    assert stl.read_bytes() == b"the old cam's STL" and csv.read_bytes() == b"the old cam's profile"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cam.csv", "cam.stl"]  # no temp file
+    (tmp_path / "typo").mkdir()
+    assert cli.main(args) == 0 and stl.read_bytes().startswith(b"\0" * 80)
+
+
 def test_same_output_twice_is_refused(tmp_path):
     out = tmp_path / "cam.out"
     proc = run(
