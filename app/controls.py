@@ -202,6 +202,13 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
             Spec("material.follower_nu", "Follower ν2", "number", step=0.01),
             Spec("limits.max_pressure_angle_deg", "Max pressure angle [°]", "number", step=1),
             Spec("limits.resolution_deg", "Resolution [°]", "number", step=0.05),
+            Spec(
+                "limits.min_hub_wall_mm",
+                "Min hub wall [mm]",
+                "number",
+                step=0.5,
+                hint="thinnest material between the bore (and keyway) and the profile",
+            ),
         ),
     ),
 )

@@ -56,7 +56,7 @@ BATCHED_FIELDS = (
 )
 
 # the violations this core can decide; the others need the profile (module docstring)
-PROFILE_CHECKS = ("profile_crossing", "export_tolerance", "geometric_check")
+PROFILE_CHECKS = ("profile_crossing", "export_tolerance", "hub_wall", "geometric_check")
 
 
 def group_key(design: Design) -> str:

@@ -34,6 +34,8 @@ verdict holds for the real cam, not only at the analysed angles:
   crosses itself), which a convex cam never does.
 * ``export_tolerance``  the profile cannot be sampled so that every chord stays within
   limits.export_tolerance_mm of the exact cam (it has cusps or folds).
+* ``hub_wall``          with a shaft bore: the thinnest wall between the bore (and its
+  keyway) and the profile must reach limits.min_hub_wall_mm (a maker's limit).
 * ``geometric_check``   the independent check (camcore.verify) finds the profile
   does not produce S(theta) within the export tolerance over cos(pressure angle).
 """
@@ -452,6 +454,54 @@ def violation_mask(
     return m
 
 
+def hub_wall_mm(a) -> float | None:
+    """The thinnest wall [mm] between the shaft bore (with its keyway, centred on +Y,
+    camcore.export.bore_outline) and the profile's vertices; None without a bore.
+
+    Against the round bore it is min |p| - R; against the keyway, the distance of each
+    vertex to the slot's sides and top. The profile's chords stray at most the chord
+    error inside its vertices, which is subtracted."""
+    cam = a.design.cam
+    R = cam.bore_diameter_mm / 2
+    if R <= 0:
+        return None
+    p = to_mm(a.profile.points)
+    wall = float(np.hypot(p[:, 0], p[:, 1]).min()) - R
+    if cam.keyway_width_mm > 0:
+        hw, top = cam.keyway_width_mm / 2, R + cam.keyway_depth_mm
+        foot = math.sqrt(R * R - hw * hw)
+        for a0, a1 in (((-hw, foot), (-hw, top)), ((-hw, top), (hw, top)), ((hw, top), (hw, foot))):
+            wall = min(wall, float(_segment_distance(p, np.array(a0), np.array(a1)).min()))
+    return wall - to_mm(a.chord_error)
+
+
+def _segment_distance(p: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> np.ndarray:
+    """Distance of each point p (N, 2) to the segment a0-a1."""
+    d = a1 - a0
+    t = np.clip(((p - a0) @ d) / float(d @ d), 0.0, 1.0)
+    return np.hypot(*(p - (a0 + t[:, None] * d)).T)
+
+
+def _hub_wall(a) -> list[Violation]:
+    """The hub's thinnest wall against limits.min_hub_wall_mm (not in the paper: a
+    maker's limit; a wall of hundredths of a millimetre passed every other check)."""
+    wall, lim = hub_wall_mm(a), a.design.limits.min_hub_wall_mm
+    if wall is None or wall >= lim:
+        return []
+    key = " and keyway" if a.design.cam.keyway_width_mm > 0 else ""
+    return [
+        Violation(
+            "hub_wall",
+            "hub wall",
+            f"the thinnest wall between the bore{key} and the profile is {wall:.3g} mm, "
+            f"below the limit {lim:g} mm (limits.min_hub_wall_mm): a hub that thin can "
+            "crack when clamped or keyed; a smaller bore or a larger cam",
+            (),
+            lim - wall,
+        )
+    ]
+
+
 def run_all(a, lift_error: float | None) -> list[Violation]:
     """Every violation of ``a`` (a camcore.analysis.Analysis)."""
     out = (
@@ -487,6 +537,7 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
                 to_mm(a.chord_error) - tol,
             )
         )
+    out += _hub_wall(a)
     if lift_error is not None and not lift_error <= lift_tolerance(a):
         out.append(
             Violation(

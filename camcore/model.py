@@ -633,6 +633,13 @@ class Limits(_Part):
         le=10.0,
         description="the maximum Hertz stress times this must stay within the allowable",
     )
+    min_hub_wall_mm: float = Field(
+        2.0,
+        ge=0.0,
+        le=1000.0,
+        description="thinnest material allowed between the shaft bore (and keyway) and "
+        "the profile [mm]; checked when there is a bore",
+    )
 
 
 class Design(_Part):

@@ -147,3 +147,27 @@ def test_keyway_limits(change, message):
     data["cam"].update(change)
     with pytest.raises(ValidationError, match=message):
         Design.model_validate(data)
+
+
+def test_a_hub_wall_below_the_limit_is_a_violation():
+    """A bore that leaves a wall a maker cannot make (0.05 mm in the paper cam) passed
+    every check and exported with exit 0 (a maker's review): limits.min_hub_wall_mm
+    (default 2 mm) now says so, with the wall measured to the round bore (r_b - R) and
+    to the keyway's corners (r_b - |corner|), less the chord error."""
+    from camcore import checks
+
+    def with_bore(bore, width=0.0, depth=0.0, wall_limit=2.0):
+        data = load_preset("paper_example").model_dump()
+        data["cam"].update(bore_diameter_mm=bore, keyway_width_mm=width, keyway_depth_mm=depth)
+        data["limits"]["min_hub_wall_mm"] = wall_limit
+        return analyze(Design.model_validate(data), verify=False)
+
+    thin = with_bore(159.9)
+    (v,) = [v for v in thin.violations if v.code == "hub_wall"]
+    assert v.amount == pytest.approx(2.0 - 0.05, abs=2e-3) and "is 0.049" in v.message
+    keyed = with_bore(30.0, 8.0, 3.3)
+    wall = 80.0 - math.hypot(4.0, 15.0 + 3.3)  # the base circle over the key's corners
+    assert checks.hub_wall_mm(keyed) == pytest.approx(wall, abs=2e-3)
+    assert "hub_wall" not in {v.code for v in keyed.violations}
+    assert "hub_wall" in {v.code for v in with_bore(30.0, 8.0, 3.3, wall_limit=62.0).violations}
+    assert checks.hub_wall_mm(with_bore(0.0)) is None  # a solid blank has no hub wall
