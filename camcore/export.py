@@ -4,8 +4,12 @@ All exports are in millimetres. The STL is the profile extruded by the cam width
 w (z from 0 to w). The profile of a valid design is convex, hence star-shaped
 about the cam axis, so each cap is a triangle fan around the axis: the solid is
 watertight by construction and its volume is exactly the polygon area times w.
-A profile that is not star-shaped (a self-intersecting, undercut design) is
-refused with a clear error rather than exported as a broken part.
+A profile that is not star-shaped about the axis (it crosses itself) is refused
+with a clear error rather than exported as a broken part. A profile that breaks a
+limit but is still star-shaped is exported as the envelope of the follower's
+positions: a slight undercut (roller_undercut) or cusp (curvature_convex) is then a
+sharp corner where the cam cannot follow the motion, and the CLI exits 1 and says
+so (the app's status box names the broken limits).
 """
 
 from __future__ import annotations

@@ -15,8 +15,10 @@ found with a k-d tree).
 Chordal accuracy. The profile's chords lie within its measured chord error e of the
 exact cam; offsetting by d scales a chord's sagitta on a convex stretch of radius rho
 by (rho + d) / rho, so the path lies within e (1 + d kappa_max) of the exact offset
-(kappa_max the largest convex curvature of the polyline); this bound is written into
-the G-code header.
+(kappa_max the largest convex curvature of the polyline). The G-code writes its
+coordinates to DECIMALS places, which moves a vertex by up to ROUNDING_MM more; the
+header states the sum, rounded up (a maker's review measured the written file 0.04 um
+beyond the bound that left the rounding out).
 """
 
 from __future__ import annotations
@@ -33,6 +35,8 @@ from .units import MM, to_deg, to_mm
 SAFE_Z_MM = 5.0  # rapid height above the blank's top face
 FEED_MM_PER_MIN = 200.0
 PLUNGE_MM_PER_MIN = 50.0
+DECIMALS = 4  # of the X, Y words [mm]: 0.1 um, what controllers take
+ROUNDING_MM = 0.5 * 10.0**-DECIMALS * math.sqrt(2)  # the most a rounded vertex moves
 
 
 class GougeError(ExportError):
@@ -132,6 +136,14 @@ def _comment(text: str) -> str:
     return "(" + re.sub(r"[^A-Za-z0-9 _.,:=+\-/]", "_", text)[:80] + ")"
 
 
+def _round_up(x: float, digits: int = 3) -> float:
+    """x rounded up to ``digits`` significant digits (a bound must not shrink)."""
+    if x <= 0:
+        return x
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(x)))
+    return math.ceil(x * scale) / scale
+
+
 def gcode(a, cutter_diameter: float | None = None) -> str:
     """G-code (RS-274, millimetres, absolute) that cuts the cam's outside contour.
 
@@ -142,6 +154,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     a straight feed onto the path; the same way out."""
     D = a.design.cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
+    stated = _round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
     n = vertex_normals(to_mm(a.profile.points))[::-1]
     start, lead = path[0], path[0] + to_mm(D) * n[0]
@@ -151,22 +164,26 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"cam contour: {a.design.name}"),
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
-        _comment(f"path within {to_mm(bound):.3g} mm of the exact offset, climb, clockwise"),
+        _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
         _comment(
             f"one pass, full depth, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"
+        ),
+        _comment(
+            f"Z-{depth:g} is the cam width exactly: add your breakthrough allowance "
+            "(e.g. 0.2-0.5 mm) if the blank sits on a spoilboard"
         ),
         _comment("check them, and set the spindle speed: M3 carries no S word"),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
-        f"G0 X{lead[0]:.4f} Y{lead[1]:.4f}",
+        f"G0 X{lead[0]:.{DECIMALS}f} Y{lead[1]:.{DECIMALS}f}",
         "M3",
         f"G1 Z{-depth:.4f} F{PLUNGE_MM_PER_MIN:g}",
-        f"G1 X{start[0]:.4f} Y{start[1]:.4f} F{FEED_MM_PER_MIN:g}",
+        f"G1 X{start[0]:.{DECIMALS}f} Y{start[1]:.{DECIMALS}f} F{FEED_MM_PER_MIN:g}",
     ]
-    lines += [f"X{x:.4f} Y{y:.4f}" for x, y in path[1:]]
+    lines += [f"X{x:.{DECIMALS}f} Y{y:.{DECIMALS}f}" for x, y in path[1:]]
     lines += [
-        f"X{start[0]:.4f} Y{start[1]:.4f}",
-        f"X{lead[0]:.4f} Y{lead[1]:.4f}",
+        f"X{start[0]:.{DECIMALS}f} Y{start[1]:.{DECIMALS}f}",
+        f"X{lead[0]:.{DECIMALS}f} Y{lead[1]:.{DECIMALS}f}",
         f"G0 Z{SAFE_Z_MM:.3f}",
         "M5",
         "M30",

@@ -135,6 +135,20 @@ def test_export_of_a_design_that_breaks_a_limit_writes_and_exits_1(tmp_path):
     proc = run("export", "--preset", "paper_example", *BREAKS, "--dxf", str(out))
     assert proc.returncode == 1 and out.stat().st_size > 0
     assert "high_dwell_arc" in proc.stderr
+    assert "sharp corner" not in proc.stderr  # that limit leaves the profile smooth
+
+
+def test_an_undercut_export_says_the_part_has_a_sharp_corner(tmp_path):
+    """A slightly undercut roller cam is still star-shaped and is written (exit 1), but
+    its profile has a corner where the roller's path is only touched (a maker's review
+    measured an 11.45 deg turn at one vertex): the CLI says not to make it."""
+    out = tmp_path / "cam.stl"
+    undercut = ["--follower", "single_roller", "--set", "cam.base_radius_mm=23.5"]
+    undercut += ["--set", "follower.roller_radius_mm=11.5", "--set", "motion.rise_deg=40"]
+    undercut += ["--set", "motion.high_dwell_deg=130"]
+    proc = run("export", "--preset", "paper_example", *undercut, "--stl", str(out))
+    assert proc.returncode == 1 and out.stat().st_size > 0
+    assert "roller_undercut" in proc.stderr and "sharp corner" in proc.stderr
 
 
 def test_version():
