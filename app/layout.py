@@ -40,14 +40,16 @@ DOWNLOADS = (
     ("pdf", "Report PDF"),
 )
 STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session adapts them
-# The wide panel (Curves tab): viser's widest panel is 384 px; this rule, in an HTML
-# element of the tab, anchors the panel at the right edge and widens it (its charts
-# follow). viser 1.1.1 marks the panel data-testid="floating-panel"; while the rule is
-# on, the panel cannot be dragged.
-WIDE_PANEL_CSS = (
-    "<style>[data-testid='floating-panel']{left:auto!important;right:15px!important;"
-    "width:min(62vw,1000px)!important}</style>"
-)
+# The wide panel (Curves tab): viser's widest theme panel is 24 em = 384 px; the wide
+# one takes up to 62 % of the viewer's width, at most 1000 px (it stays at the right
+# edge and its charts follow).
+NARROW_PANEL_PX = 384
+
+
+def wide_panel_px(viewer_width_px: int) -> int:
+    """The wide panel's width [px] for a viewer ``viewer_width_px`` wide (0: unknown)."""
+    width = viewer_width_px if viewer_width_px > 0 else 1280
+    return int(max(NARROW_PANEL_PX, min(0.62 * width, 1000)))
 
 
 @dataclass
@@ -55,7 +57,6 @@ class Layout:
     """Handles of one tab's widgets (viser GUI handles unless said otherwise)."""
 
     status: Any
-    wide_css: Any  # holds WIDE_PANEL_CSS while the wide panel is on
     quick_stl_btn: Any
     quick_md: Any
     # animation
@@ -97,7 +98,7 @@ class Layout:
 def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     """Build the whole tab in ``gui`` (a client's GuiApi) for design ``base`` whose
     analysis is ``first`` (the curves take their series from it)."""
-    h: dict[str, Any] = {"status": gui.add_html(""), "wide_css": gui.add_html("")}
+    h: dict[str, Any] = {"status": gui.add_html("")}
     h["quick_stl_btn"] = gui.add_button("⬇ Download the cam (STL, mm)")
     h["quick_md"] = gui.add_markdown("")  # that button's answer (sent, or why not)
     with gui.add_folder("Animation", expand_by_default=True):

@@ -24,7 +24,7 @@ from camcore.model import load_preset as load_preset_design
 
 from . import controls, plots, storage, uploads
 from .analyst import Analyst, Result
-from .layout import DEFAULT_PRESET, WIDE_PANEL_CSS, Layout, build_layout
+from .layout import DEFAULT_PRESET, NARROW_PANEL_PX, Layout, build_layout, wide_panel_px
 from .panels import (
     esc,
     file_stem,
@@ -531,9 +531,13 @@ class Session:
                     self.ui.stations_img = self.client.gui.add_image(image, format="png")
 
     def set_wide_panel(self, on: bool) -> None:
-        """Widen the control panel for the curves (layout.WIDE_PANEL_CSS), or not."""
+        """Widen the control panel for the curves, or give it back its width: through
+        viser's own panel width (a CSS width on the panel's frame had left its contents
+        at their own width, 34 px past the frame's right edge on a 1920 px screen)."""
         with self.lock:
-            self.ui.wide_css.content = WIDE_PANEL_CSS if on else ""
+            self.client.gui.main_panel.set_width(
+                wide_panel_px(self.client.camera.image_width) if on else NARROW_PANEL_PX
+            )
 
     def set_camera_view(self, view: str) -> None:
         """A preset view (Front by default; the close-up follows the animation)."""

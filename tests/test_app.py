@@ -698,13 +698,19 @@ def test_explore_with_a_profile_figure_runs_the_full_analysis(tab):
     assert e.front_dd.options and all("µm" in o for o in e.front_dd.options)
 
 
-def test_wide_panel_toggle(tab):
-    from app.layout import WIDE_PANEL_CSS
+def test_wide_panel_toggle(tab, monkeypatch):
+    """The wide panel asks viser for the width (62 % of the viewer, at most 1000 px) and
+    gives the panel its own back (the browser test sees the contents follow)."""
+    from viser._gui_handles import MainPanelHandle
 
+    from app.layout import NARROW_PANEL_PX, wide_panel_px
+
+    widths: list[float] = []
+    monkeypatch.setattr(MainPanelHandle, "set_width", lambda self, w: widths.append(w))
     tab.ui.wide_box.value = True
-    assert tab.ui.wide_css.content == WIDE_PANEL_CSS
     tab.ui.wide_box.value = False
-    assert tab.ui.wide_css.content == ""
+    assert widths == [wide_panel_px(tab.client.camera.image_width), NARROW_PANEL_PX]
+    assert [wide_panel_px(w) for w in (0, 600, 1000, 1920)] == [793, 384, 620, 1000]
 
 
 def test_explore_refuses_hostile_ranges(tab):
