@@ -142,15 +142,15 @@ def test_app_in_headless_chromium(tmp_path):
             )
             box = panel.bounding_box()
             assert box["x"] + box["width"] <= 1000 and box["width"] > narrow + 150
-            page.wait_for_timeout(500)  # the panel's contents follow its width
             # its contents follow (a CSS width on the frame had left the number boxes
             # past its right edge, cut off): every visible input inside the panel
-            right = page.evaluate(
-                """() => Math.max(...[...document.querySelectorAll(
-                    '[data-testid=floating-panel] input')].map(
-                    e => e.getBoundingClientRect()).filter(r => r.width > 0).map(r => r.right))"""
+            page.wait_for_function(
+                """() => { const p = document.querySelector('[data-testid=floating-panel]');
+                    const right = p.getBoundingClientRect().right;
+                    return [...p.querySelectorAll('input')].map(e => e.getBoundingClientRect())
+                      .filter(r => r.width > 0).every(r => r.right <= right + 0.5) }""",
+                timeout=15_000,
             )
-            assert right <= box["x"] + box["width"] + 0.5, (right, box)
             page.get_by_text("Wide panel").first.click()
             page.wait_for_function(
                 f"() => document.querySelector('[data-testid=floating-panel]')"
