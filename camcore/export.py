@@ -81,6 +81,17 @@ def bore_outline(cam) -> np.ndarray | None:
     return np.vstack([[[hw, top], [-hw, top]], circle])
 
 
+def keyed_bore_xyb(cam) -> list[tuple[float, float, float]]:
+    """The keyed bore of bore_outline as LWPOLYLINE vertices (x, y, bulge) [mm]: the
+    slot's top and left side as lines, the circle from the left foot round the bottom
+    to the right foot as one arc (bulge tan(angle / 4), counter-clockwise), and the
+    right side closing it."""
+    R, hw = cam.bore_diameter_mm / 2, cam.keyway_width_mm / 2
+    top, foot = R + cam.keyway_depth_mm, math.sqrt(R * R - hw * hw)
+    swept = math.pi + 2 * math.atan2(foot, hw)  # from pi - a_c to 2 pi + a_c
+    return [(hw, top, 0.0), (-hw, top, 0.0), (-hw, foot, math.tan(swept / 4)), (hw, foot, 0.0)]
+
+
 def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
     hole = bore_outline(a.design.cam)
     if hole is not None and np.hypot(*hole.T).max() >= np.hypot(p[:, 0], p[:, 1]).min():
@@ -195,7 +206,8 @@ def dxf_bytes(a) -> bytes:
     """DXF (R2010, mm) for CAM/CNC software.
 
     Layers: PROFILE (the closed profile, one LWPOLYLINE), BORE (the shaft hole: a true
-    circle, or with a keyway its outline), and two reference layers that are not
+    circle, or with a keyway its outline of three lines and a true arc, which CAM
+    software recognizes as the bore), and two reference layers that are not
     features and are set not to plot: CENTERLINES (a centre cross at the axis, CENTER
     linetype) and DATUM (the angular datum: a radial line on the theta = 0 ray, where
     the follower sits when the rise begins, with a note; the cam turns clockwise).
@@ -225,7 +237,9 @@ def dxf_bytes(a) -> bytes:
     if hole is not None:
         doc.layers.add("BORE", color=3)
         if cam.keyway_width_mm > 0:
-            msp.add_lwpolyline(hole.tolist(), close=True, dxfattribs={"layer": "BORE"})
+            msp.add_lwpolyline(
+                keyed_bore_xyb(cam), format="xyb", close=True, dxfattribs={"layer": "BORE"}
+            )
         else:
             msp.add_circle(
                 (0.0, 0.0), radius=cam.bore_diameter_mm / 2, dxfattribs={"layer": "BORE"}

@@ -122,6 +122,19 @@ def test_keyway_in_dxf_and_datum_layers():
     assert len(bore) == 1 and bore[0].dxftype() == "LWPOLYLINE" and bore[0].closed
     pts = np.array([p[:2] for p in bore[0].get_points()])
     assert pts[:, 1].max() == pytest.approx(18.3)
+    # three lines and one true arc of the bore's circle (CAM software sees a bore; a
+    # maker's review found a 258-gon whose chords cut 1-3 um inside the circle)
+    parts = list(bore[0].virtual_entities())
+    arcs = [e for e in parts if e.dxftype() == "ARC"]
+    assert sorted(e.dxftype() for e in parts) == ["ARC", "LINE", "LINE", "LINE"]
+    (arc,) = arcs
+    assert arc.dxf.radius == pytest.approx(15.0) and np.allclose(
+        tuple(arc.dxf.center)[:2], 0, atol=1e-9
+    )
+    # it runs round the bottom (through -Y), from one foot of the slot to the other
+    foot = math.degrees(math.atan2(math.sqrt(15.0**2 - 4.0**2), 4.0))
+    assert arc.dxf.start_angle == pytest.approx(180 - foot)
+    assert arc.dxf.end_angle % 360 == pytest.approx(foot)
     # reference layers: present, not plotted, no circle that looks like a feature
     for name in ("CENTERLINES", "DATUM"):
         assert doc.layers.get(name).dxf.plot == 0
