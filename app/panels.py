@@ -233,6 +233,10 @@ def summary_markdown(s: dict) -> str:
         ),
         ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
     ]
+    if s["profile"]["hub_wall_mm"] is not None:
+        rows.append(
+            ("Hub wall (thinnest, bore to profile)", f"{f(s['profile']['hub_wall_mm'], 2)} mm")
+        )
     return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
 
 

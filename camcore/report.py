@@ -256,6 +256,7 @@ def summary(a: Analysis) -> dict:
             "area_mm2": a.profile.area * 1e6,
             "perimeter_mm": a.profile.perimeter * 1e3,
             "vertices": int(a.profile.points.shape[0]),
+            "hub_wall_mm": checks.hub_wall_mm(a),  # None without a bore
         },
         "verification": {
             "max_lift_error_mm": None if a.lift_error is None else a.lift_error * 1e3,
@@ -400,6 +401,11 @@ def report_text(s: dict) -> str:
         (
             "profile area / perimeter",
             f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / {_fmt(s['profile']['perimeter_mm'], 3)} mm",
+        ),
+        *(
+            [("hub wall (thinnest, bore to profile)", f"{_fmt(s['profile']['hub_wall_mm'], 3)} mm")]
+            if s["profile"]["hub_wall_mm"] is not None
+            else []
         ),
         (
             "profile chords within",

@@ -189,6 +189,9 @@ def test_key_numbers_typeset_units_as_the_curves_do(paper_analysis):
     text = panels.summary_markdown(summary(paper_analysis))
     assert "µm per million" in text and "N·m" in text and "kg·m²" in text
     assert " um " not in text and " N m " not in text
+    assert "Hub wall" not in text  # no bore, no hub wall
+    bored = {**summary(paper_analysis), "profile": {"area_mm2": 1.0, "hub_wall_mm": 4.25}}
+    assert "| Hub wall (thinnest, bore to profile) | 4.25 mm |" in panels.summary_markdown(bored)
 
 
 @pytest.mark.parametrize("preset", ["paper_example", "valve_lift_roller"])

@@ -184,3 +184,9 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
     assert "hub_wall" not in {v.code for v in keyed.violations}
     assert "hub_wall" in {v.code for v in with_bore(30.0, 8.0, 3.3, wall_limit=62.0).violations}
     assert checks.hub_wall_mm(with_bore(0.0)) is None  # a solid blank has no hub wall
+    from camcore.report import report_text, summary
+
+    s = summary(keyed)
+    assert s["profile"]["hub_wall_mm"] == checks.hub_wall_mm(keyed)  # reported, in mm
+    assert f"{s['profile']['hub_wall_mm']:.3f} mm" in report_text(s)
+    assert summary(with_bore(0.0))["profile"]["hub_wall_mm"] is None
