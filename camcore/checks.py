@@ -456,22 +456,26 @@ def violation_mask(
 
 def hub_wall_mm(a) -> float | None:
     """The thinnest wall [mm] between the shaft bore (with its keyway, centred on +Y,
-    camcore.export.bore_outline) and the profile's vertices; None without a bore.
+    camcore.export.bore_outline) and the cam; None without a bore.
 
-    Against the round bore it is min |p| - R; against the keyway, the distance of each
-    vertex to the slot's sides and top. The profile's chords stray at most the chord
-    error inside its vertices, which is subtracted."""
+    The distance between two polylines is the least of each one's vertices to the
+    other's edges: against the round bore, the profile polyline's nearest approach to
+    the axis less R; against the keyway, also the profile's vertices to the slot's
+    sides and top and the slot's corners and feet to the profile's edges. The exact cam
+    lies within the chord error of the polyline, which is subtracted."""
     cam = a.design.cam
     R = cam.bore_diameter_mm / 2
     if R <= 0:
         return None
     p = to_mm(a.profile.points)
-    wall = float(np.hypot(p[:, 0], p[:, 1]).min()) - R
+    wall = _polyline_distance(np.zeros(2), p) - R
     if cam.keyway_width_mm > 0:
         hw, top = cam.keyway_width_mm / 2, R + cam.keyway_depth_mm
         foot = math.sqrt(R * R - hw * hw)
-        for a0, a1 in (((-hw, foot), (-hw, top)), ((-hw, top), (hw, top)), ((hw, top), (hw, foot))):
-            wall = min(wall, float(_segment_distance(p, np.array(a0), np.array(a1)).min()))
+        slot = np.array([(-hw, foot), (-hw, top), (hw, top), (hw, foot)])
+        for a0, a1 in zip(slot[:-1], slot[1:], strict=True):
+            wall = min(wall, float(_segment_distance(p, a0, a1).min()))
+        wall = min(wall, *(_polyline_distance(q, p) for q in slot))
     return wall - to_mm(a.chord_error)
 
 
@@ -480,6 +484,13 @@ def _segment_distance(p: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> np.ndarr
     d = a1 - a0
     t = np.clip(((p - a0) @ d) / float(d @ d), 0.0, 1.0)
     return np.hypot(*(p - (a0 + t[:, None] * d)).T)
+
+
+def _polyline_distance(q: np.ndarray, p: np.ndarray) -> float:
+    """Distance of the point q to the closed polyline p (N, 2): its nearest edge."""
+    e = np.roll(p, -1, axis=0) - p
+    t = np.clip(((q - p) * e).sum(axis=1) / (e * e).sum(axis=1), 0.0, 1.0)
+    return float(np.hypot(*(q - (p + t[:, None] * e)).T).min())
 
 
 def _hub_wall(a) -> list[Violation]:

@@ -177,13 +177,18 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
 
     thin = with_bore(159.9)
     (v,) = [v for v in thin.violations if v.code == "hub_wall"]
-    assert v.amount == pytest.approx(2.0 - 0.05, abs=2e-3) and "is 0.049" in v.message
+    assert v.amount == pytest.approx(2.0 - 0.05, abs=2e-3) and "is 0.04" in v.message
     keyed = with_bore(30.0, 8.0, 3.3)
     wall = 80.0 - math.hypot(4.0, 15.0 + 3.3)  # the base circle over the key's corners
     assert checks.hub_wall_mm(keyed) == pytest.approx(wall, abs=2e-3)
     assert "hub_wall" not in {v.code for v in keyed.violations}
     assert "hub_wall" in {v.code for v in with_bore(30.0, 8.0, 3.3, wall_limit=62.0).violations}
     assert checks.hub_wall_mm(with_bore(0.0)) is None  # a solid blank has no hub wall
+    # a key's corner 0.3 mm under the base circle: the nearest point of the profile is
+    # on an edge between two vertices ~0.8 mm apart, not at one (the review's case)
+    depth = math.sqrt(80.0**2 - 4.0**2) - 0.3 - 15.0
+    near = checks.hub_wall_mm(with_bore(30.0, 8.0, depth, wall_limit=0.0))
+    assert near == pytest.approx(80.0 - math.hypot(4.0, 15.0 + depth), abs=2e-3)
     from camcore.report import report_text, summary
 
     s = summary(keyed)
