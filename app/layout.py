@@ -41,14 +41,18 @@ DOWNLOADS = (
 )
 STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session adapts them
 # The wide panel (Curves tab): viser's widest theme panel is 24 em = 384 px; the wide
-# one takes up to 62 % of the viewer's width, at most 1000 px (it stays at the right
-# edge and its charts follow).
+# one takes 62 % of the 3D view's drawing width, at most 1000 px (it stays at the right
+# edge and its charts follow). The drawing width is in device pixels (CSS pixels times
+# the screen's pixel ratio, times 0.75-1 as viser adapts to the frame rate), so on a
+# high-DPI screen the share is larger; panels.STATUS_CSS keeps every panel 80 px
+# narrower than the window.
 NARROW_PANEL_PX = 384
 
 
-def wide_panel_px(viewer_width_px: int) -> int:
-    """The wide panel's width [px] for a viewer ``viewer_width_px`` wide (0: unknown)."""
-    width = viewer_width_px if viewer_width_px > 0 else 1280
+def wide_panel_px(drawn_width_px: int) -> int:
+    """The wide panel's width [px] for a 3D view ``drawn_width_px`` wide (0: unknown,
+    taken as 1280)."""
+    width = drawn_width_px if drawn_width_px > 0 else 1280
     return int(max(NARROW_PANEL_PX, min(0.62 * width, 1000)))
 
 

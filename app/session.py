@@ -534,10 +534,12 @@ class Session:
         """Widen the control panel for the curves, or give it back its width: through
         viser's own panel width (a CSS width on the panel's frame had left its contents
         at their own width, 34 px past the frame's right edge on a 1920 px screen)."""
+        try:
+            drawn = self.client.camera.image_width  # the 3D view's drawing width [px]
+        except AssertionError:  # no camera message yet
+            drawn = 0
         with self.lock:
-            self.client.gui.main_panel.set_width(
-                wide_panel_px(self.client.camera.image_width) if on else NARROW_PANEL_PX
-            )
+            self.client.gui.main_panel.set_width(wide_panel_px(drawn) if on else NARROW_PANEL_PX)
 
     def set_camera_view(self, view: str) -> None:
         """A preset view (Front by default; the close-up follows the animation)."""
