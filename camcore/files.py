@@ -76,21 +76,55 @@ def write_atomic(path: str | Path, data: bytes) -> None:
 def write_all_atomic(files: list[tuple[str | Path, bytes]]) -> None:
     """Write several files all or none: every one is written to a temporary file beside
     its target first, and only when all of them are on disk are they renamed into
-    place (a missing directory for the third file leaves the first two untouched).
+    place (a missing directory for the third file leaves the first two untouched). If
+    a rename fails midway (a target another user owns in a sticky directory), the
+    files already replaced get their old contents back from hard links kept for that.
     Raises FileError naming the path that could not be written."""
     staged: list[tuple[str, Path]] = []
+    kept: dict[Path, str | None] = {}  # target -> a hard link to its old file, or None
+    done: list[Path] = []
     try:
         for path, data in files:
             staged.append((_stage(Path(path), data), Path(path)))
         for tmp, path in staged:
+            kept[path] = _keep(path, tmp)
+        for tmp, path in staged:
             try:
                 os.replace(tmp, path)
             except OSError as exc:
+                _restore(done, kept)
                 raise FileError(f"cannot write {path}: {exc.strerror}") from None
+            done.append(path)
     finally:
-        for tmp, _ in staged:
-            if os.path.exists(tmp):
-                os.unlink(tmp)
+        for name in [tmp for tmp, _ in staged] + [k for k in kept.values() if k]:
+            if os.path.lexists(name):
+                os.unlink(name)
+
+
+def _keep(path: Path, tmp: str) -> str | None:
+    """A hard link to the file (or link) now at *path*, beside it; None if there is
+    none or the file system cannot link (then a failed export cannot give it back)."""
+    if not os.path.lexists(path):
+        return None
+    backup = f"{tmp}.old"
+    try:
+        os.link(path, backup, follow_symlinks=False)
+    except OSError:
+        return None
+    return backup
+
+
+def _restore(done: list[Path], kept: dict[Path, str | None]) -> None:
+    """Undo the renames already made: the old file back, or no file where none was."""
+    for path in done:
+        old = kept.get(path)
+        try:
+            if old is not None:
+                os.replace(old, path)
+            else:
+                os.unlink(path)
+        except OSError:
+            pass
 
 
 def _stage(path: Path, data: bytes) -> str:

@@ -94,6 +94,29 @@ def test_one_unwritable_output_leaves_every_file_as_it_was(tmp_path, capsys):
     assert cli.main(args) == 0 and stl.read_bytes().startswith(b"\0" * 80)
 
 
+def test_a_rename_that_fails_midway_gives_the_replaced_files_back(tmp_path, monkeypatch):
+    """All or none when the second rename fails after the first succeeded (a target
+    another user owns in a sticky directory; found by a review): the STL already
+    replaced gets its old contents back, a new file where none was is removed, and no
+    temporary file or kept link is left."""
+    stl, csv, dxf = tmp_path / "cam.stl", tmp_path / "cam.csv", tmp_path / "cam.dxf"
+    stl.write_bytes(b"old stl")
+    csv.write_bytes(b"old csv")
+    real = os.replace
+
+    def refuse_the_csv(src, dst):
+        if Path(dst) == csv:
+            raise PermissionError(1, "Operation not permitted")
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", refuse_the_csv)
+    args = ["export", "--preset", "paper_example", "--dxf", str(dxf), "--stl", str(stl)]
+    assert cli.main([*args, "--csv", str(csv)]) == 2
+    monkeypatch.undo()
+    assert stl.read_bytes() == b"old stl" and csv.read_bytes() == b"old csv"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cam.csv", "cam.stl"]
+
+
 def test_same_output_twice_is_refused(tmp_path):
     out = tmp_path / "cam.out"
     proc = run(
