@@ -14,8 +14,8 @@ Out come fixed-size figures per design: the grid maxima and ranges of the report
 (the zoom search of camcore.extremes, batched), the shaft figures, and the verdict of
 the paper's limits (camcore.checks, the same rules in the same order). What needs the
 ragged profile is not built here: the profile's area, perimeter and vertices, its
-chord error and the export tolerance, the star-shape check, wear along the profile and
-the geometric check (``camcore.sweep`` runs those through the single analysis when
+chord error and the export tolerance, the star-shape check, the hub wall, wear along
+the profile and the geometric check (``camcore.sweep`` runs those through the single analysis when
 asked). What depends on neither the geometry nor the grid (the elastic train, the
 program's continuity) is computed once per batch; the spring figures depend on the
 grid (their search starts from its samples), so each design gets its own, in one
@@ -55,7 +55,7 @@ BATCHED_FIELDS = (
     ("follower", "single_offset_mm"),
 )
 
-# the violations this core can decide; the others need the profile (module docstring)
+# the violations this core cannot decide: they need the profile (module docstring)
 PROFILE_CHECKS = ("profile_crossing", "export_tolerance", "hub_wall", "geometric_check")
 
 

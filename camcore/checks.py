@@ -504,7 +504,7 @@ def _hub_wall(a) -> list[Violation]:
         Violation(
             "hub_wall",
             "hub wall",
-            f"the thinnest wall between the bore{key} and the profile is {wall:.3g} mm, "
+            f"the thinnest wall between the bore{key} and the profile is {wall:.4f} mm, "
             f"below the limit {lim:g} mm (limits.min_hub_wall_mm): a hub that thin can "
             "crack when clamped or keyed; a smaller bore or a larger cam",
             (),

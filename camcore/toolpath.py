@@ -168,10 +168,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(
             f"one pass, full depth, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"
         ),
-        _comment(
-            f"Z-{depth:g} is the cam width exactly: add your breakthrough allowance "
-            "(e.g. 0.2-0.5 mm) if the blank sits on a spoilboard"
-        ),
+        _comment(f"Z-{depth:g} = the cam width exactly: add a breakthrough allowance"),
         _comment("check them, and set the spindle speed: M3 carries no S word"),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",

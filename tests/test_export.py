@@ -177,7 +177,7 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
 
     thin = with_bore(159.9)
     (v,) = [v for v in thin.violations if v.code == "hub_wall"]
-    assert v.amount == pytest.approx(2.0 - 0.05, abs=2e-3) and "is 0.04" in v.message
+    assert v.amount == pytest.approx(2.0 - 0.05, abs=2e-3) and "is 0.0487 mm" in v.message
     keyed = with_bore(30.0, 8.0, 3.3)
     wall = 80.0 - math.hypot(4.0, 15.0 + 3.3)  # the base circle over the key's corners
     assert checks.hub_wall_mm(keyed) == pytest.approx(wall, abs=2e-3)

@@ -157,15 +157,15 @@ def test_offset_lowers_the_rise_pressure_angle():
 def test_a_large_offset_raises_the_rise_pressure_angle_again():
     """The limit of the documented sign (README, Offset single followers; found by an
     independent review): past about the rise's largest V the resting follower's lean
-    atan(e_s / Y_C) sets the rise's maximum, which then grows with e_s. The README's
-    figures for the paper example as a single roller, to their printed digits."""
+    atan(e_s / Y_C) sets the rise's maximum, which then grows with e_s (the README's
+    figures of it: tests/test_readme_numbers.py)."""
     rise = {
         e_s: summary(analyze(design("single_roller", e_s=e_s), verify=False))[
             "pressure_angle_max_deg"
         ]["rise"]
         for e_s in (0.0, 10.0, 15.0, 20.0)
     }
-    assert [round(rise[e], 2) for e in (0.0, 10.0, 15.0, 20.0)] == [10.23, 6.52, 9.81, 13.14]
+    assert rise[10.0] < rise[15.0] < rise[0.0] < rise[20.0]  # falls, then rises past e = 0
     a = analyze(design("single_roller", e_s=20.0), verify=False)
     R_p, e = a.geo.r_b + a.geo.r, 20e-3  # the pitch (roller centre) radius at S = 0
     lean = math.degrees(math.atan(e / math.sqrt(R_p**2 - e**2)))

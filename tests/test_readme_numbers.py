@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from camcore.analysis import compare
-from camcore.model import FollowerKind, load_preset
+from camcore.model import Design, FollowerKind, load_preset
 from camcore.report import summary
 
 README = Path(__file__).resolve().parents[1] / "README.md"
@@ -85,3 +85,24 @@ def test_the_section_6_geometry_is_what_camcore_computes(sums):
         f"{pa['rise']:.2f}",
         f"{pa['fall']:.2f}",
     )
+
+
+def test_the_offset_figures_are_what_camcore_computes():
+    """The README's figures for the offset's turn (Offset single followers): the rise's
+    largest |phi| of the paper example as a single roller at four offsets."""
+    from camcore.analysis import analyze
+
+    text = " ".join(README.read_text(encoding="utf-8").split())
+    m = re.search(
+        r"largest \|phi\| is ([0-9.]+) deg at e_s = 0, ([0-9.]+) at 10 mm, ([0-9.]+) at "
+        r"15 mm and ([0-9.]+) at 20 mm",
+        text,
+    )
+    assert m is not None
+    data = load_preset("paper_example").with_kind(FollowerKind.single_roller).model_dump()
+    printed = []
+    for e_s in (0.0, 10.0, 15.0, 20.0):
+        data["follower"]["single_offset_mm"] = e_s
+        s = summary(analyze(Design.model_validate(data), verify=False))
+        printed.append(f"{s['pressure_angle_max_deg']['rise']:.2f}")
+    assert m.groups() == tuple(printed)

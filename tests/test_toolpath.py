@@ -134,4 +134,5 @@ def test_the_header_bound_holds_for_the_written_coordinates(tol_mm):
     moved = np.hypot(*(xy - path[::-1] / MM).T).max()
     assert moved <= toolpath.ROUNDING_MM
     assert bound / MM + moved <= stated <= 1.01 * (bound / MM + toolpath.ROUNDING_MM)
-    assert "breakthrough" in text  # Z is the cam width exactly, and the header says so
+    # Z is the cam width exactly, and the header says so in a whole comment
+    assert "(Z-15 = the cam width exactly: add a breakthrough allowance)" in text.splitlines()
