@@ -482,14 +482,17 @@ def hub_wall_mm(a) -> float | None:
 def _segment_distance(p: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> np.ndarray:
     """Distance of each point p (N, 2) to the segment a0-a1."""
     d = a1 - a0
-    t = np.clip(((p - a0) @ d) / float(d @ d), 0.0, 1.0)
+    dd = float(d @ d)
+    t = np.clip(((p - a0) @ d) / dd, 0.0, 1.0) if dd > 0 else np.zeros(len(p))
     return np.hypot(*(p - (a0 + t[:, None] * d)).T)
 
 
 def _polyline_distance(q: np.ndarray, p: np.ndarray) -> float:
     """Distance of the point q to the closed polyline p (N, 2): its nearest edge."""
     e = np.roll(p, -1, axis=0) - p
-    t = np.clip(((q - p) * e).sum(axis=1) / (e * e).sum(axis=1), 0.0, 1.0)
+    ee = (e * e).sum(axis=1)
+    along = ((q - p) * e).sum(axis=1)
+    t = np.clip(np.divide(along, ee, out=np.zeros_like(ee), where=ee > 0), 0.0, 1.0)
     return float(np.hypot(*(q - (p + t[:, None] * e)).T).min())
 
 

@@ -189,6 +189,10 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
     depth = math.sqrt(80.0**2 - 4.0**2) - 0.3 - 15.0
     near = checks.hub_wall_mm(with_bore(30.0, 8.0, depth, wall_limit=0.0))
     assert near == pytest.approx(80.0 - math.hypot(4.0, 15.0 + depth), abs=2e-3)
+    # a profile that repeats a vertex (a zero-length edge) still has a finite distance
+    # (it was NaN, and a NaN wall read as broken; the property tests met it)
+    square = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    assert checks._polyline_distance(np.zeros(2), square) == pytest.approx(math.sqrt(0.5))
     from camcore.report import report_text, summary
 
     s = summary(keyed)
