@@ -32,6 +32,13 @@ def _table() -> dict[str, list[str]]:
     return out
 
 
+def _printed(pattern: str) -> tuple[str, ...]:
+    """The numbers the README prints where ``pattern`` matches (its lines joined)."""
+    m = re.search(pattern, " ".join(README.read_text(encoding="utf-8").split()))
+    assert m is not None, pattern
+    return m.groups()
+
+
 @pytest.fixture(scope="module")
 def sums():
     return {k: summary(a) for k, a in compare(load_preset("paper_example")).items()}
@@ -52,14 +59,12 @@ def test_the_section_6_table_is_what_camcore_computes(sums):
 
 
 def test_the_dwell_ratios_are_what_camcore_computes(sums):
-    text = README.read_text(encoding="utf-8")
-    m = re.search(
-        r"Ratios double/single in the dwell: ([0-9.]+) % \(rollers.*?and ([0-9.]+) %", text, re.S
+    rollers, concave = _printed(
+        r"Ratios double/single in the dwell: ([0-9.]+) % \(rollers.*?and ([0-9.]+) %"
     )
-    assert m is not None
     for printed, double, single in (
-        (m.group(1), FollowerKind.double_roller, FollowerKind.single_roller),
-        (m.group(2), FollowerKind.double_concave, FollowerKind.single_concave),
+        (rollers, FollowerKind.double_roller, FollowerKind.single_roller),
+        (concave, FollowerKind.double_concave, FollowerKind.single_concave),
     ):
         ratio = (
             sums[double]["contact_force_max_N"]["high_dwell_two_contact"]
@@ -69,16 +74,13 @@ def test_the_dwell_ratios_are_what_camcore_computes(sums):
 
 
 def test_the_section_6_geometry_is_what_camcore_computes(sums):
-    text = " ".join(README.read_text(encoding="utf-8").split())
-    m = re.search(
+    printed = _printed(
         r"Geometry: R = ([0-9.]+) mm, psi_h = ([0-9.]+) deg, psi_l = ([0-9.]+) deg, .*?"
-        r"max pressure angle ([0-9.]+) deg rise, ([0-9.]+) deg fall",
-        text,
+        r"max pressure angle ([0-9.]+) deg rise, ([0-9.]+) deg fall"
     )
-    assert m is not None
     s = sums[FollowerKind.double_concave]
     pa = s["pressure_angle_max_deg"]
-    assert m.groups() == (
+    assert printed == (
         f"{s['dwell_radius_mm']:.4f}",
         f"{s['psi_h_deg']:.4f}",
         f"{s['psi_l_deg']:.4f}",
@@ -92,17 +94,14 @@ def test_the_offset_figures_are_what_camcore_computes():
     largest |phi| of the paper example as a single roller at four offsets."""
     from camcore.analysis import analyze
 
-    text = " ".join(README.read_text(encoding="utf-8").split())
-    m = re.search(
+    printed = _printed(
         r"largest \|phi\| is ([0-9.]+) deg at e_s = 0, ([0-9.]+) at 10 mm, ([0-9.]+) at "
-        r"15 mm and ([0-9.]+) at 20 mm",
-        text,
+        r"15 mm and ([0-9.]+) at 20 mm"
     )
-    assert m is not None
     data = load_preset("paper_example").with_kind(FollowerKind.single_roller).model_dump()
-    printed = []
+    computed = []
     for e_s in (0.0, 10.0, 15.0, 20.0):
         data["follower"]["single_offset_mm"] = e_s
         s = summary(analyze(Design.model_validate(data), verify=False))
-        printed.append(f"{s['pressure_angle_max_deg']['rise']:.2f}")
-    assert m.groups() == tuple(printed)
+        computed.append(f"{s['pressure_angle_max_deg']['rise']:.2f}")
+    assert printed == tuple(computed)
