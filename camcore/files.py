@@ -12,6 +12,7 @@ the user expects a good one.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import stat
 import tempfile
@@ -118,13 +119,11 @@ def _restore(done: list[Path], kept: dict[Path, str | None]) -> None:
     """Undo the renames already made: the old file back, or no file where none was."""
     for path in done:
         old = kept.get(path)
-        try:
+        with contextlib.suppress(OSError):
             if old is not None:
                 os.replace(old, path)
             else:
                 os.unlink(path)
-        except OSError:
-            pass
 
 
 def _stage(path: Path, data: bytes) -> str:
@@ -143,7 +142,8 @@ def _stage(path: Path, data: bytes) -> str:
             os.fsync(f.fileno())
         os.chmod(tmp, 0o644)
     except OSError as exc:
-        os.unlink(tmp)
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
         raise FileError(f"cannot write {path}: {exc.strerror}") from None
     return tmp
 
