@@ -235,6 +235,16 @@ def test_trust_in_the_browser(tmp_path):
             _field(page, "Lift h").fill("70")
             _field(page, "Lift h").press("Enter")
             _wait(lambda: session.design.motion.lift_mm == 70.0)
+            # the widened range must reach the browser before the box loses focus: a
+            # box that blurs first clamps to the old end (a loaded CI run did; a race a
+            # user on a loaded server can meet too, see the README)
+            page.wait_for_function(
+                """() => { const l = [...document.querySelectorAll('label')]
+                    .find(e => e.innerText.replace(/\\s+/g, ' ').startsWith('Lift h'));
+                    let e = l; for (let i = 0; i < 4; i++) e = e.parentElement;
+                    const t = e.querySelector('[role=slider]');
+                    return t && Number(t.getAttribute('aria-valuemax')) >= 70 }"""
+            )
             _field(page, "Width w").fill("20")
             _field(page, "Width w").press("Enter")
             _wait(lambda: session.design.cam.width_mm == 20.0)
