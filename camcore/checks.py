@@ -460,40 +460,29 @@ def hub_wall_mm(a) -> float | None:
 
     The distance between two polylines is the least of each one's vertices to the
     other's edges: against the round bore, the profile polyline's nearest approach to
-    the axis less R; against the keyway, also the profile's vertices to the slot's
-    sides and top and the slot's corners and feet to the profile's edges. The exact cam
-    lies within the chord error of the polyline, which is subtracted."""
+    the axis less R; against the keyway, the profile's vertices to the slot (closed by
+    the chord between its feet, which lies inside the bore and so never comes nearer)
+    and the slot's corners and feet to the profile. The exact cam lies within the chord
+    error of the polyline, which is subtracted."""
+    from .toolpath import distance_to_polyline
+
     cam = a.design.cam
     R = cam.bore_diameter_mm / 2
     if R <= 0:
         return None
     p = to_mm(a.profile.points)
-    wall = _polyline_distance(np.zeros(2), p) - R
+    reach = 2.0 * float(np.hypot(p[:, 0], p[:, 1]).max())  # beyond any distance here
+    wall = float(distance_to_polyline(np.zeros((1, 2)), p, reach)[0]) - R
     if cam.keyway_width_mm > 0:
         hw, top = cam.keyway_width_mm / 2, R + cam.keyway_depth_mm
         foot = math.sqrt(R * R - hw * hw)
         slot = np.array([(-hw, foot), (-hw, top), (hw, top), (hw, foot)])
-        for a0, a1 in zip(slot[:-1], slot[1:], strict=True):
-            wall = min(wall, float(_segment_distance(p, a0, a1).min()))
-        wall = min(wall, *(_polyline_distance(q, p) for q in slot))
+        wall = min(
+            wall,
+            float(distance_to_polyline(p, slot, reach).min()),
+            float(distance_to_polyline(slot, p, reach).min()),
+        )
     return wall - to_mm(a.chord_error)
-
-
-def _segment_distance(p: np.ndarray, a0: np.ndarray, a1: np.ndarray) -> np.ndarray:
-    """Distance of each point p (N, 2) to the segment a0-a1."""
-    d = a1 - a0
-    dd = float(d @ d)
-    t = np.clip(((p - a0) @ d) / dd, 0.0, 1.0) if dd > 0 else np.zeros(len(p))
-    return np.hypot(*(p - (a0 + t[:, None] * d)).T)
-
-
-def _polyline_distance(q: np.ndarray, p: np.ndarray) -> float:
-    """Distance of the point q to the closed polyline p (N, 2): its nearest edge."""
-    e = np.roll(p, -1, axis=0) - p
-    ee = (e * e).sum(axis=1)
-    along = ((q - p) * e).sum(axis=1)
-    t = np.clip(np.divide(along, ee, out=np.zeros_like(ee), where=ee > 0), 0.0, 1.0)
-    return float(np.hypot(*(q - (p + t[:, None] * e)).T).min())
 
 
 def _hub_wall(a) -> list[Violation]:

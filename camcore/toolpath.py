@@ -64,9 +64,10 @@ def discrete_curvature(points: np.ndarray) -> np.ndarray:
         return np.nan_to_num(2.0 * cross / (la * lb * lc))
 
 
-def _distance_to_polyline(q: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
-    """Distance [m] of each point q to the closed polyline, for points within ``reach``
-    of it (larger distances come back as reach)."""
+def distance_to_polyline(q: np.ndarray, points: np.ndarray, reach: float) -> np.ndarray:
+    """Distance of each point q (M, 2) to the closed polyline (N, 2), in their unit, for
+    points within ``reach`` of it (larger distances come back as reach). Also used by
+    camcore.checks.hub_wall_mm."""
     a = points
     b = np.roll(points, -1, axis=0)
     seg = b - a
@@ -107,7 +108,7 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
     d = 0.5 * D
     pts = a.profile.points
     path = pts + d * vertex_normals(pts)
-    gap = _distance_to_polyline(path, pts, d)
+    gap = distance_to_polyline(path, pts, d)
     # the exact cam is within the chord error e of the polyline, and on a concave
     # stretch looser than the cutter the offset vertices come within d e / |rho| < e of
     # the chords: only a shortfall beyond 2 e is the cutter reaching into the cam

@@ -177,7 +177,9 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
 
     thin = with_bore(159.9)
     (v,) = [v for v in thin.violations if v.code == "hub_wall"]
-    assert v.amount == pytest.approx(2.0 - 0.05, abs=2e-3) and "is 0.0487 mm" in v.message
+    wall = checks.hub_wall_mm(thin)
+    assert wall == pytest.approx(80.0 - 159.9 / 2, abs=2e-3)  # r_b - R, less the chords
+    assert v.amount == pytest.approx(2.0 - wall) and f"is {wall:.4f} mm" in v.message
     keyed = with_bore(30.0, 8.0, 3.3)
     wall = 80.0 - math.hypot(4.0, 15.0 + 3.3)  # the base circle over the key's corners
     assert checks.hub_wall_mm(keyed) == pytest.approx(wall, abs=2e-3)
@@ -191,8 +193,11 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
     assert near == pytest.approx(80.0 - math.hypot(4.0, 15.0 + depth), abs=2e-3)
     # a profile that repeats a vertex (a zero-length edge) still has a finite distance
     # (it was NaN, and a NaN wall read as broken; the property tests met it)
+    from camcore.toolpath import distance_to_polyline
+
     square = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
-    assert checks._polyline_distance(np.zeros(2), square) == pytest.approx(math.sqrt(0.5))
+    (d,) = distance_to_polyline(np.zeros((1, 2)), square, 10.0)
+    assert d == pytest.approx(math.sqrt(0.5))
     from camcore.report import report_text, summary
 
     s = summary(keyed)
