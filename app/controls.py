@@ -122,6 +122,20 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 step=1,
                 hint="end mill for the G-code download; refused where it would gouge",
             ),
+            Spec(
+                "cam.pass_depth_mm",
+                "Depth per pass [mm]",
+                "number",
+                step=0.5,
+                hint="G-code: largest cut per pass; 0 = the whole depth at once",
+            ),
+            Spec(
+                "cam.breakthrough_mm",
+                "Breakthrough [mm]",
+                "number",
+                step=0.1,
+                hint="G-code: how far the last pass goes below the blank",
+            ),
         ),
     ),
     (

@@ -409,6 +409,9 @@ class Follower(_Part):
         return self.offset_mm if self.kind.is_double else 0.0
 
 
+MAX_PASSES = 100  # of the toolpath export: its file grows with them
+
+
 class Cam(_Part):
     """The disk cam. It turns clockwise, as in the paper."""
 
@@ -445,6 +448,44 @@ class Cam(_Part):
         le=500,
         description="diameter D of the end mill for the toolpath export [mm]",
     )
+    pass_depth_mm: float = Field(
+        0.0,
+        ge=0,
+        le=10000,
+        description="largest depth of cut per pass of the toolpath export [mm]; 0 = the "
+        "whole depth in one pass. The passes are equal, as few as this allows",
+    )
+    breakthrough_mm: float = Field(
+        0.0,
+        ge=0,
+        le=100,
+        description="how far the toolpath's last pass goes below the blank's bottom face "
+        "[mm]; 0 = to the cam width exactly (a thin skin may stay)",
+    )
+
+    @property
+    def cut_depth_mm(self) -> float:
+        """How deep the toolpath cuts: the cam width and the breakthrough [mm]."""
+        return self.width_mm + self.breakthrough_mm
+
+    @property
+    def passes(self) -> int:
+        """The toolpath's passes: as few equal ones as pass_depth_mm allows (a ratio a
+        rounding error above a whole number counts as that number)."""
+        if self.pass_depth_mm == 0:
+            return 1
+        ratio = min(self.cut_depth_mm / self.pass_depth_mm, 1e9)  # (a tiny depth: inf)
+        return max(1, math.ceil(ratio - 1e-9))
+
+    @model_validator(mode="after")
+    def _few_enough_passes(self) -> Cam:
+        if self.passes > MAX_PASSES:
+            raise ValueError(
+                f"pass_depth_mm = {self.pass_depth_mm:g} mm would cut the "
+                f"{self.cut_depth_mm:g} mm in {self.passes} passes, more than {MAX_PASSES}: "
+                f"use at least {math.ceil(self.cut_depth_mm / MAX_PASSES * 1000) / 1000:g} mm"
+            )
+        return self
 
     @model_validator(mode="after")
     def _bore_inside_base_circle(self) -> Cam:

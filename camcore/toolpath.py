@@ -145,46 +145,53 @@ def _round_up(x: float, digits: int = 3) -> float:
     return math.ceil(x * scale) / scale
 
 
+def _xy(p) -> str:
+    """The X and Y words of a point [mm], to DECIMALS places."""
+    return f"X{p[0]:.{DECIMALS}f} Y{p[1]:.{DECIMALS}f}"
+
+
 def gcode(a, cutter_diameter: float | None = None) -> str:
     """G-code (RS-274, millimetres, absolute) that cuts the cam's outside contour.
 
-    The blank's top face is Z = 0; the cut goes through the cam width. Cam frame: the
-    axis at X = Y = 0, theta = 0 on +Y (the DXF datum). Climb milling with a
-    clockwise spindle: the path runs clockwise around the cam. Lead-in: a rapid to a
-    point 1 D outside the path along its outward normal, plunge there (off the part),
-    a straight feed onto the path; the same way out."""
-    D = a.design.cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
+    The blank's top face is Z = 0; the cut goes through the cam width and
+    cam.breakthrough_mm below it, in cam.passes equal passes (cam.pass_depth_mm at
+    most each). Cam frame: the axis at X = Y = 0, theta = 0 on +Y (the DXF datum).
+    Climb milling with a clockwise spindle: the path runs clockwise around the cam.
+    Each pass: a plunge at a point 1 D outside the path along its outward normal (off
+    the part), a straight feed onto the path, the contour, and back the same way."""
+    cam = a.design.cam
+    D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
     stated = _round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
     n = vertex_normals(to_mm(a.profile.points))[::-1]
     start, lead = path[0], path[0] + to_mm(D) * n[0]
-    depth = a.design.cam.width_mm
+    depths = cam.cut_depth_mm * np.arange(1, cam.passes + 1) / cam.passes
+    bottom = (
+        f"Z-{cam.cut_depth_mm:g} = the cam width and {cam.breakthrough_mm:g} mm breakthrough"
+        if cam.breakthrough_mm > 0
+        else f"Z-{cam.width_mm:g} = the cam width exactly: add a breakthrough allowance"
+    )
+    passes = (
+        "one pass, full depth" if cam.passes == 1 else f"{cam.passes} passes of {depths[0]:g} mm"
+    )
     lines = [
         "%",
         _comment(f"cam contour: {a.design.name}"),
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
-        _comment(
-            f"one pass, full depth, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"
-        ),
-        _comment(f"Z-{depth:g} = the cam width exactly: add a breakthrough allowance"),
+        _comment(f"{passes}, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"),
+        _comment(bottom),
         _comment("check them, and set the spindle speed: M3 carries no S word"),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
-        f"G0 X{lead[0]:.{DECIMALS}f} Y{lead[1]:.{DECIMALS}f}",
+        f"G0 {_xy(lead)}",
         "M3",
-        f"G1 Z{-depth:.4f} F{PLUNGE_MM_PER_MIN:g}",
-        f"G1 X{start[0]:.{DECIMALS}f} Y{start[1]:.{DECIMALS}f} F{FEED_MM_PER_MIN:g}",
     ]
-    lines += [f"X{x:.{DECIMALS}f} Y{y:.{DECIMALS}f}" for x, y in path[1:]]
-    lines += [
-        f"X{start[0]:.{DECIMALS}f} Y{start[1]:.{DECIMALS}f}",
-        f"X{lead[0]:.{DECIMALS}f} Y{lead[1]:.{DECIMALS}f}",
-        f"G0 Z{SAFE_Z_MM:.3f}",
-        "M5",
-        "M30",
-        "%",
-    ]
+    contour = [_xy(p) for p in path[1:]] + [_xy(start), _xy(lead)]
+    for z in depths:  # each pass starts and ends at the lead point, off the part
+        lines += [f"G1 Z{-z:.4f} F{PLUNGE_MM_PER_MIN:g}", f"G1 {_xy(start)} F{FEED_MM_PER_MIN:g}"]
+        lines += contour
+    lines += [f"G0 Z{SAFE_Z_MM:.3f}", "M5", "M30", "%"]
     return "\n".join(lines) + "\n"

@@ -136,3 +136,60 @@ def test_the_header_bound_holds_for_the_written_coordinates(tol_mm):
     assert bound / MM + moved <= stated <= 1.01 * (bound / MM + toolpath.ROUNDING_MM)
     # Z is the cam width exactly, and the header says so in a whole comment
     assert "(Z-15 = the cam width exactly: add a breakthrough allowance)" in text.splitlines()
+
+
+def _passes(text: str) -> list[list[tuple[float, float]]]:
+    """The G-code's passes: the X Y words after each plunge (G1 Z-...)."""
+    out: list[list[tuple[float, float]]] = []
+    for line in text.splitlines():
+        if line.startswith("G1 Z-"):
+            out.append([])
+        elif out and (m := re.search(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", line)):
+            out[-1].append((float(m[1]), float(m[2])))
+    return out
+
+
+@pytest.mark.parametrize(
+    ("width", "pass_depth", "breakthrough", "n"),
+    [
+        (15.0, 0.0, 0.0, 1),
+        (15.0, 4.0, 0.0, 4),
+        (15.0, 5.0, 0.0, 3),
+        (15.0, 4.0, 0.5, 4),
+        (20.0, 2.05, 0.5, 10),
+    ],
+)
+def test_gcode_cuts_in_equal_passes_through_the_breakthrough(width, pass_depth, breakthrough, n):
+    """As few equal passes as the pass depth allows, each the whole contour, the last
+    at the width plus the breakthrough; the header says how many and how deep."""
+    data = PAPER.model_dump()
+    data["cam"].update(width_mm=width, pass_depth_mm=pass_depth, breakthrough_mm=breakthrough)
+    d = Design.model_validate(data)
+    assert d.cam.passes == n
+    text = toolpath.gcode(analyze(d, verify=False), 10 * MM)
+    z = [float(m) for m in re.findall(r"^G1 Z(-?\d+\.\d+)", text, flags=re.M)]
+    np.testing.assert_allclose(z, -(width + breakthrough) * np.arange(1, n + 1) / n, atol=1e-4)
+    if pass_depth:
+        assert -np.diff([0.0, *z]).max() <= pass_depth + 1e-4
+    passes = _passes(text)
+    assert len(passes) == n and all(p == passes[0] for p in passes)
+    assert passes[0][0] == passes[0][-2]  # onto the path, round it, and off to the lead point
+    head = "\n".join(text.splitlines()[:8])
+    assert ("one pass, full depth" if n == 1 else f"({n} passes of ") in head
+    if breakthrough:
+        assert (
+            f"(Z-{width + breakthrough:g} = the cam width and {breakthrough:g} mm breakthrough)"
+            in head
+        )
+
+
+def test_too_many_passes_is_refused_with_the_pass_depth_that_fits():
+    data = PAPER.model_dump()
+    data["cam"].update(width_mm=15.0, pass_depth_mm=0.1)  # 150 passes
+    with pytest.raises(ValueError, match=r"150 passes, more than 100: use at least 0\.15 mm"):
+        Design.model_validate(data)
+    data["cam"]["pass_depth_mm"] = 0.15  # 15 / 0.15 = 100 up to rounding: allowed
+    assert Design.model_validate(data).cam.passes == 100
+    data["cam"]["pass_depth_mm"] = 1e-308  # the ratio overflows: still a clear refusal
+    with pytest.raises(ValueError, match=r"more than 100: use at least 0\.15 mm"):
+        Design.model_validate(data)
