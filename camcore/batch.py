@@ -583,11 +583,28 @@ def _grid_figures(bt: Batch, loc) -> list[dict]:
     ]
 
 
+# The report's keys a batched summary leaves out: the profile's figures and checks,
+# what is computed along the profile (wear, its pitting life), and the variable-size
+# descriptions (the dwell and station lists; their angles are in dwell_arc_deg and
+# stations_deg), the sliding speed and the angles beyond Hertz' validity.
+LEFT_OUT = (
+    "profile",
+    "verification",
+    "wear_depth_max_um_per_Mcycle",
+    "pitting_life_cycles",
+    "pitting_life_hours",
+    "sliding_speed_max_m_per_s",
+    "hertz_beyond_validity_deg",
+    "dwells",
+    "stations",
+)
+
+
 def summaries(designs: list[Design]) -> list[dict]:
-    """The report of each design (camcore.report.summary's keys, as far as they need no
-    profile: see the module docstring), plus ``violations`` as a list of {"code": ...}
-    in the order of checks.run_all, ``valid`` (no violation among the checks run) and
-    ``profile_checked`` = False. The designs must make a batch (make_batch)."""
+    """The report of each design (camcore.report.summary's keys but LEFT_OUT), plus
+    ``violations`` as a list of {"code": ...} in the order of checks.run_all, ``valid``
+    (no violation among the checks run) and ``profile_checked`` = False. The designs
+    must make a batch (make_batch)."""
     bt = make_batch(designs)
     B, N = bt.theta.shape
     loc = local(bt, bt.theta.ravel(), np.repeat(np.arange(B), N))

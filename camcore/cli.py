@@ -1,4 +1,4 @@
-"""Command line: ``camcore report | compare | export``.
+"""Command line: ``camcore report | compare | export | sweep``.
 
 Exit status (the same for every command, so scripts can rely on it):
 
@@ -7,6 +7,9 @@ Exit status (the same for every command, so scripts can rely on it):
   still printed, exports are still written, and the limits are listed;
 - 2: bad input (unreadable or invalid design file, bad value, impossible export):
   one line starting with ``camcore: error:`` on stderr, never a traceback.
+
+``sweep`` exits 0 when its table is written (each row has its own verdict), 130
+when interrupted (the same command resumes) and 2 on bad input.
 """
 
 from __future__ import annotations
@@ -197,6 +200,8 @@ def _sweep(args) -> int:
         raise DesignError("--workers: at least 1")
     if args.chunk < 1:
         raise DesignError("--chunk: at least 1")
+    if args.workers is not None and args.scheduler is not None:
+        raise DesignError("--workers starts a cluster, --scheduler uses one: give one of them")
     _refuse_collisions({"out": args.out}, args.spec)
     n = sweep.run(
         spec,
@@ -207,7 +212,7 @@ def _sweep(args) -> int:
         workers=args.workers,
         scheduler=args.scheduler,
     )
-    print(f"wrote {args.out} ({n} designs)")
+    print(f"wrote {args.out} ({n} designs: {sweep.tally(args.out)})")
     return EXIT_VALID
 
 
@@ -217,7 +222,8 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="camcore",
         description="Disk cam design after Chuang, Hsu & Chang (translating followers).",
-        epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input.",
+        epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input "
+        "(sweep: 0 table written, 130 interrupted, 2 bad input).",
     )
     p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -320,6 +326,7 @@ def main(argv: list[str] | None = None) -> int:
     from pydantic import ValidationError
 
     from .export import ExportError
+    from .files import FileError
     from .model import format_validation_error
 
     args = _parser().parse_args(argv)
@@ -327,7 +334,7 @@ def main(argv: list[str] | None = None) -> int:
         # extreme designs overflow intermediate terms; results are checked finite
         with np.errstate(all="ignore"):
             return args.run(args)
-    except (DesignError, ExportError) as exc:
+    except (DesignError, ExportError, FileError) as exc:
         print(f"camcore: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValidationError as exc:

@@ -20,6 +20,7 @@ end. Chunks run in this process by default, on a Dask ``LocalCluster`` with
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import itertools
 import json
@@ -33,11 +34,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .files import read_capped, write_atomic
+from .files import FileError, read_capped, write_atomic
 from .model import (
     Design,
     DesignError,
     design_from_json,
+    format_validation_error,
     load_preset,
     set_field,
 )
@@ -96,7 +98,36 @@ def _axis(path: str, raw) -> tuple:
         return tuple(float(x) for x in np.linspace(lo, hi, num))
     if not isinstance(raw, list) or not raw or len(raw) > MAX_VALUES:
         raise DesignError(f"grid.{path}: a list of 1 to {MAX_VALUES} values, or a range")
-    return tuple(raw)
+    return _one_type(path, tuple(raw))
+
+
+def _kind(value) -> str:
+    """A grid value's column type in the table (a list or object becomes JSON text)."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "boolean"
+    if isinstance(value, int | float):
+        return "number"
+    return "text" if isinstance(value, str) else "list or object"
+
+
+def _one_type(path: str, values: tuple) -> tuple:
+    """An axis' values, all of one type (nulls aside: one column of the table), its
+    numbers finite; integers mixed with floats, or too large for a 64-bit column,
+    become floats."""
+    kinds = {_kind(v) for v in values} - {"null"}
+    if len(kinds) > 1:
+        raise DesignError(
+            f"grid.{path}: values of one type (one column of the table), got "
+            f"{' and '.join(sorted(kinds))}"
+        )
+    numbers = [v for v in values if _kind(v) == "number"]
+    if not all(math.isfinite(v) for v in numbers):
+        raise DesignError(f"grid.{path}: numbers must be finite")
+    if any(isinstance(v, float) or abs(v) >= 2**63 for v in numbers):
+        return tuple(v if v is None else float(v) for v in values)
+    return values
 
 
 def parse_spec(text: str | bytes) -> Spec:
@@ -122,13 +153,60 @@ def parse_spec(text: str | bytes) -> Spec:
     if not isinstance(grid, dict) or not grid:
         raise DesignError("grid: an object of field paths to values")
     axes = tuple((str(path), _axis(path, raw)) for path, raw in grid.items())
+    for path, _ in axes:
+        inner = [p for p, _ in axes if p.startswith(path + ".")]
+        if inner:
+            raise DesignError(f"grid.{path} and grid.{inner[0]}: one sets a part of the other")
     base_dict = json.loads(design.model_dump_json())
-    for path, values in axes:  # every path must be a field of the design
-        set_field(json.loads(json.dumps(base_dict)), path, values[0], "grid.")
+    for path, values in axes:
+        _check_values(base_dict, path, values)
     spec = Spec(base_dict, axes)
     if spec.size > MAX_DESIGNS:
         raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")
     return spec
+
+
+# Validation errors that depend on the other fields' values (a limit, a check across
+# fields): a grid value meeting one of them makes an error row; any other error (a
+# wrong type, an unknown enum member, a missing or extra key) holds for every row, and
+# the spec is refused.
+_COMBINATION_ERRORS = frozenset(
+    {
+        "value_error",
+        "assertion_error",
+        "greater_than",
+        "greater_than_equal",
+        "less_than",
+        "less_than_equal",
+    }
+)
+
+
+def _check_values(base: dict, path: str, values: tuple) -> None:
+    """Refuse a grid path the design has no field at, and a value no design can take
+    there (e.g. "80" for a number, a misspelt follower kind), naming it. Each distinct
+    text, list or object is tried on the base design, and one value of each number
+    type (every int or every float behaves alike)."""
+    from pydantic import ValidationError
+
+    tried: dict[str, object] = {}
+    for v in values:
+        kind = _kind(v)
+        tag = f"{kind}:{type(v).__name__}" if kind == "number" else json.dumps(v, sort_keys=True)
+        tried.setdefault(tag, v)
+    for v in tried.values():
+        data = json.loads(json.dumps(base))
+        set_field(data, path, v, "grid.")  # every path must be a field of the design
+        try:
+            Design.model_validate_json(json.dumps(data), strict=True)
+        except ValidationError as exc:
+            if any(e["type"] not in _COMBINATION_ERRORS for e in exc.errors()):
+                shown = json.dumps(v)
+                shown = shown if len(shown) <= 60 else shown[:57] + "..."
+                raise DesignError(
+                    f"grid.{path}: {shown} is not a value of this field: "
+                    f"{format_validation_error(exc)}"
+                ) from None
 
 
 def flatten(node, prefix: str = "", out: dict | None = None) -> dict:
@@ -307,12 +385,53 @@ def _table(rows: list[dict]):
     return pa.table(cols)
 
 
-def _progress(done: int, total: int, t0: float, stream=sys.stderr) -> None:
+def _progress(done: int, total: int, rate: float, stream=sys.stderr) -> None:
     width = 30
     fill = int(width * done / max(total, 1))
-    rate = done / max(time.perf_counter() - t0, 1e-9)
     stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} designs, {rate:.1f}/s")
     stream.flush()
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("camdesigner")
+    except PackageNotFoundError:  # a source tree that was never installed
+        return "unknown"
+
+
+def _parts_dir(out: Path, stamp: dict) -> Path:
+    """``OUT.parts/``, holding the finished chunks of this very run: same spec, mode,
+    chunk size and camcore version (its ``stamp``). Parts of another run are refused
+    with what differs; a parts directory with no chunk in it yet is taken over."""
+    if out.is_dir():
+        raise FileError(f"--out {out}: that is a directory; give a file name")
+    if not out.parent.is_dir():
+        raise FileError(f"--out {out}: no directory {out.parent}")
+    parts = out.with_name(out.name + ".parts")
+    label = parts / "sweep.json"
+    if parts.exists() and any(parts.glob("chunk-*.parquet")):
+        try:
+            theirs = json.loads(label.read_text())
+        except (OSError, ValueError):
+            theirs = {}
+        differ = [
+            f"{k} {theirs.get(k)!r} (this run: {v!r})"
+            for k, v in stamp.items()
+            if theirs.get(k) != v
+        ]
+        if differ:
+            raise DesignError(
+                f"{parts} holds the finished chunks of another sweep: {'; '.join(differ)}. "
+                "Rerun that sweep to finish it, or remove the directory to start over"
+            )
+    try:
+        parts.mkdir(exist_ok=True)
+    except OSError as exc:
+        raise FileError(f"cannot write {parts}: {exc.strerror}") from None
+    write_atomic(label, json.dumps(stamp).encode())
+    return parts
 
 
 def run(
@@ -328,42 +447,49 @@ def run(
 ) -> int:
     """Run the sweep into the Parquet file ``out``; returns the number of rows.
 
-    Finished chunks are kept in ``out.parts/`` (with the spec's fingerprint) until the
-    whole table is written, so a run interrupted and started again with the same spec
-    computes only the missing chunks. ``fast``: the batched core (``fast_rows``; the
-    geometric check is not run either way)."""
+    Finished chunks are kept in ``out.parts/`` (with the spec's fingerprint, the mode,
+    the chunk size and the version) until the whole table is written, so a run
+    interrupted and started again the same way computes only the missing chunks.
+    ``fast``: the batched core (``fast_rows``; the geometric check is not run either
+    way). ``progress(done, total, rate)``: designs done of all, and designs per second
+    computed by this run (not the chunks it found done)."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     out = Path(out)
-    parts = out.with_name(out.name + ".parts")
-    stamp = parts / "spec.fingerprint"
-    mark = spec.fingerprint() + (" fast" if fast else " verify" if verify else "")
-    if parts.exists() and (not stamp.is_file() or stamp.read_text() != mark):
-        raise DesignError(f"{parts} holds the parts of another sweep; remove it first")
-    parts.mkdir(parents=True, exist_ok=True)
-    stamp.write_text(mark)
+    mode = "fast" if fast else "verify" if verify else "no-verify"
+    stamp = {"spec": spec.fingerprint(), "mode": mode, "chunk": chunk, "camcore": _version()}
     total = spec.size
     n_chunks = -(-total // chunk)
-    todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
-    done = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
-    t0 = time.perf_counter()
+    with _cluster(workers, scheduler) as client:  # a bad address fails before any file
+        parts = _parts_dir(out, stamp)
+        todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
+        found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
+        done, t0 = found, time.perf_counter()
 
-    def keep(i: int, rows: list[dict]) -> None:
-        nonlocal done
-        buf = pa.BufferOutputStream()
-        pq.write_table(_table(rows), buf)
-        write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
-        done += len(rows)
-        if progress:
-            progress(done, total, t0)
+        def keep(i: int, rows: list[dict]) -> None:
+            nonlocal done
+            buf = pa.BufferOutputStream()
+            pq.write_table(_table(rows), buf)
+            write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
+            done += len(rows)
+            if progress:
+                progress(done, total, (done - found) / max(time.perf_counter() - t0, 1e-9))
 
-    if workers is None and scheduler is None:
-        memo: dict[str, dict] = {}  # a design repeated in a later chunk is not redone
-        for i in todo:
-            keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify, fast, memo))
-    else:
-        _run_dask(spec, chunk, todo, (verify, fast), workers, scheduler, keep)
+        try:
+            if client is None:
+                memo: dict[str, dict] = {}  # a design repeated in a later chunk is not redone
+                for i in todo:
+                    keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify, fast, memo))
+            else:
+                _run_dask(client, spec, chunk, todo, (verify, fast), keep)
+        except KeyboardInterrupt:
+            if progress:
+                sys.stderr.write(
+                    f"\ninterrupted: {done} of {total} designs are kept in {parts}; "
+                    "the same command resumes\n"
+                )
+            raise
     if progress:
         sys.stderr.write("\n")
     tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
@@ -375,10 +501,15 @@ def run(
     return table.num_rows
 
 
-def _run_dask(spec, chunk, todo, how, workers, scheduler, keep) -> None:
-    """The chunks on a Dask cluster: a LocalCluster of ``workers`` processes, or the
-    scheduler at ``scheduler``. Each finished chunk is kept as it arrives."""
-    from dask.distributed import Client, LocalCluster, as_completed
+@contextlib.contextmanager
+def _cluster(workers: int | None, scheduler: str | None):
+    """A Dask client: of a LocalCluster of ``workers`` processes, or of the scheduler at
+    ``scheduler`` (refused, with the reason, if it cannot be reached in 10 s); None
+    for neither (the chunks run in this process)."""
+    if workers is None and scheduler is None:
+        yield None
+        return
+    from dask.distributed import Client, LocalCluster
 
     cluster = None
     if scheduler is None:
@@ -387,18 +518,42 @@ def _run_dask(spec, chunk, todo, how, workers, scheduler, keep) -> None:
         )
         client = Client(cluster)
     else:
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler, timeout="10s")
+        except (OSError, ValueError, TypeError) as exc:  # no cluster there, or no address
+            raise DesignError(f"--scheduler {scheduler}: cannot connect ({exc})") from None
     try:
-        base = client.scatter(spec.base, broadcast=True)
-        futures = {
-            client.submit(run_chunk, base, spec.chunk(i, chunk), *how, pure=False): i for i in todo
-        }
-        for fut in as_completed(futures):
-            keep(futures[fut], fut.result())
+        yield client
     finally:
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _run_dask(client, spec, chunk, todo, how, keep) -> None:
+    """The chunks on a Dask cluster; each finished chunk is kept as it arrives."""
+    from dask.distributed import as_completed
+
+    # the base goes out wrapped in a list: a dict would be scattered key by key under
+    # its own keys ("cam", "name", ...), shared with any other sweep on that cluster
+    [base] = client.scatter([spec.base], broadcast=True)
+    futures = {
+        client.submit(run_chunk, base, spec.chunk(i, chunk), *how, pure=False): i for i in todo
+    }
+    for fut in as_completed(futures):
+        keep(futures[fut], fut.result())
+
+
+def tally(path: str | Path) -> str:
+    """How the rows of a sweep's table came out: valid, breaking a limit, no design."""
+    import pyarrow.parquet as pq
+
+    t = pq.read_table(path, columns=["valid", "error"]).to_pydict()
+    refused = sum(e is not None for e in t["error"])
+    valid = sum(bool(v) for v in t["valid"])
+    return (
+        f"{valid} valid, {len(t['valid']) - valid - refused} break a limit, {refused} not designs"
+    )
 
 
 def load_spec(path: str | Path) -> Spec:

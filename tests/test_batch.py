@@ -104,6 +104,7 @@ def test_batch_equals_single_reports(preset, kind, variant):
             single = summary(analyze(d, verify=False))
             assert fast["profile_checked"] is False
             assert differences(fast, single) == [], (d.cam.base_radius_mm, kind)
+            assert set(single) - set(fast) == set(batch.LEFT_OUT)  # what the README lists
 
 
 def test_the_spread_has_broken_limits_too():

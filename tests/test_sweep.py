@@ -13,6 +13,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from camcore import sweep
+from camcore.files import FileError
 from camcore.model import DesignError
 
 SPEC = {
@@ -103,13 +104,49 @@ def test_an_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch)
     assert not (tmp_path / "r.parquet.parts").exists()
 
 
+def _interrupted(spec, out, chunk: int, **how) -> None:
+    """Run until two chunks are kept, then stop as Ctrl-C would."""
+
+    def stop(done, total, rate):
+        if done >= 2 * chunk:
+            raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run(spec, out, chunk=chunk, progress=stop, **how)
+
+
 def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
+    """Finished chunks are reused only by the same spec, mode and chunk size (a resume
+    with another --chunk had written 32 rows of 60, or 88 with repeats); parts with no
+    chunk yet are taken over."""
     spec = sweep.parse_spec(json.dumps(SPEC))
-    parts = tmp_path / "r.parquet.parts"
-    parts.mkdir()
-    (parts / "spec.fingerprint").write_text("something else")
-    with pytest.raises(DesignError, match="another sweep"):
-        sweep.run(spec, tmp_path / "r.parquet", progress=None)
+    out = tmp_path / "r.parquet"
+    _interrupted(spec, out, 2, verify=False)
+    with pytest.raises(DesignError, match=r"chunk 2 \(this run: 3\)"):
+        sweep.run(spec, out, chunk=3, verify=False, progress=None)
+    with pytest.raises(DesignError, match=r"mode 'no-verify' \(this run: 'fast'\)"):
+        sweep.run(spec, out, chunk=2, fast=True, progress=None)
+    other = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [70, 80]}}))
+    with pytest.raises(DesignError, match="another sweep: spec"):
+        sweep.run(other, out, chunk=2, verify=False, progress=None)
+    assert sweep.run(spec, out, chunk=2, verify=False, progress=None) == spec.size
+    fresh = tmp_path / "fresh.parquet"
+    sweep.run(spec, fresh, chunk=4, verify=False, progress=None)
+    assert rows_of(out) == rows_of(fresh)
+    empty = tmp_path / "e.parquet.parts"  # e.g. a run stopped before its first chunk
+    empty.mkdir()
+    (empty / "sweep.json").write_text("{}")
+    assert sweep.run(other, tmp_path / "e.parquet", verify=False, progress=None) == 2
+
+
+def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    monkeypatch.setattr(sweep, "run_chunk", lambda *a: pytest.fail("computed"))
+    with pytest.raises(FileError, match="is a directory"):
+        sweep.run(spec, tmp_path, progress=None)
+    with pytest.raises(FileError, match="no directory"):
+        sweep.run(spec, tmp_path / "missing" / "r.parquet", progress=None)
+    assert not (tmp_path / "missing").exists()
 
 
 @pytest.mark.parametrize(
@@ -121,6 +158,15 @@ def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
         ({"grid": {"cam.base_radius_mm": []}}, "a list of 1"),
         ({"grid": {"cam.base_radius_mm": [1]}, "extra": 1}, "an object with"),
         ({"base": {"preset": "../../etc/passwd"}, "grid": {"cam.width_mm": [1]}}, "no preset"),
+        ({"grid": {"follower.kind": ["single_roller", 5]}}, "one type.*number and text"),
+        ({"grid": {"cam.base_radius_mm": [70, True]}}, "one type.*boolean and number"),
+        ({"grid": {"cam.base_radius_mm": ["80", "90"]}}, r'"80" is not a value of this'),
+        ({"grid": {"follower.kind": ["double_roler"]}}, '"double_roler" is not a value'),
+        ({"grid": {"follower.kind": {"from": 1, "to": 2, "num": 2}}}, "1.0 is not a value"),
+        (
+            {"grid": {"cam.base_radius_mm": [70], "cam": [{"base_radius_mm": 90}]}},
+            "grid.cam and grid.cam.base_radius_mm: one sets a part of the other",
+        ),
         (
             {
                 "grid": {
@@ -137,6 +183,18 @@ def test_bad_specs_are_refused_with_the_key_named(spec, message):
         sweep.parse_spec(json.dumps(spec))
 
 
+def test_values_that_only_some_combinations_refuse_make_rows():
+    """A value out of a field's own range, or one that fails only with the base's other
+    fields, is a row that says why (another axis may make it a design); an infinite
+    number is refused at once; integers beside floats, or too large for a 64-bit
+    column, become floats."""
+    spec = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [-5, 80, 1e23]}}))
+    assert spec.axes[0][1] == (-5.0, 80.0, 1e23)
+    with pytest.raises(DesignError, match="finite"):
+        sweep.parse_spec('{"grid": {"cam.base_radius_mm": [70, 1e400]}}')
+    assert sweep.parse_spec(json.dumps({"grid": {"cam.speed_rpm": [10**30]}})).axes[0][1] == (1e30,)
+
+
 def test_cli_sweep_and_its_exit_codes(tmp_path):
     spec = tmp_path / "spec.json"
     spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": [80, 85]}}))
@@ -148,6 +206,19 @@ def test_cli_sweep_and_its_exit_codes(tmp_path):
     )
     assert run.returncode == 0, run.stderr
     assert "2/2 designs" in run.stderr and len(rows_of(out)) == 2
+    valid = sum(r["valid"] for r in rows_of(out))
+    assert f"(2 designs: {valid} valid, {2 - valid} break a limit, 0 not designs)" in run.stdout
+    for args, message in [
+        ([str(tmp_path / "none.json"), "--out", str(out)], "cannot read"),
+        ([str(spec), "--out", str(tmp_path)], "is a directory"),
+        ([str(spec), "--out", str(out), "--scheduler", "nonsense"], "--scheduler nonsense"),
+        ([str(spec), "--out", str(out), "--scheduler", "x", "--workers", "2"], "give one"),
+    ]:
+        bad = subprocess.run(
+            [sys.executable, "-m", "camcore.cli", "sweep", *args], capture_output=True, text=True
+        )
+        assert bad.returncode == 2 and message in bad.stderr, (args, bad.stderr)
+        assert "Traceback" not in bad.stderr
     bad = subprocess.run(
         [sys.executable, "-m", "camcore.cli", "sweep", str(spec), "--out", str(spec)],
         capture_output=True,
@@ -162,6 +233,44 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     sweep.run(spec, tmp_path / "local.parquet", chunk=2, progress=None)
     sweep.run(spec, tmp_path / "dask.parquet", chunk=2, workers=2, progress=None)
     assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
+
+
+def test_sweeps_sharing_a_cluster_keep_their_own_base(tmp_path):
+    """Two sweeps on one Dask cluster at once: the base design went out under its own
+    keys ("cam", "name", ...), so the second sweep computed with the first one's."""
+    pytest.importorskip("dask.distributed")
+    from dask.distributed import Client, LocalCluster
+
+    spec = sweep.parse_spec(
+        json.dumps({"base": {"preset": "indexer_345"}, "grid": {"cam.width_mm": [10, 12]}})
+    )
+    sweep.run(spec, tmp_path / "local.parquet", chunk=1, verify=False, progress=None)
+    with (
+        LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster,
+        Client(cluster.scheduler_address) as other,
+    ):
+        paper = sweep.parse_spec(json.dumps(SPEC)).base
+        held = other.scatter(paper, broadcast=True)  # as another sweep's base was  # noqa: F841
+        sweep.run(
+            spec,
+            tmp_path / "dask.parquet",
+            chunk=1,
+            verify=False,
+            scheduler=cluster.scheduler_address,
+            progress=None,
+        )
+    assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
+
+
+def test_the_fast_leaves_out_list_is_the_readme_s():
+    from pathlib import Path
+
+    from camcore import batch
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    fast = text[text.index("**`--fast`: the batched core**") :]
+    fast = " ".join(fast[: fast.index("\n## ")].split())
+    assert all(f"`{key}`" in fast for key in batch.LEFT_OUT)
 
 
 def test_mixed_value_types_and_structured_values_join_into_one_table(tmp_path):
