@@ -84,7 +84,7 @@ def esc(text: object) -> str:
 # window: a long list of violations never hides the controls. The panel itself stays
 # 80 px narrower than the window (the wide panel on a high-DPI screen: app.layout).
 STATUS_CSS = (
-    "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important}"
+    "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important;min-width:0}"
     "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff}"
     "#cam-status{max-height:32vh;overflow-y:auto}"
     "[data-testid='floating-panel']{max-width:calc(100vw - 80px)}</style>"

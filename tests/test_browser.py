@@ -63,6 +63,15 @@ def _wait(pred, timeout_s: float = 60.0) -> None:
         time.sleep(0.1)
 
 
+# every chart (uPlot canvas) ends inside the panel, and the panel inside the window
+CHARTS_INSIDE = """() => { const p = document.querySelector('[data-testid=floating-panel]')
+    .getBoundingClientRect();
+  const charts = [...document.querySelectorAll('.uplot canvas')]
+    .map(c => c.getBoundingClientRect()).filter(r => r.width > 0);
+  return charts.length > 0 && p.right <= window.innerWidth
+    && charts.every(r => r.right <= p.right + 0.5) }"""
+
+
 @pytest.mark.browser
 def test_app_in_headless_chromium(tmp_path):
     if not os.path.exists(CHROMIUM):
@@ -135,6 +144,10 @@ def test_app_in_headless_chromium(tmp_path):
             # the curves arrive as float32 (app.viser_speedups) and uPlot draws them: the
             # first plot's canvas carries its blue S curve
             page.wait_for_function(f"() => ({S_CURVE_PIXELS})() > 100")
+            # and they fit the panel, and stay so (a clip rule on the status box's
+            # containers had let the charts widen the panel, step by step, to 1800 px)
+            page.wait_for_timeout(6000)
+            assert page.evaluate(CHARTS_INSIDE), "the charts spill past the panel"
             page.get_by_text("Wide panel").first.click()
             page.wait_for_function(
                 "() => document.querySelector('[data-testid=floating-panel]')"
@@ -151,6 +164,8 @@ def test_app_in_headless_chromium(tmp_path):
                       .filter(r => r.width > 0).every(r => r.right <= right + 0.5) }""",
                 timeout=15_000,
             )
+            page.wait_for_timeout(3000)
+            assert page.evaluate(CHARTS_INSIDE), "the charts spill past the wide panel"
             page.get_by_text("Wide panel").first.click()
             page.wait_for_function(
                 f"() => document.querySelector('[data-testid=floating-panel]')"
