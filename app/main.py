@@ -150,11 +150,14 @@ class App:
 
 
 def _port_free(host: str, port: int) -> bool:
-    """Whether ``port`` can be bound on ``host`` now (viser would silently move on)."""
+    """Whether ``port`` can be bound on ``host`` now (viser would silently move on).
+    With SO_REUSEADDR, as the server binds it: a closed connection of a server just
+    stopped (TIME_WAIT, ~60 s) does not make the port busy; a listener does."""
     import socket
 
     try:
         with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as sock:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             sock.bind((host, port))
         return True
     except OSError:

@@ -514,6 +514,28 @@ def test_busy_port_is_an_error_that_says_so():
     assert proc.returncode == 2 and f"port {port}" in proc.stderr and "busy" in proc.stderr
 
 
+def test_a_port_just_left_by_a_stopped_server_is_free():
+    """A server stopped while a tab was connected leaves its side of the connection in
+    TIME_WAIT for ~60 s: a restart at once must not call the port busy (the server
+    itself binds with SO_REUSEADDR); a listening port still is."""
+    import socket
+
+    from app.main import _port_free
+
+    server = socket.socket()
+    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    port = server.getsockname()[1]
+    assert not _port_free("127.0.0.1", port)
+    tab = socket.create_connection(("127.0.0.1", port))
+    conn, _ = server.accept()
+    conn.close()  # the server closes first: its side waits in TIME_WAIT
+    server.close()
+    tab.close()
+    assert _port_free("127.0.0.1", port)
+
+
 def test_segment_table_edits_the_program(tab):
     """The segment table (issue 10): rows follow the design; moving, adding, removing
     and editing rows re-analyses at once; a program that does not close says so and
