@@ -33,12 +33,18 @@ class ExportError(ValueError):
     """The design cannot be exported as a solid; the message says why."""
 
 
-def _profile_mm(a) -> np.ndarray:
+def require_star_shaped(a) -> None:
+    """ExportError unless the profile is star-shaped about the axis: no part, solid or
+    cutter path, can be made of a profile that crosses itself."""
     if not a.profile.is_star_shaped():
         raise ExportError(
             "the profile is not star-shaped about the cam axis (it crosses itself); "
             "fix the listed violations before exporting a solid"
         )
+
+
+def _profile_mm(a) -> np.ndarray:
+    require_star_shaped(a)
     return a.profile.points * 1e3
 
 

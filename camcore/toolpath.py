@@ -29,7 +29,7 @@ import re
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .export import ExportError
+from .export import ExportError, require_star_shaped
 from .units import MM, to_deg, to_mm
 
 SAFE_Z_MM = 5.0  # rapid height above the blank's top face
@@ -104,6 +104,7 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
     Analysis) and its chordal bound [m]; GougeError where the cutter does not fit.
 
     cutter_diameter [m]: default the design's cam.cutter_diameter_mm."""
+    require_star_shaped(a)  # a self-crossing profile is no part, whatever the cutter
     D = a.design.cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     d = 0.5 * D
     pts = a.profile.points

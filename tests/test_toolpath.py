@@ -11,6 +11,7 @@ import pytest
 
 from camcore import toolpath
 from camcore.analysis import analyze
+from camcore.export import ExportError
 from camcore.model import Design, load_preset
 from camcore.units import MM
 
@@ -193,3 +194,15 @@ def test_too_many_passes_is_refused_with_the_pass_depth_that_fits():
     data["cam"]["pass_depth_mm"] = 1e-308  # the ratio overflows: still a clear refusal
     with pytest.raises(ValueError, match=r"more than 100: use at least 0\.15 mm"):
         Design.model_validate(data)
+
+
+def test_a_self_crossing_profile_is_refused_as_such_not_as_a_gouge():
+    """r_b = 5 mm under the paper's 15 mm lift: the profile crosses itself. The G-code
+    said a 10 mm cutter would gouge and to use one of 0.03 mm; STL and DXF said why."""
+    data = PAPER.model_dump()
+    data["cam"]["base_radius_mm"] = 5.0
+    a = analyze(Design.model_validate(data), verify=False)
+    assert not a.profile.is_star_shaped()
+    with pytest.raises(ExportError, match="not star-shaped") as err:
+        toolpath.gcode(a)
+    assert not isinstance(err.value, toolpath.GougeError)
