@@ -289,7 +289,22 @@ def merged(base: Design, values: dict[str, object]) -> dict:
         if path in VALUE_OF and isinstance(v, str):
             v = VALUE_OF[path].get(v, v)
         data[group][key] = None if path in NONE_AS_ZERO and v == 0 else v
+    _keep_unused(data, base)
     return data
+
+
+def _keep_unused(data: dict, base: Design) -> None:
+    """A follower field the (new) kind does not use keeps the base design's value: its
+    control is greyed out, but a value typed into its box must not make the design
+    invalid (0 typed as the roller radius of a concave face had blocked everything)."""
+    try:
+        kind = FollowerKind(data["follower"]["kind"])
+    except (ValueError, TypeError):  # not a kind: the validation says so
+        return
+    old = base.follower.model_dump(mode="json")
+    for key in old:
+        if not kind.uses(key):
+            data["follower"][key] = old[key]
 
 
 def try_design_dict(data: dict) -> tuple[Design | None, str | None]:

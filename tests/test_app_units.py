@@ -96,6 +96,24 @@ def test_controls_rebuild_the_design_or_say_why(paper):
     assert controls.get_path(paper, "follower.kind") == "double_concave"
 
 
+def test_a_greyed_out_follower_field_cannot_block_the_design(paper):
+    """The box of a field the follower does not use stays editable in the browser: 0
+    typed as a concave face's roller radius had made the design invalid. It keeps the
+    design's value; on a switch to a follower that uses it, the box counts."""
+    assert paper.follower.kind.value == "double_concave"
+    d, err = controls.try_design(paper, {"follower.roller_radius_mm": 0.0})
+    assert err is None and d == paper
+    d, err = controls.try_design(
+        paper, {"follower.kind": "single roller", "follower.roller_radius_mm": 0.0}
+    )
+    assert d is None and "roller_radius_mm" in err
+    d, err = controls.try_design(
+        paper, {"follower.kind": "single roller", "follower.roller_radius_mm": 12.0}
+    )
+    assert err is None and d.follower.roller_radius_mm == 12.0
+    assert d.follower.face_radius_mm == paper.follower.face_radius_mm
+
+
 def test_ticker_steps_only_while_running():
     steps: list[tuple[float, int]] = []
     t = Ticker(lambda dt, n: steps.append((dt, n)), fps=100.0).start()
