@@ -228,6 +228,9 @@ class Session:
             self._enable_for_kind(design)
             ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
+            if ui.stations_img is not None:  # of the design before: the button redraws
+                ui.stations_img.remove()
+                ui.stations_img = None
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
             if ui.quick_md.content:  # it spoke of the design before this one
                 ui.quick_md.content = ""
@@ -517,13 +520,17 @@ class Session:
     # --- view ----------------------------------------------------------------------
     def show_stations_diagram(self) -> None:
         """The mechanism at every station side by side (camcore.document), under the
-        button; drawn from the design on screen, replaced on each click."""
+        button; drawn from the design on screen, replaced on each click, and taken
+        away when the design changes (_redraw: a diagram of another design beside the
+        3D view had misled)."""
         from camcore.document import stations_image
 
         with self.lock:
             a = self.analysis
         image = stations_image(a)  # ~0.5 s of matplotlib, outside the lock
         with self.lock:
+            if self.analysis is not a:  # the design changed meanwhile: not its picture
+                return
             if self.ui.stations_img is not None:
                 self.ui.stations_img.image = image
             else:

@@ -644,6 +644,10 @@ def test_stations_diagram_in_the_view_tab(tab):
     assert img.image.std() > 10  # something is drawn
     s.ui.stations_fig_btn.value = True
     assert s.ui.stations_img is img  # the same element, a new picture
+    s.ui.controls["follower.kind"].value = "single roller"  # the diagram would be stale
+    assert s.design.follower.kind.value == "single_roller" and s.ui.stations_img is None
+    s.ui.stations_fig_btn.value = True  # drawn again for the design on screen
+    assert s.ui.stations_img is not None and s.ui.stations_img is not img
 
 
 def test_the_touching_face_is_highlighted_and_the_idle_one_dimmed(tab):
