@@ -126,10 +126,35 @@ def explore_png(
     front: np.ndarray,
     width_px: int = 760,
 ) -> bytes:
-    """The exploration as one PNG: per follower kind, the (x, y) grid coloured by the
-    first limit each design breaks (green: valid); below, the valid designs in the plane
-    of the first two figures with the Pareto front numbered (the numbers of the app's
-    list). ``x`` and ``y`` are (grid path, axis label)."""
+    """The exploration as one PNG (explore_figure)."""
+    fig = explore_figure(rows, x, y, names, front, width_px)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png")
+    return buf.getvalue()
+
+
+def _limits(values: np.ndarray) -> tuple[float, float]:
+    """An axis' limits around the finite ``values``, with a margin for the markers."""
+    v = values[np.isfinite(values)]
+    lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+    pad = 0.05 * (hi - lo) if hi > lo else 0.5 * abs(lo) or 1.0
+    return lo - pad, hi + pad
+
+
+def explore_figure(
+    rows: list[dict],
+    x: tuple[str, str],
+    y: tuple[str, str],
+    names: list[str],
+    front: np.ndarray,
+    width_px: int = 760,
+):
+    """The exploration as a matplotlib Figure: per follower kind, the (x, y) grid
+    coloured by the first limit each design breaks (green: valid), all on the same axes
+    (a sweep cancelled during one kind leaves it part of the range, which must not look
+    like the whole); below, the valid designs in the plane of the first two figures with
+    the Pareto front numbered (the numbers of the app's list). ``x`` and ``y`` are (grid
+    path, axis label)."""
     from matplotlib.figure import Figure as MplFigure
 
     kinds = list(dict.fromkeys(_kind(r) for r in rows))
@@ -157,6 +182,8 @@ def explore_png(
         unused = {p for r in rows if _kind(r) == kind for p in ignored_fields(r)}
         note = [axis for axis, (path, _) in zip("xy", (x, y), strict=True) if path in unused]
         title = _label(kind) + (f" (does not use {' or '.join(note)})" if note else "")
+        ax.set_xlim(*_limits(xs))
+        ax.set_ylim(*_limits(ys))
         ax.set_title(title, fontsize=12)
         ax.set_xlabel(x[1], fontsize=11)
         ax.set_ylabel(y[1], fontsize=11)
@@ -171,9 +198,7 @@ def explore_png(
         title_fontsize=10,
     )
     _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front)
-    buf = io.BytesIO()
-    fig.savefig(buf, format="png")
-    return buf.getvalue()
+    return fig
 
 
 def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> None:

@@ -405,6 +405,34 @@ def test_explore_counts_a_design_swept_over_a_field_it_ignores_once():
     assert png.startswith(b"\x89PNG")
 
 
+def test_every_follower_s_map_spans_the_whole_sweep():
+    """A sweep cancelled during the last follower: its map had shrunk to the 60-63.6 mm
+    it reached, as if that were the whole range. All maps share the sweep's axes."""
+    from camcore.explore import explore_figure, pareto
+
+    rows = _paper_rows(
+        {
+            "follower.kind": ["single_roller", "double_concave"],
+            "cam.base_radius_mm": [60, 85, 110],
+            "follower.offset_mm": [20, 30],
+        }
+    )
+    rows = rows[:7]  # cancelled: the double concave faces reached 60 mm, e = 20 only
+    names = ["cam_size", "stress"]
+    fig = explore_figure(
+        rows,
+        ("cam.base_radius_mm", "r_b"),
+        ("follower.offset_mm", "e"),
+        names,
+        pareto(rows, names),
+    )
+    maps = fig.axes[:2]
+    assert [ax.get_title()[:14] for ax in maps] == ["single roller ", "double concave"]
+    (x0, x1), (y0, y1) = maps[0].get_xlim(), maps[0].get_ylim()
+    assert x0 < 60 and x1 > 110 and y0 < 20 and y1 > 30
+    assert maps[1].get_xlim() == (x0, x1) and maps[1].get_ylim() == (y0, y1)
+
+
 def test_a_refused_copy_does_not_hide_a_valid_design():
     """A field a follower ignores is still checked against its own limits: a concave
     face swept over roller radius 0 (refused) and 10 is one design, and the valid row
