@@ -567,17 +567,29 @@ CAMERA_VIEWS = ("Front", "Contact close-up", "3D")
 FRONT_FOV = math.radians(8.0)  # a long lens: nearly orthographic, the cam looks round
 
 
-def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
+DEFAULT_FRAME = (16 / 9, 0.0)  # (aspect, panel share) before the browser says
+
+
+def camera_for(
+    view: str, a, k: int, frame: tuple[float, float] = DEFAULT_FRAME
+) -> tuple[tuple, tuple, float]:
     """(position, look_at, fov [rad]) of a preset view of analysis ``a`` at grid index k.
 
     Front: straight along -z with a long lens, the whole mechanism in frame. Contact
     close-up: the same lens on the contact region, following the follower's lift (call
-    again as the cam turns). 3D: the perspective view from above and to the side."""
+    again as the cam turns). 3D: the perspective view from above and to the side.
+
+    ``frame`` = (aspect, panel share): the 3D view's width over its height, and the
+    share of its width the control panel covers at its right edge. Front and close-up
+    put the mechanism in the middle of the part left visible (centred on the whole
+    view, the close-up had the right face S2 under the panel at 1280 x 720)."""
+    aspect, share = frame
     if view == "Contact close-up":  # (called every frame while playing: cheap)
         y = a.geo.r_b + float(a.prog.S[k])  # the contacts sit near the top of the cam
         span = 0.8 * a.geo.r_b  # both faces of a double follower and the flanks in frame
         dist = span / (2 * math.tan(FRONT_FOV / 2))
-        return (0.0, y, dist), (0.0, y, 0.0), FRONT_FOV
+        x = _beside_panel(dist, aspect, share)
+        return (x, y, dist), (x, y, 0.0), FRONT_FOV
     # in frame: the follower's highest part at full lift (the stem's end) and the cam's
     # widest radius below its axis (any point of the cam passes there as it turns)
     top = max(float(m.bounds[1, 1]) for m, _ in follower_parts(a).values()) + a.geo.h
@@ -589,4 +601,12 @@ def camera_for(view: str, a, k: int) -> tuple[tuple, tuple, float]:
         pos = look + np.array([0.18 * H, 0.12 * H, 0.95 * H])
         return tuple(pos), tuple(look), math.radians(50.0)
     dist = 1.15 * H / (2 * math.tan(FRONT_FOV / 2))
-    return (0.0, cy, dist), (0.0, cy, 0.0), FRONT_FOV
+    x = _beside_panel(dist, aspect, share)
+    return (x, cy, dist), (x, cy, 0.0), FRONT_FOV
+
+
+def _beside_panel(dist: float, aspect: float, share: float) -> float:
+    """How far right [m] to move a front camera ``dist`` from the cam's plane so that
+    x = 0 shows in the middle of the view's uncovered part: the panel's half share of
+    the visible width (2 dist tan(fov/2) aspect)."""
+    return share * dist * math.tan(FRONT_FOV / 2) * aspect

@@ -34,7 +34,7 @@ from .panels import (
     summary_markdown,
     where_markdown,
 )
-from .scene import CAMERA_VIEWS, SceneView, camera_for
+from .scene import CAMERA_VIEWS, DEFAULT_FRAME, SceneView, camera_for
 from .ticker import Debouncer, Ticker
 
 FPS = 30.0
@@ -77,6 +77,7 @@ class Session:
         self.theta_deg = 0.0
         self.speed = 45.0  # animation, cam degrees per second
         self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
+        self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
         self.station_events: list[str] = []  # what happens at each station, in words
         self.store = storage.BrowserStore(client)
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
@@ -444,7 +445,7 @@ class Session:
                 finally:
                     self._syncing = False
             if self.camera_view == "Contact close-up":  # follow the contacts as S changes
-                pos, look, _ = camera_for(self.camera_view, self.analysis, k)
+                pos, look, _ = camera_for(self.camera_view, self.analysis, k, self._frame())
                 self.client.camera.position, self.client.camera.look_at = pos, look
             if markers:
                 self._show_markers(k)
@@ -526,10 +527,10 @@ class Session:
         from camcore.document import stations_image
 
         with self.lock:
-            a = self.analysis
+            a, gen = self.analysis, self.gen
         image = stations_image(a)  # ~0.5 s of matplotlib, outside the lock
         with self.lock:
-            if self.analysis is not a:  # the design changed meanwhile: not its picture
+            if self._stale(gen):  # the design changed meanwhile: not its picture
                 return
             if self.ui.stations_img is not None:
                 self.ui.stations_img.image = image
@@ -546,7 +547,24 @@ class Session:
         except AssertionError:  # no camera message yet
             drawn = 0
         with self.lock:
-            self.client.gui.main_panel.set_width(wide_panel_px(drawn) if on else NARROW_PANEL_PX)
+            self.panel_px = wide_panel_px(drawn) if on else NARROW_PANEL_PX
+            self.client.gui.main_panel.set_width(self.panel_px)
+            if self.camera_view != "3D":  # the mechanism beside the panel's new width
+                self.reset_camera()
+
+    def _frame(self) -> tuple[float, float]:
+        """(aspect, panel share) of this tab's 3D view (scene.camera_for): its drawing
+        size, and the panel's width over the drawing width. The drawing width is in
+        device pixels, scaled down to 0.75 while viser saves frames, the panel's in CSS
+        pixels: on a high-DPI screen the share is read smaller than it is, and the
+        mechanism sits between the middle of the view and that of its uncovered part."""
+        try:
+            w, h = self.client.camera.image_width, self.client.camera.image_height
+        except AssertionError:  # no camera message yet
+            return DEFAULT_FRAME
+        if w <= 0 or h <= 0:
+            return DEFAULT_FRAME
+        return w / h, min(self.panel_px / w, 0.6)
 
     def set_camera_view(self, view: str) -> None:
         """A preset view (Front by default; the close-up follows the animation)."""
@@ -557,7 +575,7 @@ class Session:
             self.reset_camera()
 
     def reset_camera(self) -> None:
-        pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k)
+        pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k, self._frame())
         cam = self.client.camera
         cam.up_direction = (0.0, 1.0, 0.0)
         cam.fov = fov

@@ -623,7 +623,7 @@ def test_camera_presets_front_by_default_and_a_close_up_that_follows(tab):
     s = tab
     cam = s.client.camera
     assert s.camera_view == "Front" and cam.fov < math.radians(10)  # a long, flat lens
-    assert abs(cam.position[0]) < 1e-12 and abs(cam.look_at[0]) < 1e-12  # straight on
+    assert cam.position[0] == cam.look_at[0] > 0  # straight on, the cam left of the panel
     s.ui.view_btns.value = "Contact close-up"
     s.ui.angle_slider.value = 50.0
     S = float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))
@@ -733,9 +733,12 @@ def test_wide_panel_toggle(tab, monkeypatch):
 
     widths: list[float] = []
     monkeypatch.setattr(MainPanelHandle, "set_width", lambda self, w: widths.append(w))
+    narrow_x = tab.client.camera.position[0]
     tab.ui.wide_box.value = True
+    wide_x = tab.client.camera.position[0]  # the mechanism moves left of the wider panel
     tab.ui.wide_box.value = False
     assert widths == [wide_panel_px(tab.client.camera.image_width), NARROW_PANEL_PX]
+    assert wide_x > narrow_x > 0 and tab.client.camera.position[0] == narrow_x
     assert [wide_panel_px(w) for w in (0, 600, 1000, 1920)] == [793, 384, 620, 1000]
 
 

@@ -228,6 +228,29 @@ def test_the_front_view_frames_the_whole_mechanism(preset):
     assert look[1] + half >= stem_top and look[1] - half <= cam_bottom
 
 
+@pytest.mark.parametrize("view", ["Front", "Contact close-up"])
+def test_the_mechanism_is_framed_beside_the_panel(view):
+    """At 1280 x 720 the narrow panel covers 30 % of the view's right side: centred on
+    the whole view, the close-up had the right face S2 under it. The follower (and in
+    Front the cam) lie inside the uncovered part, centred in it."""
+    from app.layout import NARROW_PANEL_PX
+    from app.scene import camera_for, follower_parts
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+
+    a = analyze(load_preset("paper_example"), verify=False)
+    k = panels.nearest_index(a.theta, 130.0)  # the high dwell: both faces on the cam
+    aspect, share = 1280 / 720, NARROW_PANEL_PX / 1280
+    pos, look, fov = camera_for(view, a, k, (aspect, share))
+    half = pos[2] * math.tan(fov / 2) * aspect  # half the visible width at the cam
+    left, right = pos[0] - half, pos[0] + half - 2 * share * half  # uncovered part
+    assert look[0] == pos[0] and (left + right) / 2 == pytest.approx(0.0, abs=1e-12)
+    xs = [m.bounds[:, 0] for m, _ in follower_parts(a).values()]
+    if view == "Front":
+        xs.append(np.array([-1.0, 1.0]) * np.hypot(*a.profile.points.T).max())
+    assert left < min(x[0] for x in xs) and max(x[1] for x in xs) < right
+
+
 def test_where_names_the_segments_around_an_empty_dwell():
     """A fall straight into a rise meets it through an empty dwell (motion.segments):
     the line says 'fall ends, rise begins', not the empty dwell's name."""
