@@ -252,10 +252,14 @@ def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
     return j - 1 if x - theta[j - 1] < theta[j] - x else j
 
 
-def where_markdown(a, k: int, events: list[str]) -> str:
+def where_markdown(a, k: int, events: list[str], after: list[list[str]] | None = None) -> str:
     """The line under the angle slider: angle, segment (both names at a boundary), the
     station reached or the two it lies between, what happens there in words, the
-    faces in contact, S and F_N at grid index k of analysis ``a``."""
+    faces in contact, S and F_N at grid index k of analysis ``a``.
+
+    ``after``: per station, the faces touching just after it (report's "contacts"). At
+    a station a face that touches now but not after it is marked as leaving (the
+    stations diagram draws it idle there: the text had said both faces touch, no more)."""
     th = math.degrees(a.theta[k])
     st = np.degrees(a.stations)
     step = a.design.limits.resolution_deg
@@ -270,6 +274,9 @@ def where_markdown(a, k: int, events: list[str]) -> str:
             f"between stations {i - 1} and {i}" if 0 < i < n else f"between stations {n - 1} and 0"
         )
     faces = [a.geo.faces[i].name for i in np.flatnonzero(a.in_contact[:, k])]
+    if at and after:
+        stay = {face for i in at if i < len(after) for face in after[i]}
+        faces = [f if f.split(" ")[0] in stay else f"{f} leaving the cam" for f in faces]
     seg = SEGMENT_NAMES[int(a.prog.segment[k])]
     j, n = int(a.prog.index[k]), len(a.segments)
 

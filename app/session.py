@@ -79,6 +79,7 @@ class Session:
         self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
         self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
         self.station_events: list[str] = []  # what happens at each station, in words
+        self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
         self._persist = False  # on once the browser's stored design has been read
@@ -236,7 +237,7 @@ class Session:
             if ui.quick_md.content:  # it spoke of the design before this one
                 ui.quick_md.content = ""
             self._show_summary(s)
-            ui.where_md.content = where_markdown(a, k, self.station_events)
+            ui.where_md.content = where_markdown(a, k, self.station_events, self.station_faces)
             self._show_status()
         self._save_working()
         if reset_camera:
@@ -275,6 +276,7 @@ class Session:
         """Key numbers, and what happens at each station in words (for where_md)."""
         self.ui.summary_md.content = summary_markdown(s)
         self.station_events = [st["event"] for st in s["stations"]]
+        self.station_faces = [st["contacts"] for st in s["stations"]]
 
     def _show_station_buttons(self, a: Analysis) -> None:
         names = tuple(str(i) for i in range(len(a.stations)))
@@ -451,7 +453,9 @@ class Session:
                 self._show_markers(k)
 
     def _show_markers(self, k: int) -> None:
-        self.ui.where_md.content = where_markdown(self.analysis, k, self.station_events)
+        self.ui.where_md.content = where_markdown(
+            self.analysis, k, self.station_events, self.station_faces
+        )
         for c in self.ui.curves:
             c.marker(math.degrees(self.analysis.theta[k]))
 
@@ -516,7 +520,9 @@ class Session:
             if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
                 self._show_markers(k)
             elif slow:
-                self.ui.where_md.content = where_markdown(self.analysis, k, self.station_events)
+                self.ui.where_md.content = where_markdown(
+                    self.analysis, k, self.station_events, self.station_faces
+                )
 
     # --- view ----------------------------------------------------------------------
     def show_stations_diagram(self) -> None:

@@ -46,6 +46,27 @@ def test_where_says_station_event_faces_and_segment_boundary(paper_analysis):
     assert "between stations" in panels.where_markdown(a, mid, [])
 
 
+def test_at_a_station_a_face_that_leaves_is_said_to(paper_analysis):
+    """At stations 0 and 3 one face still touches and leaves: the line said both touch
+    while the stations diagram drew the leaving one idle. Between stations, and where a
+    face arrives (station 2), no face is marked."""
+    from camcore.report import summary
+
+    a = paper_analysis
+    stations = summary(a)["stations"]
+    events, after = [s["event"] for s in stations], [s["contacts"] for s in stations]
+
+    def contact_line(deg: float) -> str:
+        k = panels.nearest_index(a.theta, deg)
+        return panels.where_markdown(a, k, events, after).split("In contact: ")[1]
+
+    st = np.degrees(a.stations)
+    assert contact_line(st[0]).startswith("**S1 (left face), S2 (right face) leaving the cam**")
+    assert contact_line(st[3]).startswith("**S1 (left face) leaving the cam, S2 (right face)**")
+    assert contact_line(st[2]).startswith("**S1 (left face), S2 (right face)**")
+    assert "leaving" not in contact_line(30.0) + contact_line(135.0)
+
+
 def test_status_panel_states():
     ok = panels.status_html(None, [], 1e-7, True)
     assert "All design limits met" in ok and "0.0001 mm" in ok
