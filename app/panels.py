@@ -252,6 +252,9 @@ def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
     return j - 1 if x - theta[j - 1] < theta[j] - x else j
 
 
+EVENT_LINES = 3  # a station's words take up to three lines in the narrow panel
+
+
 def where_markdown(a, k: int, events: list[str], after: list[list[str]] | None = None) -> str:
     """The line under the angle slider: angle, segment (both names at a boundary), the
     station reached or the two it lies between, what happens there in words, the
@@ -267,7 +270,7 @@ def where_markdown(a, k: int, events: list[str], after: list[list[str]] | None =
     said = ""
     if at:
         where = "at station " + " and ".join(str(i) for i in at)
-        said = "  \n" + "  \n".join(f"*{esc(events[i])}*" for i in at if i < len(events))
+        said = "<br>".join(f"<i>{esc(events[i])}</i>" for i in at if i < len(events))
     else:
         i, n = int(np.searchsorted(st, th)), len(st)
         where = (
@@ -297,7 +300,10 @@ def where_markdown(a, k: int, events: list[str], after: list[list[str]] | None =
     return (
         f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
         f"In contact: **{', '.join(faces) if faces else 'none'}** · "
-        f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N{said}"
+        f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N"
+        # the station's words, in room kept for them between stations too: the panel
+        # below does not jump as the animation passes a station
+        f"<div style='min-height:{EVENT_LINES * 1.35:.2f}em'>{said}</div>"
     )
 
 

@@ -46,6 +46,16 @@ def test_where_says_station_event_faces_and_segment_boundary(paper_analysis):
     assert "between stations" in panels.where_markdown(a, mid, [])
 
 
+def test_the_station_words_have_room_kept_between_stations(paper_analysis):
+    """The line under the slider keeps the same room for a station's words whether at a
+    station or between two (the panel below had jumped ~30 px at each station)."""
+    a = paper_analysis
+    box = f"<div style='min-height:{panels.EVENT_LINES * 1.35:.2f}em'>"
+    at = panels.where_markdown(a, 0, ["the low dwell ends"])
+    between = panels.where_markdown(a, panels.nearest_index(a.theta, 30.0), ["x"])
+    assert box + "<i>the low dwell ends</i></div>" in at and between.endswith(box + "</div>")
+
+
 def test_at_a_station_a_face_that_leaves_is_said_to(paper_analysis):
     """At stations 0 and 3 one face still touches and leaves: the line said both touch
     while the stations diagram drew the leaving one idle. Between stations, and where a
