@@ -78,6 +78,7 @@ class Session:
         self.speed = 45.0  # animation, cam degrees per second
         self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
         self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
+        self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
         self.station_events: list[str] = []  # what happens at each station, in words
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
@@ -240,8 +241,8 @@ class Session:
             ui.where_md.content = where_markdown(a, k, self.station_events, self.station_faces)
             self._show_status()
         self._save_working()
-        if reset_camera:
-            self.reset_camera()
+        if reset_camera or not 0.5 < _size(a) / self._framed_size < 2:
+            self.reset_camera()  # (r_b 80 -> 5000 mm had put the camera inside the cam)
 
     def _show_curves(self, data: plots.CurveData, k: int) -> None:
         at = math.degrees(self.analysis.theta[k])
@@ -581,6 +582,7 @@ class Session:
             self.reset_camera()
 
     def reset_camera(self) -> None:
+        self._framed_size = _size(self.analysis)
         pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k, self._frame())
         cam = self.client.camera
         cam.up_direction = (0.0, 1.0, 0.0)
@@ -601,3 +603,8 @@ class Session:
         for t in self.threads:
             if t.is_alive() and t is not threading.current_thread():
                 t.join(timeout=2.0)
+
+
+def _size(a: Analysis) -> float:
+    """The cam's largest radius [m]: the preset views frame the mechanism by it."""
+    return float(a.geo.r_b + a.prog.S.max())

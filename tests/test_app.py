@@ -634,6 +634,22 @@ def test_camera_presets_front_by_default_and_a_close_up_that_follows(tab):
     assert cam.fov > math.radians(30)
 
 
+def test_the_camera_reframes_when_the_cam_changes_size_a_lot(tab):
+    """r_b 80 -> 5000 mm had left the camera inside the cam (a magenta blob); a small
+    change keeps the user's own view."""
+    cam = tab.client.camera
+    tab.ui.controls["follower.kind"].value = "single roller"  # (|r_f| < 5000 mm)
+    cam.position = (0.01, 0.2, 1.5)  # the user moved the camera
+    tab.ui.controls["cam.base_radius_mm"].value = 90.0
+    assert tab.design.cam.base_radius_mm == 90.0 and tuple(cam.position) == (0.01, 0.2, 1.5)
+    tab.ui.controls["cam.base_radius_mm"].value = 5000.0
+    assert tab.design.cam.base_radius_mm == 5000.0
+    assert cam.position[2] > 30 * 1.5  # framed again, from far enough away
+    far = cam.position
+    tab.ui.controls["cam.base_radius_mm"].value = 80.0
+    assert cam.position[2] < far[2] / 20
+
+
 def test_stations_diagram_in_the_view_tab(tab):
     """The paper's Fig. 4 for the design on screen: one panel per station, drawn on
     request and replaced on the next request."""
