@@ -14,6 +14,7 @@ inline.
 from __future__ import annotations
 
 import json
+import logging
 import math
 import threading
 
@@ -358,6 +359,13 @@ class Session:
                 name, data = f"{file_stem(d)}{spec.suffix}", spec.write(a)
             except (KeyError, export.ExportError) as exc:
                 return say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
+            except Exception as exc:  # a defect of ours: said, not silent (and logged)
+                logging.getLogger(__name__).exception("export %r failed", kind)
+                return say(
+                    f"✖ Cannot export {esc(kind)}: an internal error "
+                    f"({esc(type(exc).__name__)}: {esc(exc)}). Please report it; the other "
+                    "files may still work."
+                )
             say(
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
                 f"{d.follower.kind.label}."

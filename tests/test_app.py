@@ -485,6 +485,22 @@ def test_browser_storage_values_are_untrusted():
         storage.with_saved({}, "   ", d)
 
 
+def test_an_export_that_fails_unexpectedly_says_so(tab, downloads, monkeypatch):
+    """A defect in an exporter had left the button silent: the tab says what failed."""
+    from dataclasses import replace
+
+    from camcore import export
+
+    def broken(a):
+        raise RuntimeError("boom <b>")
+
+    monkeypatch.setitem(export.EXPORTS, "stl", replace(export.EXPORTS["stl"], write=broken))
+    tab.download("stl")
+    assert not downloads
+    md = tab.ui.files_md.content
+    assert "Cannot export stl: an internal error (RuntimeError: boom &lt;b&gt;)" in md
+
+
 def test_download_names_say_which_design_they_hold(tab):
     from app.panels import file_stem
 
