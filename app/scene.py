@@ -200,10 +200,21 @@ def _display_points(a) -> np.ndarray:
     return a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
 
 
-def _label_size(a) -> dict:
-    """Labels sized in the scene (a fixed share of the base radius), so they grow as a
-    teacher zooms in and stay readable from the back of a room."""
-    return {"font_size_mode": "scene", "font_scene_height": 0.06 * a.geo.r_b}
+LABEL_SHARE = 0.025  # a label's height in a preset view: of the view's height
+
+
+def label_height(pos, look, fov: float) -> float:
+    """The labels' height [m] for a camera at ``pos`` looking at ``look`` with the
+    vertical field of view ``fov`` [rad]: LABEL_SHARE of the height it sees there
+    (18 px of a 720 px projector, 27 of 1080, in every preset view; a share of the
+    base radius had made them 8 px in the Front view and 54 px in the close-up)."""
+    dist = float(np.linalg.norm(np.subtract(pos, look)))
+    return LABEL_SHARE * 2 * dist * math.tan(fov / 2)
+
+
+def _label_size(height: float) -> dict:
+    """Labels sized in the scene, so they grow as a teacher zooms in."""
+    return {"font_size_mode": "scene", "font_scene_height": height}
 
 
 def geometry_key(design) -> str:
@@ -241,6 +252,16 @@ class SceneView:
         self._made: dict[str, Any] = {}  # node name -> what it was made from (see _put)
         self._wear_at = (0.0, 0.0)  # (z, thickness) of the wear band, drawn when shown
         self._wear_of: Any = None  # the analysis the band on screen was drawn for
+        self.label_h = 0.005  # the labels' height [m] (set_label_height)
+
+    def set_label_height(self, height: float) -> None:
+        """Size every label ``height`` [m] high (label_height of the preset view)."""
+        self.label_h = height
+        for name in ("label0", "label1", "q_label", "phi_label"):
+            if name in self.nodes:
+                self.nodes[name].font_scene_height = height
+        if self.a is not None:
+            self.pose(self.k)  # the phi label stands a label's height below the contact
 
     # --- build once per analysis ---------------------------------------------------
     def build(self, a) -> None:
@@ -407,7 +428,7 @@ class SceneView:
             y = float(mesh.bounds[1, 1])
             name = f.name.split(" ")[0] if len(a.geo.faces) == 2 else f.name
             left = i == 0 and len(a.geo.faces) == 2
-            pos, size = (float(lo if left else hi), y, 0.0), _label_size(a)
+            pos, size = (float(lo if left else hi), y, 0.0), _label_size(self.label_h)
             self._put(
                 key,
                 (name, pos, tuple(size.items()), left),
@@ -445,14 +466,18 @@ class SceneView:
         )
         self.nodes["q"] = s.add_icosphere("/ov/q", radius=r * 1.2, color=Q_RGB)
         self.nodes["q_label"] = s.add_label(
-            "/ov/q/label", "I23 = Q", position=(0, -2 * r, 0), **_label_size(a), anchor="top-center"
+            "/ov/q/label",
+            "I23 = Q",
+            position=(0, -2 * r, 0),
+            **_label_size(self.label_h),
+            anchor="top-center",
         )
         self.nodes["q_lines"] = s.add_line_segments(
             "/ov/q_lines", one, Q_RGB, thickness=self.thin * 0.5
         )
         self.nodes["phi"] = s.add_line_segments("/ov/phi", one, PHI_RGB, thickness=self.thin * 0.6)
         self.nodes["phi_label"] = s.add_label(
-            "/ov/phi_label", "φ", **_label_size(a), anchor="center-center"
+            "/ov/phi_label", "φ", **_label_size(self.label_h), anchor="center-center"
         )
 
     # --- per frame -----------------------------------------------------------------
@@ -535,8 +560,8 @@ class SceneView:
         # below the contact, on the cam and outward of the driving face: clear of the
         # follower (pad, roller, plate and yoke all lie above the contact), of the angle
         # arc (above it too) and of the normals to Q (they run inward, down to the axis)
-        side = -1.0 if p[0] <= 0 else 1.0
-        lab.position = (p[0] + side * 0.3 * L, p[1] - 0.2 * L, z)
+        side = -1.0 if p[0] <= 0 else 1.0  # (its top edge a label's height lower still)
+        lab.position = (p[0] + side * 0.3 * L, p[1] - 0.2 * L - self.label_h, z)
         lab.text = f"φ = {math.degrees(phi):.1f}°"
         lab.visible = self.show["pressure_angle"] and touching
 

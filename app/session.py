@@ -35,7 +35,7 @@ from .panels import (
     summary_markdown,
     where_markdown,
 )
-from .scene import CAMERA_VIEWS, DEFAULT_FRAME, SceneView, camera_for
+from .scene import CAMERA_VIEWS, DEFAULT_FRAME, SceneView, camera_for, label_height
 from .ticker import Debouncer, Ticker
 
 FPS = 30.0
@@ -592,6 +592,7 @@ class Session:
     def reset_camera(self) -> None:
         self._framed_size = _size(self.analysis)
         pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k, self._frame())
+        self.view.set_label_height(label_height(pos, look, fov))
         cam = self.client.camera
         cam.up_direction = (0.0, 1.0, 0.0)
         cam.fov = fov

@@ -5,6 +5,7 @@ check the scene, curves and panels change as they should."""
 from __future__ import annotations
 
 import io
+import itertools
 import math
 import time
 
@@ -650,6 +651,21 @@ def test_camera_presets_front_by_default_and_a_close_up_that_follows(tab):
     assert cam.fov > math.radians(30)
 
 
+@pytest.mark.parametrize("kind", ["double concave", "single roller"])
+def test_labels_read_on_a_projector_in_every_preset_view(tab, kind):
+    """At 720 px high (a projector) the labels (S1, S2, I23 = Q, phi) stand 18 px in
+    each preset view: sized as a share of r_b they were 8 px in the Front view."""
+    tab.ui.controls["follower.kind"].value = kind
+    names = ["q_label", "phi_label", "label0"] + (["label1"] if kind == "double concave" else [])
+    for view in ("Front", "Contact close-up", "3D"):
+        tab.ui.view_btns.value = view
+        cam = tab.client.camera
+        seen = 2 * np.linalg.norm(np.subtract(cam.position, cam.look_at)) * math.tan(cam.fov / 2)
+        for name in names:
+            px = tab.view.nodes[name].font_scene_height / seen * 720
+            assert 17 < px < 19, (view, name, px)
+
+
 def test_the_camera_reframes_when_the_cam_changes_size_a_lot(tab):
     """r_b 80 -> 5000 mm had left the camera inside the cam (a magenta blob); a small
     change keeps the user's own view."""
@@ -890,7 +906,11 @@ def test_the_pressure_angle_label_is_clear_of_the_follower(tab, kind):
     a = s.analysis
     parts = [m for name, (m, _) in follower_parts(a).items() if name != "guide"]
     lab = s.view.nodes["phi_label"]
-    for deg in (0.0, 30.0, 50.0, 99.0, 101.0, 120.0, 200.0, 240.0, 300.0):
+    views = ("Front", "Contact close-up")  # (labels of two sizes: scene.label_height)
+    for view, deg in itertools.product(
+        views, (0.0, 30.0, 50.0, 99.0, 101.0, 120.0, 200.0, 240.0, 300.0)
+    ):
+        s.ui.view_btns.value = view
         s.ui.angle_slider.value = deg
         k = s.view.k
         x, y, _ = lab.position
@@ -898,4 +918,4 @@ def test_the_pressure_angle_label_is_clear_of_the_follower(tab, kind):
         half_w = 0.55 * h * len(lab.text) / 2
         u, v = np.meshgrid(np.linspace(-half_w, half_w, 15), np.linspace(-h / 2, h / 2, 5))
         box = np.column_stack([x + u.ravel(), y - float(a.prog.S[k]) + v.ravel()])
-        assert not _inside_any(box, parts), (kind, deg, lab.text)
+        assert not _inside_any(box, parts), (kind, view, deg, lab.text)
