@@ -388,8 +388,20 @@ def _table(rows: list[dict]):
 def _progress(done: int, total: int, rate: float, stream=sys.stderr) -> None:
     width = 30
     fill = int(width * done / max(total, 1))
-    stream.write(f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} designs, {rate:.1f}/s")
+    left = f", ~{_duration((total - done) / rate)} left" if rate > 0 and done < total else ""
+    stream.write(
+        f"\r[{'#' * fill}{'.' * (width - fill)}] {done}/{total} designs, {rate:.1f}/s{left}   "
+    )
     stream.flush()
+
+
+def _duration(seconds: float) -> str:
+    """A time to go, as a person reads it: 40 s, 12 min, 3.5 h."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    return f"{seconds / 3600:.1f} h"
 
 
 def _version() -> str:

@@ -183,6 +183,17 @@ def test_bad_specs_are_refused_with_the_key_named(spec, message):
         sweep.parse_spec(json.dumps(spec))
 
 
+def test_the_progress_line_says_how_long_is_left():
+    import io
+
+    out = io.StringIO()
+    sweep._progress(250, 1000, 5.0, out)  # 750 designs at 5 a second: 150 s
+    assert "250/1000 designs, 5.0/s, ~2 min left" in out.getvalue()
+    sweep._progress(1000, 1000, 5.0, out)
+    assert out.getvalue().endswith("1000/1000 designs, 5.0/s   ")
+    assert [sweep._duration(s) for s in (40, 720, 12600)] == ["40 s", "12 min", "3.5 h"]
+
+
 def test_values_that_only_some_combinations_refuse_make_rows():
     """A value out of a field's own range, or one that fails only with the base's other
     fields, is a row that says why (another axis may make it a design); an infinite
