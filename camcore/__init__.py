@@ -17,6 +17,17 @@ Data flows one way: ``Design`` (camcore.model) -> ``analyze`` (camcore.analysis)
 from .analysis import Analysis, analyze, compare
 from .model import Design, DesignError, FollowerKind, MotionLaw, load_design, load_preset
 
+
+def package_version() -> str:
+    """The installed camdesigner's version ("unknown" in a source tree never installed)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("camdesigner")
+    except PackageNotFoundError:
+        return "unknown"
+
+
 __all__ = [
     "Analysis",
     "Design",
@@ -27,4 +38,5 @@ __all__ = [
     "compare",
     "load_design",
     "load_preset",
+    "package_version",
 ]

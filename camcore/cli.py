@@ -17,10 +17,10 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from importlib.metadata import PackageNotFoundError, version
 
 import numpy as np
 
+from . import package_version
 from .model import (
     PAPER_FOLLOWERS,
     Design,
@@ -33,13 +33,6 @@ from .model import (
 )
 
 EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT = 0, 1, 2
-
-
-def _version() -> str:
-    try:
-        return version("camdesigner")
-    except PackageNotFoundError:  # running from a source tree that was never installed
-        return "unknown"
 
 
 def _apply_set(data: dict, assignment: str) -> None:
@@ -225,7 +218,7 @@ def _parser() -> argparse.ArgumentParser:
         epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input "
         "(sweep: 0 table written, 130 interrupted, 2 bad input).",
     )
-    p.add_argument("--version", action="version", version=f"%(prog)s {_version()}")
+    p.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
     sub = p.add_subparsers(dest="command", required=True)
 
     def source(sp, follower=True):

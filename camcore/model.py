@@ -480,9 +480,10 @@ class Cam(_Part):
     @model_validator(mode="after")
     def _few_enough_passes(self) -> Cam:
         if self.passes > MAX_PASSES:
+            many = f"{self.passes} passes, " if self.passes < 1e9 else ""  # (1e9: capped)
             raise ValueError(
                 f"pass_depth_mm = {self.pass_depth_mm:g} mm would cut the "
-                f"{self.cut_depth_mm:g} mm in {self.passes} passes, more than {MAX_PASSES}: "
+                f"{self.cut_depth_mm:g} mm in {many}more than {MAX_PASSES} passes: "
                 f"use at least {math.ceil(self.cut_depth_mm / MAX_PASSES * 1000) / 1000:g} mm"
             )
         return self

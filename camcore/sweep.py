@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import package_version
 from .files import FileError, read_capped, write_atomic
 from .model import (
     Design,
@@ -93,6 +94,8 @@ def _axis(path: str, raw) -> tuple:
         lo, hi, num = raw["from"], raw["to"], raw["num"]
         if not all(isinstance(x, int | float) and not isinstance(x, bool) for x in (lo, hi)):
             raise DesignError(f"grid.{path}: from and to must be numbers")
+        if not all(_finite(x) for x in (lo, hi)):
+            raise DesignError(f"grid.{path}: from and to must be finite numbers")
         if not isinstance(num, int) or isinstance(num, bool) or not 1 <= num <= MAX_VALUES:
             raise DesignError(f"grid.{path}.num: an integer from 1 to {MAX_VALUES}")
         return tuple(float(x) for x in np.linspace(lo, hi, num))
@@ -112,6 +115,11 @@ def _kind(value) -> str:
     return "text" if isinstance(value, str) else "list or object"
 
 
+def _finite(x: int | float) -> bool:
+    """Finite, and within a float's range (an integer of 400 digits is not)."""
+    return abs(x) <= sys.float_info.max if isinstance(x, int) else math.isfinite(x)
+
+
 def _one_type(path: str, values: tuple) -> tuple:
     """An axis' values, all of one type (nulls aside: one column of the table), its
     numbers finite; integers mixed with floats, or too large for a 64-bit column,
@@ -123,8 +131,8 @@ def _one_type(path: str, values: tuple) -> tuple:
             f"{' and '.join(sorted(kinds))}"
         )
     numbers = [v for v in values if _kind(v) == "number"]
-    if not all(math.isfinite(v) for v in numbers):
-        raise DesignError(f"grid.{path}: numbers must be finite")
+    if not all(_finite(v) for v in numbers):
+        raise DesignError(f"grid.{path}: numbers must be finite (and within a float's range)")
     if any(isinstance(v, float) or abs(v) >= 2**63 for v in numbers):
         return tuple(v if v is None else float(v) for v in values)
     return values
@@ -404,15 +412,6 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h"
 
 
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("camdesigner")
-    except PackageNotFoundError:  # a source tree that was never installed
-        return "unknown"
-
-
 def _parts_dir(out: Path, stamp: dict) -> Path:
     """``OUT.parts/``, holding the finished chunks of this very run: same spec, mode,
     chunk size and camcore version (its ``stamp``). Parts of another run are refused
@@ -470,14 +469,16 @@ def run(
 
     out = Path(out)
     mode = "fast" if fast else "verify" if verify else "no-verify"
-    stamp = {"spec": spec.fingerprint(), "mode": mode, "chunk": chunk, "camcore": _version()}
+    stamp = {"spec": spec.fingerprint(), "mode": mode, "chunk": chunk, "camcore": package_version()}
     total = spec.size
     n_chunks = -(-total // chunk)
-    with _cluster(workers, scheduler) as client:  # a bad address fails before any file
-        parts = _parts_dir(out, stamp)
-        todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
-        found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
-        done, t0 = found, time.perf_counter()
+    parts = _parts_dir(out, stamp)  # a bad output fails before any work or cluster
+    todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
+    found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
+    done = found
+    # (a bad scheduler leaves parts with no chunk in them, which the next run takes over)
+    with _cluster(workers if todo else None, scheduler if todo else None) as client:
+        t0 = time.perf_counter()  # the rate: of this run's work, from when it can start
 
         def keep(i: int, rows: list[dict]) -> None:
             nonlocal done

@@ -37,6 +37,7 @@ FEED_MM_PER_MIN = 200.0
 PLUNGE_MM_PER_MIN = 50.0
 DECIMALS = 4  # of the X, Y words [mm]: 0.1 um, what controllers take
 ROUNDING_MM = 0.5 * 10.0**-DECIMALS * math.sqrt(2)  # the most a rounded vertex moves
+MAX_MOVES = 1_000_000  # lines of cutting moves in one file (~20 MB)
 
 
 class GougeError(ExportError):
@@ -146,6 +147,21 @@ def _round_up(x: float, digits: int = 3) -> float:
     return math.ceil(x * scale) / scale
 
 
+def _check_size(cam, moves_per_pass: int) -> None:
+    """ExportError if the passes would write more than MAX_MOVES cutting moves (the
+    contour once per pass: 100 passes of a fine profile made a 100 MB file), naming
+    the least pass depth that fits."""
+    if cam.passes * moves_per_pass <= MAX_MOVES:
+        return
+    fits = max(1, MAX_MOVES // moves_per_pass)
+    least = math.ceil(cam.cut_depth_mm / fits * 1000) / 1000
+    raise ExportError(
+        f"the G-code would cut {cam.passes} passes of {moves_per_pass:,} moves, more than "
+        f"{MAX_MOVES:,} in one file: use a pass depth of at least {least:g} mm, or a "
+        "coarser export tolerance (fewer vertices)"
+    )
+
+
 def _xy(p) -> str:
     """The X and Y words of a point [mm], to DECIMALS places."""
     return f"X{p[0]:.{DECIMALS}f} Y{p[1]:.{DECIMALS}f}"
@@ -163,6 +179,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     cam = a.design.cam
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
+    _check_size(cam, path.shape[0] + 2)
     stated = _round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
     n = vertex_normals(to_mm(a.profile.points))[::-1]

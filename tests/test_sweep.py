@@ -142,6 +142,9 @@ def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
 def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
     spec = sweep.parse_spec(json.dumps(SPEC))
     monkeypatch.setattr(sweep, "run_chunk", lambda *a: pytest.fail("computed"))
+    monkeypatch.setattr(sweep, "_cluster", lambda *a: pytest.fail("a cluster started"))
+    with pytest.raises(FileError, match="no directory"):
+        sweep.run(spec, tmp_path / "missing" / "r.parquet", workers=2, progress=None)
     with pytest.raises(FileError, match="is a directory"):
         sweep.run(spec, tmp_path, progress=None)
     with pytest.raises(FileError, match="no directory"):
@@ -201,8 +204,9 @@ def test_values_that_only_some_combinations_refuse_make_rows():
     column, become floats."""
     spec = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [-5, 80, 1e23]}}))
     assert spec.axes[0][1] == (-5.0, 80.0, 1e23)
-    with pytest.raises(DesignError, match="finite"):
-        sweep.parse_spec('{"grid": {"cam.base_radius_mm": [70, 1e400]}}')
+    for axis in ("[70, 1e400]", "[1" + "0" * 400 + "]", '{"from": 1, "to": 1e400, "num": 3}'):
+        with pytest.raises(DesignError, match="finite"):
+            sweep.parse_spec('{"grid": {"cam.base_radius_mm": ' + axis + "}}")
     assert sweep.parse_spec(json.dumps({"grid": {"cam.speed_rpm": [10**30]}})).axes[0][1] == (1e30,)
 
 

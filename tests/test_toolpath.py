@@ -187,12 +187,16 @@ def test_gcode_cuts_in_equal_passes_through_the_breakthrough(width, pass_depth, 
 def test_too_many_passes_is_refused_with_the_pass_depth_that_fits():
     data = PAPER.model_dump()
     data["cam"].update(width_mm=15.0, pass_depth_mm=0.1)  # 150 passes
-    with pytest.raises(ValueError, match=r"150 passes, more than 100: use at least 0\.15 mm"):
+    with pytest.raises(
+        ValueError, match=r"in 150 passes, more than 100 passes: use at least 0\.15 mm"
+    ):
         Design.model_validate(data)
     data["cam"]["pass_depth_mm"] = 0.15  # 15 / 0.15 = 100 up to rounding: allowed
     assert Design.model_validate(data).cam.passes == 100
     data["cam"]["pass_depth_mm"] = 1e-308  # the ratio overflows: still a clear refusal
-    with pytest.raises(ValueError, match=r"more than 100: use at least 0\.15 mm"):
+    with pytest.raises(
+        ValueError, match=r"cut the 15 mm in more than 100 passes: use at least 0\.15"
+    ):
         Design.model_validate(data)
 
 
@@ -206,3 +210,21 @@ def test_a_self_crossing_profile_is_refused_as_such_not_as_a_gouge():
     with pytest.raises(ExportError, match="not star-shaped") as err:
         toolpath.gcode(a)
     assert not isinstance(err.value, toolpath.GougeError)
+
+
+def test_a_gcode_file_beyond_a_million_moves_is_refused_with_a_pass_depth_that_fits():
+    """100 passes of a 1e-5 mm profile (10,800 vertices) would be 20 MB of G-code (a
+    large cam, 100 MB): refused, naming the least pass depth that fits, which fits."""
+    data = PAPER.model_dump()
+    data["limits"]["export_tolerance_mm"] = 1e-5
+    data["cam"]["pass_depth_mm"] = 0.15  # 100 passes
+    a = analyze(Design.model_validate(data), verify=False)
+    moves = toolpath.cutter_path(a)[0].shape[0] + 2
+    assert 100 * moves > toolpath.MAX_MOVES
+    with pytest.raises(ExportError, match=r"at least ([0-9.]+) mm") as err:
+        toolpath.gcode(a)
+    least = float(re.search(r"at least ([0-9.]+) mm", str(err.value)).group(1))
+    data["cam"]["pass_depth_mm"] = least
+    fits = Design.model_validate(data)
+    assert fits.cam.passes * moves <= toolpath.MAX_MOVES
+    assert fits.cam.passes > 80  # the least that fits, not any
