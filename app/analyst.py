@@ -146,9 +146,9 @@ class Analyst:
         """camcore.sweep.same_designs (validates every point), in the background worker."""
         return self._run("bg", sweep.same_designs, base, points)
 
-    def explore_png(self, rows, x, y, names, front) -> bytes:
+    def explore_png(self, rows, x, y, names, front, limits=None) -> bytes:
         """camcore.explore.explore_png, drawn in the background worker."""
-        return self._run("bg", explore.explore_png, rows, x, y, names, front)
+        return self._run("bg", explore.explore_png, rows, x, y, names, front, 760, limits)
 
     def close(self) -> None:
         with self._lock:

@@ -184,18 +184,20 @@ class ExplorePanel:
                 for i, (j, p) in enumerate(zip(same, points, strict=True))
                 if j in done
             ]
-            self._show(base, rows, len(points), x, y, names)
+            span = [[p[path] for p in points] for path in (x[0], y[0])]  # the asked ranges
+            limits = ((min(span[0]), max(span[0])), (min(span[1]), max(span[1])))
+            self._show(base, rows, len(points), x, y, names, limits)
         except Exception as exc:  # a worker lost: say so, keep the tab
             self.progress.content = f"✖ The sweep stopped: {esc(exc)}"
         finally:
             self.run_btn.disabled, self.cancel_btn.disabled = False, True
 
-    def _show(self, base, rows, total, x, y, names) -> None:
+    def _show(self, base, rows, total, x, y, names, limits) -> None:
         if not rows:
             self.progress.content = "Cancelled before the first designs."
             return
         front = pareto(rows, names)
-        png = self._analyst.explore_png(rows, x, y, names, front)
+        png = self._analyst.explore_png(rows, x, y, names, front, limits)
         offers = {}
         for n, i in enumerate(front[:MAX_FRONT], start=1):
             r = rows[i]

@@ -10,6 +10,7 @@ import argparse
 import ctypes
 import ctypes.util
 import gc
+import os
 import signal
 import threading
 import time
@@ -157,7 +158,8 @@ def _port_free(host: str, port: int) -> bool:
 
     try:
         with socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET) as sock:
-            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            if os.name != "nt":  # (on Windows it would let a bind share a live port)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
             sock.bind((host, port))
         return True
     except OSError:

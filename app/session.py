@@ -35,7 +35,14 @@ from .panels import (
     summary_markdown,
     where_markdown,
 )
-from .scene import CAMERA_VIEWS, DEFAULT_FRAME, SceneView, camera_for, label_height
+from .scene import (
+    CAMERA_VIEWS,
+    DEFAULT_FRAME,
+    SceneView,
+    camera_for,
+    geometry_key,
+    label_height,
+)
 from .ticker import Debouncer, Ticker
 
 FPS = 30.0
@@ -80,6 +87,7 @@ class Session:
         self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
         self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
         self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
+        self._diagram_of = ""  # geometry_key of the stations diagram on screen
         self.station_events: list[str] = []  # what happens at each station, in words
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
@@ -232,8 +240,8 @@ class Session:
             self._enable_for_kind(design)
             ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
-            if ui.stations_img is not None:  # of the design before: the button redraws
-                ui.stations_img.remove()
+            if ui.stations_img is not None and geometry_key(design) != self._diagram_of:
+                ui.stations_img.remove()  # of another geometry: the button draws it again
                 ui.stations_img = None
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
             if ui.quick_md.content:  # it spoke of the design before this one
@@ -361,10 +369,10 @@ class Session:
                 return say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
             except Exception as exc:  # a defect of ours: said, not silent (and logged)
                 logging.getLogger(__name__).exception("export %r failed", kind)
-                return say(
+                return say(  # (the type only: its text may name the server's files)
                     f"✖ Cannot export {esc(kind)}: an internal error "
-                    f"({esc(type(exc).__name__)}: {esc(exc)}). Please report it; the other "
-                    "files may still work."
+                    f"({esc(type(exc).__name__)}, in the server's log). Please report it; "
+                    "the other files may still work."
                 )
             say(
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
@@ -537,16 +545,17 @@ class Session:
     def show_stations_diagram(self) -> None:
         """The mechanism at every station side by side (camcore.document), under the
         button; drawn from the design on screen, replaced on each click, and taken
-        away when the design changes (_redraw: a diagram of another design beside the
-        3D view had misled)."""
+        away when the geometry changes (_redraw: a diagram of another follower beside
+        the 3D view had misled; a new speed or material leaves it)."""
         from camcore.document import stations_image
 
         with self.lock:
-            a, gen = self.analysis, self.gen
+            a, key = self.analysis, geometry_key(self.design)
         image = stations_image(a)  # ~0.5 s of matplotlib, outside the lock
         with self.lock:
-            if self._stale(gen):  # the design changed meanwhile: not its picture
+            if geometry_key(self.design) != key:  # the geometry changed meanwhile
                 return
+            self._diagram_of = key
             if self.ui.stations_img is not None:
                 self.ui.stations_img.image = image
             else:
@@ -590,14 +599,17 @@ class Session:
             self.reset_camera()
 
     def reset_camera(self) -> None:
-        self._framed_size = _size(self.analysis)
-        pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k, self._frame())
-        self.view.set_label_height(label_height(pos, look, fov))
-        cam = self.client.camera
-        cam.up_direction = (0.0, 1.0, 0.0)
-        cam.fov = fov
-        cam.position = pos
-        cam.look_at = look
+        """The preset view's camera and label size (also the Reset button's, which
+        runs in a callback thread of its own: hence the lock)."""
+        with self.lock:
+            self._framed_size = _size(self.analysis)
+            pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k, self._frame())
+            self.view.set_label_height(label_height(pos, look, fov))
+            cam = self.client.camera
+            cam.up_direction = (0.0, 1.0, 0.0)
+            cam.fov = fov
+            cam.position = pos
+            cam.look_at = look
 
     @property
     def threads(self) -> tuple[threading.Thread, ...]:

@@ -125,16 +125,18 @@ def explore_png(
     names: list[str],
     front: np.ndarray,
     width_px: int = 760,
+    limits: tuple[tuple[float, float], tuple[float, float]] | None = None,
 ) -> bytes:
     """The exploration as one PNG (explore_figure)."""
-    fig = explore_figure(rows, x, y, names, front, width_px)
+    fig = explore_figure(rows, x, y, names, front, width_px, limits)
     buf = io.BytesIO()
     fig.savefig(buf, format="png")
     return buf.getvalue()
 
 
-def _limits(values: np.ndarray) -> tuple[float, float]:
+def _limits(values) -> tuple[float, float]:
     """An axis' limits around the finite ``values``, with a margin for the markers."""
+    values = np.asarray(values, dtype=float)
     v = values[np.isfinite(values)]
     lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
     pad = 0.05 * (hi - lo) if hi > lo else 0.5 * abs(lo) or 1.0
@@ -148,12 +150,14 @@ def explore_figure(
     names: list[str],
     front: np.ndarray,
     width_px: int = 760,
+    limits: tuple[tuple[float, float], tuple[float, float]] | None = None,
 ):
     """The exploration as a matplotlib Figure: per follower kind, the (x, y) grid
-    coloured by the first limit each design breaks (green: valid), all on the same axes
-    (a sweep cancelled during one kind leaves it part of the range, which must not look
-    like the whole); below, the valid designs in the plane of the first two figures with
-    the Pareto front numbered (the numbers of the app's list). ``x`` and ``y`` are (grid
+    coloured by the first limit each design breaks (green: valid), all on the same axes:
+    ``limits`` ((x0, x1), (y0, y1)), the sweep's ranges, else those of the rows (a
+    sweep cancelled midway leaves a kind part of the range, which must not look like
+    the whole); below, the valid designs in the plane of the first two figures with the
+    Pareto front numbered (the numbers of the app's list). ``x`` and ``y`` are (grid
     path, axis label)."""
     from matplotlib.figure import Figure as MplFigure
 
@@ -182,8 +186,8 @@ def explore_figure(
         unused = {p for r in rows if _kind(r) == kind for p in ignored_fields(r)}
         note = [axis for axis, (path, _) in zip("xy", (x, y), strict=True) if path in unused]
         title = _label(kind) + (f" (does not use {' or '.join(note)})" if note else "")
-        ax.set_xlim(*_limits(xs))
-        ax.set_ylim(*_limits(ys))
+        ax.set_xlim(*_limits(xs if limits is None else limits[0]))
+        ax.set_ylim(*_limits(ys if limits is None else limits[1]))
         ax.set_title(title, fontsize=12)
         ax.set_xlabel(x[1], fontsize=11)
         ax.set_ylabel(y[1], fontsize=11)

@@ -38,8 +38,8 @@ def require_star_shaped(a) -> None:
     cutter path, can be made of a profile that crosses itself."""
     if not a.profile.is_star_shaped():
         raise ExportError(
-            "the profile is not star-shaped about the cam axis (it crosses itself); "
-            "fix the listed violations before exporting a solid"
+            "the profile is not star-shaped about the cam axis (it crosses itself): no "
+            "part can be made of it; fix the listed violations first"
         )
 
 

@@ -446,6 +446,17 @@ def test_every_follower_s_map_spans_the_whole_sweep():
     (x0, x1), (y0, y1) = maps[0].get_xlim(), maps[0].get_ylim()
     assert x0 < 60 and x1 > 110 and y0 < 20 and y1 > 30
     assert maps[1].get_xlim() == (x0, x1) and maps[1].get_ylim() == (y0, y1)
+    # cancelled during the first follower: the sweep's own ranges, not the rows'
+    first = rows[:1]
+    fig = explore_figure(
+        first,
+        ("cam.base_radius_mm", "r_b"),
+        ("follower.offset_mm", "e"),
+        names,
+        pareto(first, names),
+        limits=((60, 110), (20, 30)),
+    )
+    assert fig.axes[0].get_xlim() == (x0, x1) and fig.axes[0].get_ylim() == (y0, y1)
 
 
 def test_a_refused_copy_does_not_hide_a_valid_design():
