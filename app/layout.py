@@ -47,6 +47,7 @@ STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session a
 # high-DPI screen the share is larger; panels.STATUS_CSS keeps every panel 80 px
 # narrower than the window.
 NARROW_PANEL_PX = 384
+PAUSE_AT_STATION_S = 3.0  # the animation's stop at each station, when asked
 
 
 def wide_panel_px(drawn_width_px: int) -> int:
@@ -67,6 +68,7 @@ class Layout:
     play_btn: Any
     speed_slider: Any
     angle_slider: Any
+    pause_box: Any
     stations_btn: Any
     where_md: Any
     # Design tab
@@ -109,6 +111,12 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
         h["play_btn"] = gui.add_button("▶ Play", color="green")
         h["speed_slider"] = gui.add_slider("Play speed [°/s]", 5, 360, 5, speed_deg_s)
         h["angle_slider"] = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
+        h["pause_box"] = gui.add_checkbox(
+            "Pause at stations",
+            False,
+            hint=f"playing stops {PAUSE_AT_STATION_S:g} s at each station, where a contact "
+            "changes: time to say what happens there",
+        )
         h["stations_btn"] = gui.add_button_group("Go to station", STATION_NAMES)
         h["where_md"] = gui.add_markdown("")
     tabs = gui.add_tab_group()

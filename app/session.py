@@ -25,7 +25,14 @@ from camcore.model import load_preset as load_preset_design
 
 from . import controls, plots, storage, uploads
 from .analyst import Analyst, Result
-from .layout import DEFAULT_PRESET, NARROW_PANEL_PX, Layout, build_layout, wide_panel_px
+from .layout import (
+    DEFAULT_PRESET,
+    NARROW_PANEL_PX,
+    PAUSE_AT_STATION_S,
+    Layout,
+    build_layout,
+    wide_panel_px,
+)
 from .panels import (
     esc,
     file_stem,
@@ -88,6 +95,7 @@ class Session:
         self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
         self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
         self._diagram_of = ""  # geometry_key of the stations diagram on screen
+        self._held = 0.0  # seconds the animation still stays at a station
         self.station_events: list[str] = []  # what happens at each station, in words
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
@@ -125,6 +133,7 @@ class Session:
             cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
         ui.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))
         ui.wide_box.on_update(lambda e: self.set_wide_panel(bool(e.target.value)))
+        ui.pause_box.on_update(lambda _: self._end_pause())
         ui.camera_btn.on_click(lambda _: self.reset_camera())
         ui.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
         ui.preset_btn.on_click(lambda _: self.load_preset(ui.preset_dd.value))
@@ -479,6 +488,7 @@ class Session:
     def _on_angle(self, value: float) -> None:
         with self.lock:
             if not self._syncing:
+                self._held = 0.0  # the user's own angle: no pause left to wait out
                 self._goto(float(value), slider=False)
 
     def goto_station(self, i: int | str) -> None:
@@ -488,6 +498,7 @@ class Session:
             if str(i) not in {str(k) for k in range(n)}:
                 return
             self._set_playing(False)
+            self._held = 0.0
             self._goto(math.degrees(float(self.analysis.stations[int(i)])))
 
     def _set_speed(self, value) -> None:
@@ -527,12 +538,21 @@ class Session:
                 self.frame(dt, n)
 
     def frame(self, dt: float, n: int = 0) -> None:
-        """One animation step of dt seconds, the n-th since play (the ticker's step)."""
+        """One animation step of dt seconds, the n-th since play (the ticker's step).
+        With *Pause at stations* a step that would pass a station stops on it, and the
+        next PAUSE_AT_STATION_S seconds of steps stay there."""
         with self.lock:
             if self.closed.is_set():
                 return
+            if self._held > 0:  # stopped at a station
+                self._held -= dt
+                return
             slow = n % 3 == 0  # angle slider and the line under it at 10 Hz, together
-            self._goto(self.theta_deg + self.speed * dt, markers=False, slider=slow)
+            to = self.theta_deg + self.speed * dt
+            stop = self._station_within(self.speed * dt) if self.ui.pause_box.value else None
+            if stop is not None:
+                to, slow, self._held = stop, True, PAUSE_AT_STATION_S
+            self._goto(to, markers=stop is not None, slider=slow)
             k = self._index()
             if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
                 self._show_markers(k)
@@ -540,6 +560,18 @@ class Session:
                 self.ui.where_md.content = where_markdown(
                     self.analysis, k, self.station_events, self.station_faces
                 )
+
+    def _end_pause(self) -> None:
+        """Pause at stations ticked or unticked: a pause under way ends."""
+        with self.lock:
+            self._held = 0.0
+
+    def _station_within(self, step_deg: float) -> float | None:
+        """The first station angle [deg] after the current angle and at most
+        ``step_deg`` on (turning on from a station: the next one), else None."""
+        ahead = [(math.degrees(s) - self.theta_deg) % 360.0 for s in self.analysis.stations]
+        ahead = [d for d in ahead if 1e-9 < d <= step_deg]
+        return self.theta_deg + min(ahead) if ahead else None
 
     # --- view ----------------------------------------------------------------------
     def show_stations_diagram(self) -> None:

@@ -856,6 +856,34 @@ def test_while_playing_the_slider_and_the_line_under_it_agree(tab):
             assert f"θ = {s.ui.angle_slider.value:.1f}°" in s.ui.where_md.content, n
 
 
+def test_pause_at_stations_stops_on_each_station_then_goes_on(tab):
+    """A teacher's pause: a step that would pass a station stops on it (the line under
+    the slider says what happens there), stays PAUSE_AT_STATION_S, then goes on; off,
+    the animation runs through."""
+    from app.layout import PAUSE_AT_STATION_S
+
+    s = tab
+    s.ui.angle_slider.value = 95.0  # station 1 (the rise ends) is at 100 deg
+    s.ui.pause_box.value = True
+    s.frame(0.2, 1)  # 45 deg/s: 9 deg, past 100
+    assert s.theta_deg == pytest.approx(100.0) and "at station 1" in s.ui.where_md.content
+    assert s.ui.angle_slider.value == 100.0
+    steps = int(PAUSE_AT_STATION_S / 0.1)
+    for n in range(steps):  # held for the pause
+        s.frame(0.1, n)
+        assert s.theta_deg == pytest.approx(100.0)
+    s.frame(0.1, steps)  # (the last of the pause, or already on)
+    if s.theta_deg == pytest.approx(100.0):
+        s.frame(0.1, steps + 1)
+    assert s.theta_deg == pytest.approx(104.5)  # on again, short of station 2
+    s.frame(0.1, steps + 2)  # the next step would pass station 2: it stops there
+    assert s.theta_deg == pytest.approx(math.degrees(s.analysis.stations[2]))
+    s.ui.pause_box.value = False
+    s.ui.angle_slider.value = 95.0
+    s.frame(0.2, 1)
+    assert s.theta_deg == pytest.approx(104.0)  # through station 1
+
+
 def test_dropdowns_show_words_and_take_them(tab):
     """The follower and law dropdowns show words ("double concave", "3-4-5 polynomial"),
     not identifiers; a word picks its value, an identifier is taken as it is, and
