@@ -126,14 +126,14 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "cam.pass_depth_mm",
                 "Depth per pass [mm]",
                 "number",
-                step=0.5,
+                step=0.01,  # (the browser rounds a typed value to the step's decimals)
                 hint="G-code: largest cut per pass; 0 = the whole depth at once",
             ),
             Spec(
                 "cam.breakthrough_mm",
                 "Breakthrough [mm]",
                 "number",
-                step=0.1,
+                step=0.01,
                 hint="G-code: how far the last pass goes below the blank",
             ),
         ),
@@ -318,3 +318,14 @@ def try_design_dict(data: dict) -> tuple[Design | None, str | None]:
 def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, str | None]:
     """(design, None) if the control values make a valid design, else (None, message)."""
     return try_design_dict(merged(base, values))
+
+
+TYPED_DECIMALS = 6  # what a number box keeps of a typed value
+
+
+def fine(handle):
+    """A number box (or a slider's) that keeps TYPED_DECIMALS decimals of what is typed:
+    viser takes the box's decimals from its step and values at creation and the browser
+    rounds typed input to them (a 6.35 mm cutter became 6, a 0.01 mm pass depth 0)."""
+    handle.precision = max(handle.precision, TYPED_DECIMALS)
+    return handle

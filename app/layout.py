@@ -161,9 +161,11 @@ def _control(gui, spec: controls.Spec, base: Design):
         v = controls.control_value(Design(), spec)
     if spec.widget == "slider":
         lo, hi = min(spec.lo, v), max(spec.hi, v)
-        return gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)
+        return controls.fine(
+            gui.add_slider(spec.label, lo, hi, spec.step, float(v), hint=spec.hint)
+        )
     if spec.widget == "number":
-        return gui.add_number(spec.label, float(v), step=spec.step, hint=spec.hint)
+        return controls.fine(gui.add_number(spec.label, float(v), step=spec.step, hint=spec.hint))
     if spec.widget == "dropdown":
         return gui.add_dropdown(
             spec.label, spec.labels or spec.options, initial_value=v, hint=spec.hint

@@ -14,6 +14,7 @@ from typing import Any
 
 from camcore.model import MAX_SEGMENTS, MotionLaw
 
+from .controls import fine
 from .panels import segment_sums_markdown
 
 KINDS = ("rise", "fall", "dwell")
@@ -133,9 +134,18 @@ class SegmentTable:
         dwell, n = g.kind == "dwell", f"{i + 1}."
         row = {
             "kind": gui.add_dropdown(f"{n} kind", KINDS, initial_value=g.kind),
-            "angle": gui.add_number(f"{n} angle [°]", g.angle_deg, min=0.0, max=360.0, step=0.5),
-            "lift": gui.add_number(
-                f"{n} lift [mm]", g.lift_mm or 5.0, min=0.001, max=1000.0, step=0.5, disabled=dwell
+            "angle": fine(
+                gui.add_number(f"{n} angle [°]", g.angle_deg, min=0.0, max=360.0, step=0.5)
+            ),
+            "lift": fine(
+                gui.add_number(
+                    f"{n} lift [mm]",
+                    g.lift_mm or 5.0,
+                    min=0.001,
+                    max=1000.0,
+                    step=0.5,
+                    disabled=dwell,
+                )
             ),
             "law": gui.add_dropdown(
                 f"{n} law", LAWS, disabled=dwell, initial_value=g.law or LAWS[0]

@@ -274,6 +274,21 @@ def test_trust_in_the_browser(tmp_path):
             assert _field(page, "Lift h").bounding_box()["y"] < lift_y - 100  # it scrolled
             box = page.locator("#cam-status").bounding_box()
             assert box is not None and top is not None and 0 <= box["y"] <= top["y"] + 5
+            # typed decimals are kept (viser had rounded them to the step's: a 6.35 mm
+            # cutter became 6, a 0.01 mm pass depth 0, a 12.34 mm lift 12.3)
+            for label, typed, path in [
+                ("Cutter diameter", "6.35", ("cam", "cutter_diameter_mm")),
+                ("Breakthrough", "0.05", ("cam", "breakthrough_mm")),
+                ("Lift h", "12.34", ("motion", "lift_mm")),
+            ]:
+                _field(page, label).fill(typed)
+                _field(page, label).press("Enter")
+                _wait(
+                    lambda p=path, t=typed: getattr(getattr(session.design, p[0]), p[1]) == float(t)
+                )
+                _field(page, label).press("Tab")
+                page.wait_for_timeout(300)
+                assert _field(page, label).input_value() == typed
 
             # invalid input: the download is refused and says why
             session.ui.controls["follower.face_radius_mm"].value = -70.0  # |r_f| < r_b
