@@ -9,6 +9,8 @@ analysis, re-sending only the nodes whose geometry changed; ``pose`` only moves 
 from __future__ import annotations
 
 import math
+import threading
+import weakref
 from typing import Any
 
 import numpy as np
@@ -611,9 +613,12 @@ def camera_for(
     aspect, share = frame
     if view == "Contact close-up":  # (called every frame while playing: cheap)
         y = a.geo.r_b + float(a.prog.S[k])  # the contacts sit near the top of the cam
-        span = 0.8 * a.geo.r_b  # both faces of a double follower and the flanks in frame
+        x0, x1 = _closeup_extent(a)
+        # 0.8 r_b high (the flanks in frame), and wide enough that the follower and
+        # every contact of the cycle fit the part of the view the panel leaves
+        span = max(0.8 * a.geo.r_b, 1.25 * (x1 - x0) / (aspect * (1.0 - share)))
         dist = span / (2 * math.tan(FRONT_FOV / 2))
-        x = _beside_panel(dist, aspect, share)
+        x = 0.5 * (x0 + x1) + _beside_panel(dist, aspect, share)
         return (x, y, dist), (x, y, 0.0), FRONT_FOV
     # in frame: the follower's highest part at full lift (the stem's end) and the cam's
     # widest radius below its axis (any point of the cam passes there as it turns)
@@ -628,6 +633,29 @@ def camera_for(
     dist = 1.15 * H / (2 * math.tan(FRONT_FOV / 2))
     x = _beside_panel(dist, aspect, share)
     return (x, cy, dist), (x, cy, 0.0), FRONT_FOV
+
+
+_EXTENTS: dict[int, tuple[Any, tuple[float, float]]] = {}  # id -> (weakref, extent)
+_EXTENTS_LOCK = threading.Lock()
+
+
+def _closeup_extent(a) -> tuple[float, float]:
+    """The x range [m] the close-up keeps in view: the follower's faces (or roller,
+    plate, point) and every contact point of the cycle (an offset follower's sit off
+    the cam's axis). Once per analysis."""
+    kept = _EXTENTS.get(id(a))
+    if kept is not None and kept[0]() is a:
+        return kept[1]
+    xs = [m.bounds[:, 0] for name, (m, _) in follower_parts(a).items() if name != "guide"]
+    touching = a.point_world[..., 0][a.in_contact]
+    lo = min(min(float(x[0]) for x in xs), float(touching.min(initial=np.inf)))
+    hi = max(max(float(x[1]) for x in xs), float(touching.max(initial=-np.inf)))
+    with _EXTENTS_LOCK:  # (tabs' threads share it)
+        if len(_EXTENTS) > 256:  # the analyses of closed tabs and old designs
+            for key in [key for key, (ref, _) in _EXTENTS.items() if ref() is None]:
+                del _EXTENTS[key]
+        _EXTENTS[id(a)] = (weakref.ref(a), (lo, hi))
+    return lo, hi
 
 
 def _beside_panel(dist: float, aspect: float, share: float) -> float:

@@ -260,26 +260,39 @@ def test_the_front_view_frames_the_whole_mechanism(preset):
 
 
 @pytest.mark.parametrize("view", ["Front", "Contact close-up"])
-def test_the_mechanism_is_framed_beside_the_panel(view):
-    """At 1280 x 720 the narrow panel covers 30 % of the view's right side: centred on
-    the whole view, the close-up had the right face S2 under it. The follower (and in
-    Front the cam) lie inside the uncovered part, centred in it."""
-    from app.layout import NARROW_PANEL_PX
+@pytest.mark.parametrize(
+    ("kind", "e_s", "width", "height", "panel"),
+    [
+        ("double_concave", 0.0, 1280, 720, 384),  # the narrow panel
+        ("double_concave", 0.0, 1920, 1080, 1000),  # the wide panel
+        ("knife_edge", 25.0, 1280, 720, 384),  # an offset follower
+    ],
+)
+def test_the_mechanism_is_framed_beside_the_panel(view, kind, e_s, width, height, panel):
+    """The panel covers the view's right side (30 % at 1280 x 720, 52 % with the wide
+    panel at 1920): centred on the whole view, the close-up had the right face S2
+    under it, and with the wide panel or an offset follower the contacts out of view.
+    The follower and every contact of the cycle (in Front the cam too) lie inside the
+    uncovered part."""
     from app.scene import camera_for, follower_parts
     from camcore.analysis import analyze
-    from camcore.model import load_preset
+    from camcore.model import Design, load_preset
 
-    a = analyze(load_preset("paper_example"), verify=False)
-    k = panels.nearest_index(a.theta, 130.0)  # the high dwell: both faces on the cam
-    aspect, share = 1280 / 720, NARROW_PANEL_PX / 1280
-    pos, look, fov = camera_for(view, a, k, (aspect, share))
-    half = pos[2] * math.tan(fov / 2) * aspect  # half the visible width at the cam
-    left, right = pos[0] - half, pos[0] + half - 2 * share * half  # uncovered part
-    assert look[0] == pos[0] and (left + right) / 2 == pytest.approx(0.0, abs=1e-12)
-    xs = [m.bounds[:, 0] for m, _ in follower_parts(a).values()]
-    if view == "Front":
-        xs.append(np.array([-1.0, 1.0]) * np.hypot(*a.profile.points.T).max())
-    assert left < min(x[0] for x in xs) and max(x[1] for x in xs) < right
+    data = load_preset("paper_example").with_kind(kind).model_dump()
+    data["follower"]["single_offset_mm"] = e_s
+    a = analyze(Design.model_validate(data), verify=False)
+    aspect, share = width / height, panel / width
+    for deg in (40.0, 130.0, 235.0):
+        k = panels.nearest_index(a.theta, deg)
+        pos, look, fov = camera_for(view, a, k, (aspect, share))
+        half = pos[2] * math.tan(fov / 2) * aspect  # half the visible width at the cam
+        left, right = pos[0] - half, pos[0] + half - 2 * share * half  # uncovered part
+        assert look[0] == pos[0]
+        xs = [m.bounds[:, 0] for name, (m, _) in follower_parts(a).items() if name != "guide"]
+        xs.append(np.sort(a.point_world[..., 0][a.in_contact])[[0, -1]])
+        if view == "Front":
+            xs.append(np.array([-1.0, 1.0]) * np.hypot(*a.profile.points.T).max())
+        assert left < min(x[0] for x in xs) and max(x[1] for x in xs) < right, (deg, kind)
 
 
 def test_where_names_the_segments_around_an_empty_dwell():
