@@ -252,17 +252,26 @@ def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
     return j - 1 if x - theta[j - 1] < theta[j] - x else j
 
 
-EVENT_LINES = 3  # a station's words take up to three lines in the narrow panel
+WHERE_LINES = 8  # the line under the slider wraps to 8 lines at most in the narrow panel
+WIDE_WHERE_LINES = 4  # and 4 in the wide one
 
 
-def where_markdown(a, k: int, events: list[str], after: list[list[str]] | None = None) -> str:
+def where_markdown(
+    a,
+    k: int,
+    events: list[str],
+    after: list[list[str]] | None = None,
+    room_lines: int = WHERE_LINES,
+) -> str:
     """The line under the angle slider: angle, segment (both names at a boundary), the
     station reached or the two it lies between, what happens there in words, the
     faces in contact, S and F_N at grid index k of analysis ``a``.
 
     ``after``: per station, the faces touching just after it (report's "contacts"). At
     a station a face that touches now but not after it is marked as leaving (the
-    stations diagram draws it idle there: the text had said both faces touch, no more)."""
+    stations diagram draws it idle there: the text had said both faces touch, no more).
+    ``room_lines``: the lines of room the block keeps, whatever it says (WHERE_LINES in
+    the narrow panel, WIDE_WHERE_LINES in the wide one)."""
     th = math.degrees(a.theta[k])
     st = np.degrees(a.stations)
     step = a.design.limits.resolution_deg
@@ -297,14 +306,15 @@ def where_markdown(a, k: int, events: list[str], after: list[list[str]] | None =
         seg = f"{neighbour(-1)} ends, {seg} begins"
     elif here(a.segments[j].end):
         seg = f"{seg} ends, {neighbour(1)} begins"
-    return (
-        f"**θ = {th:.1f}°** · {seg} · **{where}**  \n"
-        f"In contact: **{', '.join(faces) if faces else 'none'}** · "
+    body = (
+        f"<b>θ = {th:.1f}°</b> · {seg} · <b>{where}</b><br>"
+        f"In contact: <b>{', '.join(faces) if faces else 'none'}</b> · "
         f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N"
-        # the station's words, in room kept for them between stations too: the panel
-        # below does not jump as the animation passes a station
-        f"<div style='min-height:{EVENT_LINES * 1.35:.2f}em'>{said}</div>"
+        + (f"<br>{said}" if said else "")
     )
+    # in room kept for the longest of these lines (they wrap by their lengths, the
+    # station's words come and go): the panel below does not jump during play
+    return f"<div style='min-height:{room_lines * 1.35:.2f}em'>{body}</div>"
 
 
 # --- the segment table ---------------------------------------------------------------

@@ -34,6 +34,8 @@ from .layout import (
     wide_panel_px,
 )
 from .panels import (
+    WHERE_LINES,
+    WIDE_WHERE_LINES,
     esc,
     file_stem,
     low_dwell_text,
@@ -256,7 +258,7 @@ class Session:
             if ui.quick_md.content:  # it spoke of the design before this one
                 ui.quick_md.content = ""
             self._show_summary(s)
-            ui.where_md.content = where_markdown(a, k, self.station_events, self.station_faces)
+            ui.where_md.content = self._where(k)
             self._show_status()
         self._save_working()
         if reset_camera or not 0.5 < _size(a) / self._framed_size < 2:
@@ -479,9 +481,7 @@ class Session:
                 self._show_markers(k)
 
     def _show_markers(self, k: int) -> None:
-        self.ui.where_md.content = where_markdown(
-            self.analysis, k, self.station_events, self.station_faces
-        )
+        self.ui.where_md.content = self._where(k)
         for c in self.ui.curves:
             c.marker(math.degrees(self.analysis.theta[k]))
 
@@ -557,9 +557,18 @@ class Session:
             if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
                 self._show_markers(k)
             elif slow:
-                self.ui.where_md.content = where_markdown(
-                    self.analysis, k, self.station_events, self.station_faces
-                )
+                self.ui.where_md.content = self._where(k)
+
+    def _where(self, k: int) -> str:
+        """The block under the angle slider at grid index k, in the room it keeps."""
+        wide = self.panel_px > NARROW_PANEL_PX
+        return where_markdown(
+            self.analysis,
+            k,
+            self.station_events,
+            self.station_faces,
+            WIDE_WHERE_LINES if wide else WHERE_LINES,
+        )
 
     def _end_pause(self) -> None:
         """Pause at stations ticked or unticked: a pause under way ends."""
@@ -605,6 +614,7 @@ class Session:
         with self.lock:
             self.panel_px = wide_panel_px(drawn) if on else NARROW_PANEL_PX
             self.client.gui.main_panel.set_width(self.panel_px)
+            self.ui.where_md.content = self._where(self.view.k)  # its room follows
             if self.camera_view != "3D":  # the mechanism beside the panel's new width
                 self.reset_camera()
 

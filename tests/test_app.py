@@ -115,7 +115,7 @@ def test_follower_kind_changes_the_body(tab):
     s.ui.controls["follower.kind"].value = "single_concave"
     assert "pin0" not in s.view.nodes and "face1" not in s.view.nodes
     assert s.ui.controls["follower.offset_mm"].disabled
-    assert "In contact: **face**" in s.ui.where_md.content
+    assert "In contact: <b>face</b>" in s.ui.where_md.content
 
 
 def test_bad_upload_keeps_design_then_good_upload_loads(tab):
@@ -631,7 +631,7 @@ def test_no_pressure_angle_construction_where_nothing_touches(tab):
     s.set_design(Design.model_validate(data))
     assert "contact_lost" in {v.code for v in s.analysis.violations}
     s.ui.angle_slider.value = 101.0
-    assert "In contact: **none**" in s.ui.where_md.content
+    assert "In contact: <b>none</b>" in s.ui.where_md.content
     assert not s.view.nodes["phi"].visible and not s.view.nodes["phi_label"].visible
     s.ui.angle_slider.value = 50.0
     assert s.view.nodes["phi"].visible

@@ -46,14 +46,18 @@ def test_where_says_station_event_faces_and_segment_boundary(paper_analysis):
     assert "between stations" in panels.where_markdown(a, mid, [])
 
 
-def test_the_station_words_have_room_kept_between_stations(paper_analysis):
-    """The line under the slider keeps the same room for a station's words whether at a
-    station or between two (the panel below had jumped ~30 px at each station)."""
+def test_the_line_under_the_slider_keeps_its_room(paper_analysis):
+    """The block under the angle slider keeps the same room whether at a station (its
+    words shown) or between two, and whatever its lines' lengths (the panel below had
+    jumped up to 30 px during play)."""
     a = paper_analysis
-    box = f"<div style='min-height:{panels.EVENT_LINES * 1.35:.2f}em'>"
+    room = f"<div style='min-height:{panels.WHERE_LINES * 1.35:.2f}em'>"
     at = panels.where_markdown(a, 0, ["the low dwell ends"])
     between = panels.where_markdown(a, panels.nearest_index(a.theta, 30.0), ["x"])
-    assert box + "<i>the low dwell ends</i></div>" in at and between.endswith(box + "</div>")
+    assert at.startswith(room) and between.startswith(room)
+    assert at.endswith("<br><i>the low dwell ends</i></div>") and "<i>" not in between
+    wide = panels.where_markdown(a, 0, [], room_lines=panels.WIDE_WHERE_LINES)
+    assert wide.startswith(f"<div style='min-height:{panels.WIDE_WHERE_LINES * 1.35:.2f}em'>")
 
 
 def test_at_a_station_a_face_that_leaves_is_said_to(paper_analysis):
@@ -71,9 +75,9 @@ def test_at_a_station_a_face_that_leaves_is_said_to(paper_analysis):
         return panels.where_markdown(a, k, events, after).split("In contact: ")[1]
 
     st = np.degrees(a.stations)
-    assert contact_line(st[0]).startswith("**S1 (left face), S2 (right face) leaving the cam**")
-    assert contact_line(st[3]).startswith("**S1 (left face) leaving the cam, S2 (right face)**")
-    assert contact_line(st[2]).startswith("**S1 (left face), S2 (right face)**")
+    assert contact_line(st[0]).startswith("<b>S1 (left face), S2 (right face) leaving the cam</b>")
+    assert contact_line(st[3]).startswith("<b>S1 (left face) leaving the cam, S2 (right face)</b>")
+    assert contact_line(st[2]).startswith("<b>S1 (left face), S2 (right face)</b>")
     assert "leaving" not in contact_line(30.0) + contact_line(135.0)
 
 

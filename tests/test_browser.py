@@ -122,6 +122,20 @@ def test_app_in_headless_chromium(tmp_path):
             page.get_by_text("S2 touches; from here the load is shared").first.wait_for()
             page.get_by_text("In contact: S1 (left face), S2 (right face)").first.wait_for()
             assert tuple(session.view.nodes["face1"].color) == FOLLOWER_RGB
+            # the block under the slider keeps its room: the tabs below stay put at a
+            # station, between two, and where its lines are longest (station 0)
+            tabs_y = []
+            for go in ("2", "30", "0"):
+                if go == "30":
+                    _field(page, "Cam angle").fill("30")
+                    _field(page, "Cam angle").press("Enter")
+                    page.get_by_text("θ = 30.0°").first.wait_for()
+                else:
+                    page.get_by_role("button", name=go, exact=True).click()
+                    page.get_by_text(f"at station {go}").first.wait_for()
+                page.wait_for_timeout(300)
+                tabs_y.append(page.get_by_role("tab", name="Curves").bounding_box()["y"])
+            assert max(tabs_y) - min(tabs_y) < 1, tabs_y
 
             # change a control: follower kind -> single roller, and see the change
             kind_input = page.evaluate_handle(
