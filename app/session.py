@@ -98,6 +98,8 @@ class Session:
         self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
         self._diagram_of = ""  # geometry_key of the stations diagram on screen
         self._held = 0.0  # seconds the animation still stays at a station
+        self._seen: tuple | None = None  # the last camera message: (pose, width, height)
+        self._preset_pose: tuple = ()  # where the preset view put the camera
         self.station_events: list[str] = []  # what happens at each station, in words
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
@@ -112,6 +114,7 @@ class Session:
             self._wire(self.ui)
             self.view = SceneView(client.scene)
             client.scene.set_up_direction("+y")
+            client.camera.on_update(self._on_camera)
             self._apply(self.base, first, reset_camera=True)
         self._restorer = threading.Thread(
             target=self._restore, daemon=True, name=f"cam-restore-{id(self)}"
@@ -477,6 +480,7 @@ class Session:
             if self.camera_view == "Contact close-up":  # follow the contacts as S changes
                 pos, look, _ = camera_for(self.camera_view, self.analysis, k, self._frame())
                 self.client.camera.position, self.client.camera.look_at = pos, look
+                self._preset_pose = (*pos, *look)
             if markers:
                 self._show_markers(k)
 
@@ -618,6 +622,26 @@ class Session:
             if self.camera_view != "3D":  # the mechanism beside the panel's new width
                 self.reset_camera()
 
+    def _on_camera(self, cam) -> None:
+        """A camera message from the browser. One that keeps the pose and changes the
+        view's size is a resize (an orbit moves the pose, and may carry a size that
+        viser scaled down for the frame rate): the wide panel takes its share of the
+        new width, and a preset view the user has not moved is framed again."""
+        try:
+            w, h = cam.image_width, cam.image_height
+            pose = (*map(float, cam.position), *map(float, cam.look_at))
+        except AssertionError:  # (no message yet)
+            return
+        with self.lock:
+            last, self._seen = self._seen, (pose, w, h)
+            if last is None or (w, h) == last[1:] or not _near(pose, last[0]):
+                return
+            if self.ui.wide_box.value:
+                self.panel_px = wide_panel_px(w)
+                self.client.gui.main_panel.set_width(self.panel_px)
+            if self.camera_view != "3D" and _near(pose, self._preset_pose):
+                self.reset_camera()
+
     def _frame(self) -> tuple[float, float]:
         """(aspect, panel share) of this tab's 3D view (scene.camera_for): its drawing
         size, and the panel's width over the drawing width. The drawing width is in
@@ -652,6 +676,7 @@ class Session:
             cam.fov = fov
             cam.position = pos
             cam.look_at = look
+            self._preset_pose = (*pos, *look)
 
     @property
     def threads(self) -> tuple[threading.Thread, ...]:
@@ -671,3 +696,12 @@ class Session:
 def _size(a: Analysis) -> float:
     """The cam's largest radius [m]: the preset views frame the mechanism by it."""
     return float(a.geo.r_b + a.prog.S.max())
+
+
+def _near(p: tuple, q: tuple) -> bool:
+    """Two camera poses (position and look-at, 6 numbers [m]) alike to float32 round-off
+    (what the browser echoes of a pose the server set); any orbit moves them more."""
+    if len(p) != len(q):
+        return False
+    tol = 1e-5 * (1.0 + max(abs(v) for v in p + q))
+    return all(abs(a - b) <= tol for a, b in zip(p, q, strict=True))

@@ -41,5 +41,24 @@ class FakeTab:
         except Exception:
             pass
 
+    def camera(self, position, look_at, width: int, height: int) -> None:
+        """Send a camera message, as a browser does on an orbit or a resize."""
+        self.ws.send(
+            msgspec.msgpack.encode(
+                {
+                    "type": "ViewerCameraMessage",
+                    "wxyz": [1.0, 0.0, 0.0, 0.0],
+                    "position": [float(v) for v in position],
+                    "fov": 0.14,
+                    "near": 0.01,
+                    "far": 100.0,
+                    "image_height": height,
+                    "image_width": width,
+                    "look_at": [float(v) for v in look_at],
+                    "up_direction": [0.0, 1.0, 0.0],
+                }
+            )
+        )
+
     def close(self) -> None:
         self.ws.close()

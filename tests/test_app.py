@@ -775,6 +775,41 @@ def test_explore_with_a_profile_figure_runs_the_full_analysis(tab):
     assert e.front_dd.options and all("µm" in o for o in e.front_dd.options)
 
 
+def test_a_resized_view_resizes_the_wide_panel_and_reframes(app, monkeypatch):
+    """A window made smaller had left the wide panel 1000 px wide over most of the cam.
+    A camera message that keeps the pose and changes the size is a resize: the wide
+    panel takes its share of the new width, and the preset view, if not moved, is
+    framed again; after an orbit the user's view stays."""
+    from viser._gui_handles import MainPanelHandle
+
+    from app.layout import wide_panel_px
+
+    widths: list[float] = []
+    monkeypatch.setattr(MainPanelHandle, "set_width", lambda self, w: widths.append(w))
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    try:
+        assert wait_for(lambda: set(app.sessions) - before)
+        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+        s.ui.wide_box.value = True
+        assert widths == [wide_panel_px(1000)]
+        preset = s._preset_pose
+        t.camera(preset[:3], preset[3:], 1000, 700)  # the browser's echo of the view
+        assert wait_for(lambda: s._seen is not None and s._seen[0] == preset)
+        t.camera(preset[:3], preset[3:], 1600, 900)  # the window grows
+        assert wait_for(lambda: len(widths) == 2 and s._preset_pose != preset)  # reframed
+        assert widths[-1] == wide_panel_px(1600)
+        moved = (0.02, 0.2, 1.5)
+        t.camera(moved, (0.0, 0.1, 0.0), 1600, 900)  # the user orbits
+        assert wait_for(lambda: s._seen is not None and s._seen[0][:3] == moved)
+        t.camera(moved, (0.0, 0.1, 0.0), 1200, 700)  # then shrinks the window
+        assert wait_for(lambda: len(widths) == 3)
+        assert widths[-1] == wide_panel_px(1200)
+        assert tuple(s.client.camera.position) == pytest.approx(moved)  # their view stays
+    finally:
+        t.close()
+
+
 def test_wide_panel_toggle(tab, monkeypatch):
     """The wide panel asks viser for the width (62 % of the viewer, at most 1000 px) and
     gives the panel its own back (the browser test sees the contents follow)."""

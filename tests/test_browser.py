@@ -180,6 +180,19 @@ def test_app_in_headless_chromium(tmp_path):
             )
             page.wait_for_timeout(3000)
             assert page.evaluate(CHARTS_INSIDE), "the charts spill past the wide panel"
+            # a smaller window: the wide panel takes its share of it (it had stayed)
+            wide = panel.bounding_box()["width"]
+            page.set_viewport_size({"width": 800, "height": 700})
+            page.wait_for_function(
+                f"() => document.querySelector('[data-testid=floating-panel]')"
+                f".getBoundingClientRect().width < {wide - 60}"
+            )
+            shrunk = panel.bounding_box()["width"]
+            page.set_viewport_size({"width": 1000, "height": 700})  # and back
+            page.wait_for_function(
+                f"() => document.querySelector('[data-testid=floating-panel]')"
+                f".getBoundingClientRect().width > {shrunk + 30}"
+            )
             page.get_by_text("Wide panel").first.click()
             page.wait_for_function(
                 f"() => document.querySelector('[data-testid=floating-panel]')"
