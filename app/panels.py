@@ -120,12 +120,22 @@ def status_html(
     return f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}</div>"
 
 
+def _field_name(path: str) -> str:
+    """An error's field as the panel labels it, its path beside it ("Roller radius r_c
+    [mm] <code>follower.roller_radius_mm</code>"); the path alone where no control shows
+    it. Escaped: the path comes from the validation of what a client sent."""
+    from .controls import SPECS
+
+    label = next((spec.label for spec in SPECS if spec.path == path), None)
+    code = f"<code>{html.escape(path)}</code>"
+    return f"<b>{html.escape(label)}</b> {code}" if label else code
+
+
 def _status_boxes(error, violations, lift_error, verified, mesh_error) -> str:
     parts = []
     if error:
         items = "".join(
-            f"<li><code>{html.escape(p.split(': ', 1)[0])}</code>: "
-            f"{html.escape(p.split(': ', 1)[-1])}</li>"
+            f"<li>{_field_name(p.split(': ', 1)[0])}: {html.escape(p.split(': ', 1)[-1])}</li>"
             for p in error.split("; ")
         )
         parts.append(

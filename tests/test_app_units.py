@@ -87,6 +87,10 @@ def test_status_panel_states():
     assert "running" in panels.status_html(None, [], None, False)
     bad = panels.status_html("cam.base_radius_mm: <script>", [], None, False)
     assert "Invalid input" in bad and "<script>" not in bad and "All design" not in bad
+    # the field as the panel labels it, its path beside it; the path alone otherwise
+    assert "<b>Base radius r_b [mm]</b> <code>cam.base_radius_mm</code>" in bad
+    odd = panels.status_html("<i>x</i>.y: no", [], None, False)
+    assert "<code>&lt;i&gt;x&lt;/i&gt;.y</code>: no" in odd
     assert "No solid" in panels.status_html(None, [], None, True, "self-intersecting")
     # a file that could not be opened: said above the design's own (unchanged) state,
     # with no refusal of downloads
