@@ -289,7 +289,8 @@ def where_markdown(
     said = ""
     if at:
         where = "at station " + " and ".join(str(i) for i in at)
-        said = "<br>".join(f"<i>{esc(events[i])}</i>" for i in at if i < len(events))
+        # (HTML-escaped only: the block is HTML, where Markdown's backslashes would show)
+        said = "<br>".join(f"<i>{html.escape(events[i])}</i>" for i in at if i < len(events))
     else:
         i, n = int(np.searchsorted(st, th)), len(st)
         where = (

@@ -119,7 +119,10 @@ def test_app_in_headless_chromium(tmp_path):
             page.get_by_text("In contact: S1 (left face) ·").first.wait_for()
             assert tuple(session.view.nodes["face1"].color) == IDLE_FACE_RGB
             page.get_by_role("button", name="2", exact=True).click()
-            page.get_by_text("S2 touches; from here the load is shared").first.wait_for()
+            # (the whole sentence, as written: no Markdown escapes in the HTML block)
+            page.get_by_text(
+                "S2 touches; from here the load is shared (Eqs. 36-38)"
+            ).first.wait_for()
             page.get_by_text("In contact: S1 (left face), S2 (right face)").first.wait_for()
             assert tuple(session.view.nodes["face1"].color) == FOLLOWER_RGB
             # the block under the slider keeps its room: the tabs below stay put at a
