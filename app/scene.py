@@ -9,8 +9,6 @@ analysis, re-sending only the nodes whose geometry changed; ``pose`` only moves 
 from __future__ import annotations
 
 import math
-import threading
-import weakref
 from typing import Any
 
 import numpy as np
@@ -598,7 +596,11 @@ DEFAULT_FRAME = (16 / 9, 0.0)  # (aspect, panel share) before the browser says
 
 
 def camera_for(
-    view: str, a, k: int, frame: tuple[float, float] = DEFAULT_FRAME
+    view: str,
+    a,
+    k: int,
+    frame: tuple[float, float] = DEFAULT_FRAME,
+    extent: tuple[float, float] | None = None,
 ) -> tuple[tuple, tuple, float]:
     """(position, look_at, fov [rad]) of a preset view of analysis ``a`` at grid index k.
 
@@ -609,11 +611,12 @@ def camera_for(
     ``frame`` = (aspect, panel share): the 3D view's width over its height, and the
     share of its width the control panel covers at its right edge. Front and close-up
     put the mechanism in the middle of the part left visible (centred on the whole
-    view, the close-up had the right face S2 under the panel at 1280 x 720)."""
+    view, the close-up had the right face S2 under the panel at 1280 x 720).
+    ``extent``: closeup_extent(a), if the caller keeps it."""
     aspect, share = frame
     if view == "Contact close-up":  # (called every frame while playing: cheap)
         y = a.geo.r_b + float(a.prog.S[k])  # the contacts sit near the top of the cam
-        x0, x1 = _closeup_extent(a)
+        x0, x1 = closeup_extent(a) if extent is None else extent
         # 0.8 r_b high (the flanks in frame), and wide enough that the follower and
         # every contact of the cycle fit the part of the view the panel leaves
         span = max(0.8 * a.geo.r_b, 1.25 * (x1 - x0) / (aspect * (1.0 - share)))
@@ -635,26 +638,14 @@ def camera_for(
     return (x, cy, dist), (x, cy, 0.0), FRONT_FOV
 
 
-_EXTENTS: dict[int, tuple[Any, tuple[float, float]]] = {}  # id -> (weakref, extent)
-_EXTENTS_LOCK = threading.Lock()
-
-
-def _closeup_extent(a) -> tuple[float, float]:
+def closeup_extent(a) -> tuple[float, float]:
     """The x range [m] the close-up keeps in view: the follower's faces (or roller,
     plate, point) and every contact point of the cycle (an offset follower's sit off
-    the cam's axis). Once per analysis."""
-    kept = _EXTENTS.get(id(a))
-    if kept is not None and kept[0]() is a:
-        return kept[1]
+    the cam's axis). ~1 ms: a caller that follows the animation keeps it per analysis."""
     xs = [m.bounds[:, 0] for name, (m, _) in follower_parts(a).items() if name != "guide"]
     touching = a.point_world[..., 0][a.in_contact]
     lo = min(min(float(x[0]) for x in xs), float(touching.min(initial=np.inf)))
     hi = max(max(float(x[1]) for x in xs), float(touching.max(initial=-np.inf)))
-    with _EXTENTS_LOCK:  # (tabs' threads share it)
-        if len(_EXTENTS) > 256:  # the analyses of closed tabs and old designs
-            for key in [key for key, (ref, _) in _EXTENTS.items() if ref() is None]:
-                del _EXTENTS[key]
-        _EXTENTS[id(a)] = (weakref.ref(a), (lo, hi))
     return lo, hi
 
 

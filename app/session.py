@@ -49,6 +49,7 @@ from .scene import (
     DEFAULT_FRAME,
     SceneView,
     camera_for,
+    closeup_extent,
     geometry_key,
     label_height,
 )
@@ -100,6 +101,7 @@ class Session:
         self._held = 0.0  # seconds the animation still stays at a station
         self._seen: tuple | None = None  # the last camera message: (pose, width, height)
         self._preset_pose: tuple = ()  # where the preset view put the camera
+        self._extent: tuple = (None, (0.0, 0.0))  # (analysis, its closeup_extent)
         self.station_events: list[str] = []  # what happens at each station, in words
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
@@ -478,7 +480,7 @@ class Session:
                 finally:
                     self._syncing = False
             if self.camera_view == "Contact close-up":  # follow the contacts as S changes
-                pos, look, _ = camera_for(self.camera_view, self.analysis, k, self._frame())
+                pos, look, _ = self._camera(k)
                 self.client.camera.position, self.client.camera.look_at = pos, look
                 self._preset_pose = (*pos, *look)
             if markers:
@@ -642,6 +644,17 @@ class Session:
             if self.camera_view != "3D" and _near(pose, self._preset_pose):
                 self.reset_camera()
 
+    def _camera(self, k: int) -> tuple[tuple, tuple, float]:
+        """The preset view's (position, look_at, fov) at grid index k, for this tab's
+        view and panel; the close-up's extent kept per analysis (it follows every
+        frame of the animation, and the extent costs ~1 ms)."""
+        extent = None
+        if self.camera_view == "Contact close-up":
+            if self._extent[0] is not self.analysis:
+                self._extent = (self.analysis, closeup_extent(self.analysis))
+            extent = self._extent[1]
+        return camera_for(self.camera_view, self.analysis, k, self._frame(), extent)
+
     def _frame(self) -> tuple[float, float]:
         """(aspect, panel share) of this tab's 3D view (scene.camera_for): its drawing
         size, and the panel's width over the drawing width. The drawing width is in
@@ -669,7 +682,7 @@ class Session:
         runs in a callback thread of its own: hence the lock)."""
         with self.lock:
             self._framed_size = _size(self.analysis)
-            pos, look, fov = camera_for(self.camera_view, self.analysis, self.view.k, self._frame())
+            pos, look, fov = self._camera(self.view.k)
             self.view.set_label_height(label_height(pos, look, fov))
             cam = self.client.camera
             cam.up_direction = (0.0, 1.0, 0.0)
