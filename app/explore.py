@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from camcore.explore import FIGURES, distinct, pareto
+from camcore.explore import FIGURES, PROFILE_FIGURES, distinct, pareto
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError
 from camcore.sweep import design_at, with_point
 
@@ -42,7 +42,6 @@ FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
 MAX_STEPS = 15  # per axis
 MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
 CHUNK = 12  # designs per background job: ~0.1 s, the cancel latency
-PROFILE_FIGURES = {"wear"}  # figures the batched core does not compute
 MAX_FRONT = 30  # designs of the front offered for loading
 
 

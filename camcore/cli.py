@@ -1,4 +1,4 @@
-"""Command line: ``camcore report | compare | export | sweep``.
+"""Command line: ``camcore report | compare | export | sweep | pareto``.
 
 Exit status (the same for every command, so scripts can rely on it):
 
@@ -9,7 +9,8 @@ Exit status (the same for every command, so scripts can rely on it):
   one line starting with ``camcore: error:`` on stderr, never a traceback.
 
 ``sweep`` exits 0 when its table is written (each row has its own verdict), 130
-when interrupted (the same command resumes) and 2 on bad input.
+when interrupted (the same command resumes) and 2 on bad input. ``pareto`` exits 0
+when the table holds a valid design, 1 when it holds none, 2 on bad input.
 """
 
 from __future__ import annotations
@@ -179,13 +180,15 @@ def _export(args) -> int:
 EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "toolpath", "json", "html", "pdf")
 
 
-def _sweep(args) -> int:
+def _need_pyarrow(what: str) -> None:
     try:
         import pyarrow  # noqa: F401
     except ImportError:
-        raise DesignError(
-            "camcore sweep writes Parquet: pip install 'camdesigner[sweep]'"
-        ) from None
+        raise DesignError(f"{what}: pip install 'camdesigner[sweep]'") from None
+
+
+def _sweep(args) -> int:
+    _need_pyarrow("camcore sweep writes Parquet")
     from . import sweep
 
     spec = sweep.load_spec(args.spec)
@@ -207,6 +210,88 @@ def _sweep(args) -> int:
     )
     print(f"wrote {args.out} ({n} designs: {sweep.tally(args.out)})")
     return EXIT_VALID
+
+
+SHOWN_LIMITS = 8  # first broken limits a pareto summary names, the commonest first
+
+
+def _figure_names(text: str) -> list[str]:
+    """--figures a,b,c: known and distinct figure names."""
+    from .explore import FIGURES
+
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    unknown = [n for n in names if n not in FIGURES]
+    if unknown or not names or len(set(names)) != len(names):
+        raise DesignError(f"--figures {text!r}: one or more distinct names of {', '.join(FIGURES)}")
+    return names
+
+
+def _pareto(args) -> int:
+    _need_pyarrow("camcore pareto reads Parquet")
+    from .explore import FIGURES, table_front
+
+    names = _figure_names(args.figures)
+    f = table_front(args.table, names)
+    if args.top < 1:
+        raise DesignError("--top: at least 1")
+    if args.json:
+        print(json.dumps({"figures": names, **vars(f)}, indent=1))
+        return EXIT_VALID if f.front else EXIT_BREAKS_LIMITS
+    broken = f.rows - f.valid - f.refused
+    print(
+        f"{args.table}: {_count(f.rows, 'row')}: {f.valid} valid, {broken} break a limit, "
+        f"{f.refused} not designs"
+    )
+    if f.first_limits:
+        most = list(f.first_limits.items())[:SHOWN_LIMITS]
+        more = len(f.first_limits) - len(most)
+        print(
+            "first limit broken: "
+            + ", ".join(f"{code} {n}" for code, n in most)
+            + (f" and {more} more" if more else "")
+        )
+    if not f.front:
+        print("no valid design: no Pareto front")
+        return EXIT_BREAKS_LIMITS
+    if not f.profile_checked:
+        print(
+            "valid rows from the batched core (sweep --fast): the profile's checks and the "
+            "geometric check run when a design is analysed alone (camcore report)"
+        )
+    again = f" (and {_count(f.repeats, 'repeat')} in a field its follower ignores)"
+    print(
+        f"Pareto front of {', '.join(FIGURES[n].label for n in names)} over the valid "
+        f"designs, smaller is better: {_count(len(f.front), 'design')}"
+        + (again if f.repeats else "")
+    )
+    grid = list(dict.fromkeys(k for d in f.front for k in d["grid"]))
+    head = ["#", *grid, *(f"{FIGURES[n].label} [{FIGURES[n].unit}]" for n in names)]
+    shown = f.front[: args.top]
+    table = [
+        [
+            str(i),
+            *(_cell(d["grid"].get(k)) for k in grid),
+            *(f"{d['figures'][n]:.4g}" for n in names),
+        ]
+        for i, d in enumerate(shown, start=1)
+    ]
+    widths = [max(len(c) for c in col) for col in zip(head, *table, strict=True)]
+    for line in [head, *table]:
+        print("  ".join(c.ljust(w) for c, w in zip(line, widths, strict=True)).rstrip())
+    if len(shown) < len(f.front):
+        print(f"({len(shown)} of {len(f.front)} shown; --top N or --json for more)")
+    return EXIT_VALID
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
+def _cell(value) -> str:
+    """A grid value in the front's table; '-' for a field the follower does not use."""
+    if value is None:
+        return "-"
+    return f"{value:g}" if isinstance(value, float) else str(value)
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -312,6 +397,21 @@ def _parser() -> argparse.ArgumentParser:
         "limits, no profile figures, wear or geometric check (column profile_checked)",
     )
     w.set_defaults(run=_sweep)
+
+    from .explore import FIGURES
+
+    f = sub.add_parser("pareto", help="the Pareto front of a sweep's table")
+    f.add_argument("table", help="a Parquet table written by camcore sweep")
+    f.add_argument(
+        "--figures",
+        default="cam_size,stress,pressure_angle",
+        metavar="NAME,NAME,...",
+        help=f"figures to minimize, of {', '.join(FIGURES)} "
+        "(default cam_size,stress,pressure_angle)",
+    )
+    f.add_argument("--top", type=int, default=20, metavar="N", help="designs listed (default 20)")
+    f.add_argument("--json", action="store_true", help="print one JSON object, the whole front")
+    f.set_defaults(run=_pareto)
     return p
 
 

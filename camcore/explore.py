@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import io
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,37 +21,37 @@ from .sweep import first_violation, pareto_mask
 
 @dataclass(frozen=True)
 class Figure:
-    """A figure of merit of a design, read from a sweep row (smaller is better)."""
+    """A figure of merit of a design, read from a sweep row (smaller is better): the
+    largest of the row's ``columns`` (None / NaN if any is missing)."""
 
     label: str
     unit: str
-    get: Callable[[dict], float | None]
+    columns: tuple[str, ...]
 
-
-def _key(name: str) -> Callable[[dict], float | None]:
-    return lambda r: r.get(name)
-
-
-def _max_of(*names: str) -> Callable[[dict], float | None]:
-    def get(r: dict) -> float | None:
-        vals = [r.get(n) for n in names]
+    def get(self, row: dict) -> float | None:
+        vals = [row.get(c) for c in self.columns]
         return None if any(v is None for v in vals) else max(vals)  # type: ignore[type-var]
 
-    return get
+    def of_table(self, table: dict[str, np.ndarray]) -> np.ndarray:
+        """The figure of every row of a column table (name -> float array, NaN for null)."""
+        return np.maximum.reduce([np.asarray(table[c], dtype=float) for c in self.columns])
 
 
 FIGURES: dict[str, Figure] = {
-    "cam_size": Figure("cam size R (high-dwell radius)", "mm", _key("dwell_radius_mm")),
-    "stress": Figure("max contact stress σ_H", "MPa", _key("contact_stress_max_MPa.cycle")),
+    "cam_size": Figure("cam size R (high-dwell radius)", "mm", ("dwell_radius_mm",)),
+    "stress": Figure("max contact stress σ_H", "MPa", ("contact_stress_max_MPa.cycle",)),
     "pressure_angle": Figure(
         "max pressure angle",
         "°",
-        _max_of("pressure_angle_max_deg.rise", "pressure_angle_max_deg.fall"),
+        ("pressure_angle_max_deg.rise", "pressure_angle_max_deg.fall"),
     ),
-    "force": Figure("max contact force F_N", "N", _key("contact_force_max_N.cycle")),
-    "torque": Figure("peak driving torque", "N m", _key("cam_torque_max_Nm.drive")),
-    "wear": Figure("max wear depth", "µm/10⁶ cycles", _key("wear_depth_max_um_per_Mcycle")),
+    "force": Figure("max contact force F_N", "N", ("contact_force_max_N.cycle",)),
+    "torque": Figure("peak driving torque", "N m", ("cam_torque_max_Nm.drive",)),
+    "wear": Figure("max wear depth", "µm/10⁶ cycles", ("wear_depth_max_um_per_Mcycle",)),
 }
+
+
+PROFILE_FIGURES = {"wear"}  # figures the batched core (sweep --fast) does not compute
 
 
 def figure_values(rows: list[dict], names: list[str]) -> np.ndarray:
@@ -106,6 +105,111 @@ def pareto(rows: list[dict], names: list[str]) -> np.ndarray:
     v[~(valid & distinct(rows))] = np.nan
     idx = np.flatnonzero(pareto_mask(v))
     return idx[np.argsort(v[idx, 0], kind="stable")]
+
+
+# --- the front of a sweep's table (camcore pareto) ---------------------------------
+
+
+@dataclass(frozen=True)
+class TableFront:
+    """What a sweep's Parquet table says about "which cam is best?"."""
+
+    rows: int
+    valid: int
+    refused: int  # not designs at all (the row's error)
+    first_limits: dict[str, int]  # first broken limit -> rows, the commonest first
+    profile_checked: bool  # False if any valid row comes from the batched core
+    front: list[dict]  # per distinct front design: {"grid": {...}, "figures": {...}}
+    repeats: int  # front rows that repeat a listed design (a field its follower ignores)
+
+
+def table_front(path, names: list[str]) -> TableFront:
+    """The Pareto front of FIGURES[names] over the valid rows of the sweep table at
+    ``path`` (camcore.sweep's Parquet), read column-wise so a million-row table takes
+    seconds; the front is ordered by the first figure, each distinct design once.
+    FileError if the file is not a sweep table or lacks a figure's columns."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .files import FileError
+
+    try:
+        have = set(pq.read_schema(path).names)
+    except (OSError, pa.ArrowException) as exc:
+        raise FileError(f"{path}: not a readable Parquet table ({exc})") from None
+    if not {"valid", "error", "violations"} <= have:
+        raise FileError(f"{path}: not a camcore sweep table (no valid/error/violations)")
+    figure_cols = list(dict.fromkeys(c for n in names for c in FIGURES[n].columns))
+    for n in names:
+        for c in FIGURES[n].columns:
+            if c not in have:
+                raise FileError(
+                    f"{path} has no column {c} for the figure {n}"
+                    + (" (a --fast sweep leaves it out)" if n in PROFILE_FIGURES else "")
+                )
+    grid = sorted(c for c in have if c.startswith("grid."))
+    extra = [c for c in ("profile_checked", "follower") if c in have]
+    try:
+        t = pq.read_table(
+            path, columns=[*grid, "valid", "error", "violations", *figure_cols, *extra]
+        )
+        cols = {
+            c: t.column(c).cast(pa.float64()).to_numpy(zero_copy_only=False) for c in figure_cols
+        }
+    except (OSError, pa.ArrowException) as exc:
+        raise FileError(f"{path}: cannot read its columns ({exc})") from None
+    refused = t.column("error").is_valid().to_numpy(zero_copy_only=False)
+    valid = t.column("valid").fill_null(False).to_numpy(zero_copy_only=False).astype(bool)
+    valid &= ~refused
+    values = np.column_stack([FIGURES[n].of_table(cols) for n in names])
+    values[~valid] = np.nan
+    idx = np.flatnonzero(pareto_mask(values))
+    idx = idx[np.lexsort(values[idx].T[::-1])]  # by the first figure, then the next
+    # the follower kind tells which grid fields a row's design ignores (distinct)
+    rows = t.select([*grid, *figure_cols, *extra]).take(idx).to_pylist()
+    keep = distinct(rows)
+    front = [
+        {
+            "grid": {  # None: a field the follower does not use (any value)
+                k[5:]: None if k[5:] in ignored_fields(r) else v
+                for k, v in r.items()
+                if k.startswith("grid.")
+            },
+            "figures": {n: float(values[i, j]) for j, n in enumerate(names)},
+        }
+        for r, i, k in zip(rows, idx, keep, strict=True)
+        if k
+    ]
+    checked = True
+    if "profile_checked" in have:
+        pc = t.column("profile_checked").fill_null(True).to_numpy(zero_copy_only=False)
+        checked = bool(pc.astype(bool)[valid].all())
+    return TableFront(
+        rows=t.num_rows,
+        valid=int(valid.sum()),
+        refused=int(refused.sum()),
+        first_limits=_first_limits(t.column("violations"), ~valid & ~refused),
+        profile_checked=checked,
+        front=front,
+        repeats=len(rows) - len(front),
+    )
+
+
+def _first_limits(violations, broken: np.ndarray) -> dict[str, int]:
+    """First broken limit -> count over the rows ``broken`` (JSON text per row); each
+    distinct text is parsed once."""
+    import json
+
+    import pyarrow as pa
+
+    counts = violations.filter(pa.array(broken)).fill_null("[]").value_counts()
+    out: dict[str, int] = {}
+    for text, n in zip(
+        counts.field("values").to_pylist(), counts.field("counts").to_pylist(), strict=True
+    ):
+        codes = [v.get("code") for v in json.loads(text)] or ["invalid"]
+        out[str(codes[0])] = out.get(str(codes[0]), 0) + int(n)
+    return dict(sorted(out.items(), key=lambda kv: (-kv[1], kv[0])))
 
 
 # --- the map ------------------------------------------------------------------------

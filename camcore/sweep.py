@@ -576,15 +576,75 @@ def load_spec(path: str | Path) -> Spec:
 def pareto_mask(values: np.ndarray) -> np.ndarray:
     """Which rows of ``values`` (n designs x k figures, all to be minimized) are on the
     Pareto front: no other row is at least as good in every figure and better in one.
-    Rows with a NaN are never on it. O(n^2 k), for the few thousand rows of a sweep."""
+    Rows with a NaN are never on it; equal rows are both on it or both off.
+
+    Equal rows are merged first; sorted lexicographically, a point can then only be
+    dominated by one before it. Two figures: by the running minimum of the second
+    (O(n log n)). More: blocks of points are tested against the front found so far and
+    against each other (O(n |front| k)), so a million-row sweep takes seconds."""
     v = np.asarray(values, dtype=float)
     ok = np.isfinite(v).all(axis=1)
-    front = ok.copy()
-    for i in np.flatnonzero(ok):
-        others = v[ok]
-        dominated = (others <= v[i]).all(axis=1) & (others < v[i]).any(axis=1)
-        front[i] = not dominated.any()
+    front = np.zeros(len(v), dtype=bool)
+    if not ok.any():
+        return front
+    points, inverse = np.unique(v[ok], axis=0, return_inverse=True)  # lexicographic
+    if points.shape[1] == 1:
+        on = np.arange(len(points)) == 0
+    elif points.shape[1] == 2:  # an earlier point with a second figure <= dominates
+        before = np.minimum.accumulate(np.concatenate([[np.inf], points[:-1, 1]]))
+        on = points[:, 1] < before
+    else:
+        on = _front_by_blocks(points)
+    front[np.flatnonzero(ok)] = on[inverse.reshape(-1)]
     return front
+
+
+def _front_by_blocks(points: np.ndarray, block: int = 512) -> np.ndarray:
+    """pareto_mask of distinct, lexicographically sorted points (n x k, k >= 3).
+
+    First every point is tested against the front of a few hundred promising ones
+    (least sum of ranks): that removes most of a large sweep at once. The rest go in
+    blocks, each tested against the front found so far and then within itself."""
+    keep = np.ones(len(points), dtype=bool)
+    if len(points) > 4 * block:
+        ranks = np.argsort(np.argsort(points, axis=0), axis=0).sum(axis=1)
+        seed = np.sort(np.argpartition(ranks, block)[:block])
+        seed = seed[_front_by_blocks(points[seed], block)]
+        keep = ~_beaten_by(points[seed], points)
+        keep[seed] = True  # a point is <= itself: the seeds' front stays
+    on = np.zeros(len(points), dtype=bool)
+    rest = np.flatnonzero(keep)
+    kept = points[:0]
+    for start in range(0, len(rest), block):
+        idx = rest[start : start + block]
+        cand = points[idx]
+        if len(kept):
+            ahead = _beaten_by(kept, cand)
+            cand, idx = cand[~ahead], idx[~ahead]
+        # within the block (sorted), only an earlier point can dominate a later one
+        le = _all_le(cand, cand)  # [i, j]: cand[j] <= cand[i] in every figure
+        inside = np.tril(le, k=-1).any(axis=1)
+        on[idx[~inside]] = True
+        kept = np.concatenate([kept, cand[~inside]])
+    return on
+
+
+def _all_le(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """[i, j]: a[j] <= b[i] in every column (one 2-D comparison per column)."""
+    out = a[None, :, 0] <= b[:, None, 0]
+    for c in range(1, a.shape[1]):
+        out &= a[None, :, c] <= b[:, None, c]
+    return out
+
+
+def _beaten_by(front: np.ndarray, points: np.ndarray, size: int = 2_000_000) -> np.ndarray:
+    """Which ``points`` a row of ``front`` is <= in every column (distinct points: so
+    dominates), in pieces of at most ``size`` comparisons."""
+    out = np.zeros(len(points), dtype=bool)
+    step = max(1, size // max(1, len(front)))
+    for s in range(0, len(points), step):
+        out[s : s + step] = _all_le(front, points[s : s + step]).any(axis=1)
+    return out
 
 
 def first_violation(row: dict) -> str | None:

@@ -304,29 +304,57 @@ def test_mixed_value_types_and_structured_values_join_into_one_table(tmp_path):
     assert json.loads(rows[0]["grid.motion.segments"]) == segs
 
 
-def test_pareto_mask_against_a_brute_force_definition():
+def _dominated_brute(v: np.ndarray) -> np.ndarray:
+    """The definition, row by row: a finite row that another finite row is at least as
+    good as in every column and better in one."""
+    ok = np.isfinite(v).all(axis=1)
+    out = ~ok
+    for i in np.flatnonzero(ok):
+        o = v[ok]
+        out[i] = ((o <= v[i]).all(axis=1) & (o < v[i]).any(axis=1)).any()
+    return out
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 4])
+def test_pareto_mask_against_a_brute_force_definition(k):
+    """Every path of pareto_mask (one figure, the two-figure sweep, the blocks of three
+    or more) against the definition: random, tied (few distinct values), anti-correlated
+    (most points on the front) and NaN rows, across block boundaries."""
     from camcore.sweep import pareto_mask
 
-    rng = np.random.default_rng(3)
-    v = rng.random((200, 3))
-    v[5] = np.nan
-    v[7] = v[8]  # two equal rows are both on the front or both off it
-    mask = pareto_mask(v)
-    for i in range(len(v)):
-        if not np.isfinite(v[i]).all():
-            assert not mask[i]
-            continue
-        dominated = any(
-            np.isfinite(v[j]).all() and (v[j] <= v[i]).all() and (v[j] < v[i]).any()
-            for j in range(len(v))
-        )
-        assert mask[i] == (not dominated)
-    assert mask[7] == mask[8]
+    rng = np.random.default_rng(k)
+    for trial in range(12):
+        n = int(rng.integers(1, 1300))
+        v = rng.integers(0, 5, (n, k)).astype(float) if trial % 2 else rng.random((n, k))
+        if trial % 3 == 0:
+            v[rng.integers(0, n, 4)] = np.nan
+        if trial % 4 == 1 and k > 1:
+            v[:, -1] = v[:, :-1].sum(axis=1) * -1.0  # a plane: anti-correlated
+        mask = pareto_mask(v)
+        np.testing.assert_array_equal(mask, ~_dominated_brute(v), err_msg=f"trial {trial}")
     assert pareto_mask(np.array([[1.0, 2.0], [2.0, 1.0], [2.0, 2.0]])).tolist() == [
         True,
         True,
         False,
     ]
+    assert not pareto_mask(np.full((3, k), np.nan)).any()
+
+
+def test_pareto_mask_of_a_large_front():
+    """Thousands of points (the seeded filter of _front_by_blocks): all of a plane are
+    on the front and a point behind it is not; random points with ties against the
+    definition."""
+    from camcore.sweep import pareto_mask
+
+    rng = np.random.default_rng(5)
+    v = rng.random((6000, 3))
+    v[:, 2] = 2.0 - v[:, 0] - v[:, 1]
+    v[-1] = v[0] + 0.01
+    mask = pareto_mask(v)
+    assert mask[:-1].all() and not mask[-1]
+    # a large random sweep goes through the seeded filter first: the same front
+    w = np.round(rng.random((5000, 3)), 2)
+    np.testing.assert_array_equal(pareto_mask(w), ~_dominated_brute(w))
 
 
 def test_first_violation_names_the_broken_limit():
@@ -544,3 +572,111 @@ def test_a_design_repeated_in_a_later_chunk_is_not_analysed_again(tmp_path, monk
     assert [r["grid.follower.roller_radius_mm"] for r in rows] == [8, 8, 10, 10, 12, 12]
     for r, a in zip(rows, alone, strict=True):
         assert {k: r[k] for k in a} == a
+
+
+PARETO_SPEC = {
+    "base": {"preset": "paper_example"},
+    "grid": {
+        "cam.base_radius_mm": [12, 25, 45, 70, 100],
+        "cam.bore_diameter_mm": [0, 40],
+        "follower.roller_radius_mm": [10, 30],
+        "follower.kind": ["single_roller", "double_concave"],
+    },
+}
+
+
+@pytest.fixture(scope="module")
+def pareto_table(tmp_path_factory):
+    """A full sweep with valid designs, broken limits and points that are no design."""
+    out = tmp_path_factory.mktemp("pareto") / "r.parquet"
+    spec = sweep.parse_spec(json.dumps(PARETO_SPEC))
+    sweep.run(spec, out, chunk=8, verify=False, progress=None)
+    return out
+
+
+def test_table_front_is_the_front_of_the_rows(pareto_table):
+    """camcore pareto's column-wise front equals the definition applied to the rows as
+    dicts: valid rows only, each design once (a concave face swept over roller radii is
+    one design, its roller radius shown as None), ordered by the first figure; the
+    counts and first broken limits equal those of the rows."""
+    from collections import Counter
+
+    from camcore.explore import FIGURES, ignored_fields, table_front
+
+    rows = rows_of(pareto_table)
+    names = ["cam_size", "stress", "pressure_angle"]
+    f = table_front(pareto_table, names)
+    valid = [r for r in rows if r["valid"] and r["error"] is None]
+    assert 0 < len(valid) < len(rows)
+    assert (f.rows, f.valid) == (len(rows), len(valid))
+    assert f.refused == sum(r["error"] is not None for r in rows) > 0
+    broken = [sweep.first_violation(r) for r in rows if not r["valid"] and r["error"] is None]
+    assert f.first_limits == dict(Counter(broken)) and f.first_limits
+    assert f.profile_checked
+
+    v = np.array([[FIGURES[n].get(r) for n in names] for r in valid], dtype=float)
+    on = ~_dominated_brute(v)
+    want = set()
+    for r, keep in zip(valid, on, strict=True):
+        if keep:
+            drop = ignored_fields(r)
+            want.add(
+                tuple(
+                    (k[5:], None if k[5:] in drop else r[k])
+                    for k in sorted(r)
+                    if k.startswith("grid.")
+                )
+            )
+    got = [tuple(sorted(d["grid"].items())) for d in f.front]
+    assert len(got) == len(set(got)) and set(got) == want
+    assert f.repeats == int(on.sum()) - len(want) > 0
+    firsts = [d["figures"]["cam_size"] for d in f.front]
+    assert firsts == sorted(firsts)
+    concave = [d for d in f.front if d["grid"]["follower.kind"] == "double_concave"]
+    assert concave and all(d["grid"]["follower.roller_radius_mm"] is None for d in concave)
+
+
+def test_cli_pareto_and_its_exit_codes(pareto_table, tmp_path):
+    """The front as a table and as JSON; bad figure names, a file that is not a sweep
+    table and a figure the table lacks are refused (exit 2); a table with no valid
+    design exits 1."""
+    from camcore.explore import table_front
+
+    def run(*args):
+        return subprocess.run(
+            [sys.executable, "-m", "camcore.cli", "pareto", *map(str, args)],
+            capture_output=True,
+            text=True,
+        )
+
+    names = ["cam_size", "stress"]
+    front = table_front(pareto_table, names).front
+    text = run(pareto_table, "--figures", ",".join(names), "--top", 2)
+    assert text.returncode == 0, text.stderr
+    lines = text.stdout.splitlines()
+    assert f"smaller is better: {len(front)} designs" in text.stdout
+    assert "first limit broken: " in text.stdout
+    assert lines[-1] == f"(2 of {len(front)} shown; --top N or --json for more)"
+    first = lines[-3].split()  # the first design's row: number, grid values, figures
+    assert first[0] == "1" and first[-2:] == [f"{front[0]['figures'][n]:.4g}" for n in names]
+    js = run(pareto_table, "--figures", ",".join(names), "--json")
+    assert js.returncode == 0 and json.loads(js.stdout)["front"] == front
+
+    for args, message in [
+        ((pareto_table, "--figures", "size"), "--figures 'size'"),
+        ((pareto_table, "--figures", "stress,stress"), "distinct"),
+        ((pareto_table, "--top", 0), "--top"),
+        ((tmp_path / "none.parquet",), "not a readable Parquet table"),
+        ((pareto_table.parent,), "not a readable Parquet table"),
+    ]:
+        bad = run(*args)
+        assert bad.returncode == 2 and message in bad.stderr, (args, bad.stderr)
+        assert "Traceback" not in bad.stderr
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": [12, 14]}}))
+    fast = tmp_path / "fast.parquet"
+    sweep.run(sweep.load_spec(spec), fast, verify=False, fast=True, progress=None)
+    bad = run(fast, "--figures", "cam_size,wear")
+    assert bad.returncode == 2 and "a --fast sweep leaves it out" in bad.stderr
+    none = run(fast)
+    assert none.returncode == 1 and "no valid design" in none.stdout
