@@ -1,7 +1,7 @@
 """The Explore tab: sweep two design fields (and, optionally, the four followers)
 around the design on screen, in the background, and show which limit fails where and
-the Pareto front of two figures the user picks; a design of the front loads with one
-click.
+the Pareto front of two or three figures the user picks; a design of the front loads
+with one click.
 
 The sweep is camcore.sweep's (rows equal ``report --json``), in chunks on the
 analyst's background worker, which only uses CPU time no tab's edit wants. It runs on
@@ -43,6 +43,7 @@ MAX_STEPS = 15  # per axis
 MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
 CHUNK = 12  # designs per background job: ~0.1 s, the cancel latency
 MAX_FRONT = 30  # designs of the front offered for loading
+NO_FIGURE = "none"  # the third figure is optional
 
 
 def grid_points(
@@ -78,6 +79,9 @@ class ExplorePanel:
         figs = tuple(FIGURE_LABELS)
         self.fig_a = gui.add_dropdown("Figure 1 (Pareto x)", figs, initial_value=figs[0])
         self.fig_b = gui.add_dropdown("Figure 2 (Pareto y)", figs, initial_value=figs[1])
+        self.fig_c = gui.add_dropdown(
+            "Figure 3 (colour)", (NO_FIGURE, *figs), initial_value=NO_FIGURE
+        )
         self.run_btn = gui.add_button("Run the sweep", color="green")
         self.cancel_btn = gui.add_button("Cancel", disabled=True)
         self.progress = gui.add_markdown("")
@@ -134,9 +138,13 @@ class ExplorePanel:
     def _job(self):
         """(base, points, x, y, figures) from the widgets, or None (said why)."""
         px, py = PARAMETERS.get(self.x.value), PARAMETERS.get(self.y.value)
-        fa, fb = FIGURE_LABELS.get(self.fig_a.value), FIGURE_LABELS.get(self.fig_b.value)
-        if px is None or py is None or fa is None or fb is None or px == py or fa == fb:
-            self.progress.content = "✖ Choose two different fields and two different figures."
+        names = [FIGURE_LABELS.get(f.value) for f in (self.fig_a, self.fig_b)]
+        if self.fig_c.value != NO_FIGURE:
+            names.append(FIGURE_LABELS.get(self.fig_c.value))
+        if px is None or py is None or px == py or None in names or len(set(names)) < len(names):
+            self.progress.content = (
+                "✖ Choose two different fields and two or three different figures."
+            )
             return None
         assert self._design is not None  # bound before any click
         design = self._design()
@@ -156,7 +164,7 @@ class ExplorePanel:
             return None
         points = grid_points((px, x0, x1), (py, y0, y1), steps, kinds)
         base = design.model_dump(mode="json")
-        return base, points, (px, self.x.value), (py, self.y.value), [fa, fb]
+        return base, points, (px, self.x.value), (py, self.y.value), names
 
     def _sweep(self, base, points, x, y, names) -> None:
         """Analyse each distinct design once (points that differ only in a field their

@@ -261,8 +261,8 @@ def explore_figure(
     ``limits`` ((x0, x1), (y0, y1)), the sweep's ranges, else those of the rows (a
     sweep cancelled midway leaves a kind part of the range, which must not look like
     the whole); below, the valid designs in the plane of the first two figures with the
-    Pareto front numbered (the numbers of the app's list). ``x`` and ``y`` are (grid
-    path, axis label)."""
+    Pareto front of ``names`` (two or three figures; a third colours the points)
+    numbered as in the app's list. ``x`` and ``y`` are (grid path, axis label)."""
     from matplotlib.figure import Figure as MplFigure
 
     kinds = list(dict.fromkeys(_kind(r) for r in rows))
@@ -310,40 +310,75 @@ def explore_figure(
 
 
 def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> None:
+    """The valid designs in the plane of the first two figures, the front numbered; a
+    third figure colours the points, and its front (which in this plane is no curve)
+    is ringed instead of joined."""
+    from matplotlib.colors import Normalize
+    from matplotlib.lines import Line2D
+
     fa, fb = FIGURES[names[0]], FIGURES[names[1]]
-    v = figure_values(rows, names[:2])
+    v = figure_values(rows, names)
     valid = np.array([bool(r.get("valid")) for r in rows])
-    for kind in dict.fromkeys(_kind(r) for r in rows):
+    third = len(names) > 2 and valid.any()
+    colour: dict = {}
+    if third:
+        colour = {"cmap": "viridis", "norm": Normalize(*_span(v[valid, 2]))}
+    kinds = list(dict.fromkeys(_kind(r) for r in rows))
+    for kind in kinds:
         m = valid & np.array([_kind(r) == kind for r in rows])
-        ax.scatter(
-            v[m, 0],
-            v[m, 1],
-            s=14,
-            alpha=0.55,
-            label=_label(kind),
-            marker=_MARKERS.get(_try_kind(kind), "o"),
-        )
+        marker = _MARKERS.get(_try_kind(kind), "o")
+        extra = {"c": v[m, 2], **colour} if third else {}
+        ax.scatter(v[m, 0], v[m, 1], s=14, alpha=0.55, label=_label(kind), marker=marker, **extra)
     if front.size:
-        ax.plot(v[front, 0], v[front, 1], "k-", lw=0.8, alpha=0.6)
-        span = np.nanmax(v[front], axis=0) - np.nanmin(v[front], axis=0)
-        span = np.where(span > 0, span, 1.0)
-        shown: list[np.ndarray] = []  # numbers closer than 4 % of the front's extent
-        for n, i in enumerate(front[:30], start=1):  # would print over each other
-            at = v[i, :2] / span
-            if any(np.hypot(*(at - p)) < 0.04 for p in shown):
-                continue
-            shown.append(at)
-            ax.annotate(
-                str(n), (v[i, 0], v[i, 1]), fontsize=10, xytext=(3, 3), textcoords="offset points"
-            )
+        if third:
+            ax.scatter(v[front, 0], v[front, 1], s=70, facecolors="none", edgecolors="k", lw=0.9)
+        else:
+            ax.plot(v[front, 0], v[front, 1], "k-", lw=0.8, alpha=0.6)
+        _number_front(ax, v, front)
     ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=11)
     ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=11)
-    ax.set_title(
-        "valid designs; the numbered line is the Pareto front (smaller is better)", fontsize=12
-    )
+    if third:
+        from matplotlib.cm import ScalarMappable
+
+        fc = FIGURES[names[2]]
+        bar = ax.figure.colorbar(ScalarMappable(**colour), ax=ax)
+        bar.set_label(f"{fc.label} [{fc.unit}]", fontsize=10)
+        title = "valid designs; ringed and numbered: the Pareto front of all three figures"
+    else:
+        title = "valid designs; the numbered line is the Pareto front (smaller is better)"
+    ax.set_title(title, fontsize=12)
     ax.tick_params(labelsize=10)
     if valid.any():
-        ax.legend(fontsize=10)
+        handles = [  # grey markers: with a third figure the colour is its value
+            Line2D(
+                [], [], ls="", marker=_MARKERS.get(_try_kind(k), "o"), color="0.45", label=_label(k)
+            )
+            for k in kinds
+        ]
+        ax.legend(handles=handles if third else None, fontsize=10)
+
+
+def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
+    """The front's numbers (the app's list), leaving out those closer than 4 % of the
+    front's extent to one already printed (they would print over each other)."""
+    span = np.nanmax(v[front, :2], axis=0) - np.nanmin(v[front, :2], axis=0)
+    span = np.where(span > 0, span, 1.0)
+    shown: list[np.ndarray] = []
+    for n, i in enumerate(front[:30], start=1):
+        at = v[i, :2] / span
+        if any(np.hypot(*(at - p)) < 0.04 for p in shown):
+            continue
+        shown.append(at)
+        ax.annotate(
+            str(n), (v[i, 0], v[i, 1]), fontsize=10, xytext=(3, 3), textcoords="offset points"
+        )
+
+
+def _span(values: np.ndarray) -> tuple[float, float]:
+    """(least, largest) of the finite ``values``; a width of one where they are equal."""
+    v = values[np.isfinite(values)]
+    lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+    return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
 
 
 def _try_kind(value: str) -> FollowerKind | None:

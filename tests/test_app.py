@@ -775,6 +775,35 @@ def test_explore_with_a_profile_figure_runs_the_full_analysis(tab):
     assert e.front_dd.options and all("µm" in o for o in e.front_dd.options)
 
 
+def test_explore_ranks_by_a_third_figure(tab):
+    """A third figure joins the Pareto front: each offered design lists three values,
+    the front of three holds the design least in the third; the same figure twice is
+    refused."""
+    from camcore.explore import FIGURES
+
+    e = tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (60.0, 100.0), (10.0, 30.0)
+    e.steps.value, e.all_kinds.value = 3, True
+    e.fig_a.value, e.fig_b.value = "cam size R (high-dwell radius)", "max contact stress σ_H"
+    e.fig_c.value = "cam size R (high-dwell radius)"
+    e.run_btn.value = True
+    assert "two or three different figures" in e.progress.content
+    e.fig_c.value = "max pressure angle"
+    rows: list[dict] = []
+    real = e._analyst.sweep_chunk
+    e._analyst.sweep_chunk = lambda base, pts, *a: (
+        rows.extend(real(base, pts, *a)) or rows[-len(pts) :]
+    )
+    e.run_btn.value = True
+    assert wait_for(lambda: "on the Pareto front" in e.progress.content, 120.0), e.progress.content
+    offers = e.front_dd.options
+    assert offers and all(o.count(" mm") >= 1 and "MPa" in o and "°" in o for o in offers)
+    pa = FIGURES["pressure_angle"]
+    least = min(pa.get(r) for r in rows if r["valid"])
+    assert any(f"{least:.4g} °" in o for o in offers)
+
+
 def test_a_resized_view_resizes_the_wide_panel_and_reframes(app, monkeypatch):
     """A window made smaller had left the wide panel 1000 px wide over most of the cam.
     A camera message that keeps the pose and changes the size is a resize: the wide

@@ -487,6 +487,40 @@ def test_every_follower_s_map_spans_the_whole_sweep():
     assert fig.axes[0].get_xlim() == (x0, x1) and fig.axes[0].get_ylim() == (y0, y1)
 
 
+def test_a_third_figure_colours_the_designs_and_widens_the_front():
+    """Three figures (issue 12's cam size vs. stress vs. pressure angle): the front of
+    all three holds the front of the first two and the design least in the third; the
+    panel colours the valid designs by the third (a colour bar says which) and rings
+    the front instead of joining it (in the plane of two figures it is no curve)."""
+    from camcore.explore import explore_figure, figure_values, pareto
+
+    rows = _paper_rows(
+        {
+            "follower.kind": ["double_roller", "double_concave"],
+            "cam.base_radius_mm": [45, 60, 80, 110],
+            "follower.offset_mm": [10, 25],
+        }
+    )
+    two, three = ["cam_size", "stress"], ["cam_size", "stress", "pressure_angle"]
+    f2, f3 = pareto(rows, two), pareto(rows, three)
+    assert set(f2) < set(f3)
+    v = figure_values(rows, three)
+    valid = np.array([bool(r["valid"]) for r in rows])
+    assert int(np.flatnonzero(valid)[np.argmin(v[valid, 2])]) in set(f3)
+    fig = explore_figure(
+        rows, ("cam.base_radius_mm", "r_b"), ("follower.offset_mm", "e"), three, f3
+    )
+    panel, bar = fig.axes[-2], fig.axes[-1]
+    assert bar.get_ylabel() == "max pressure angle [°]"
+    lo, hi = bar.get_ylim()
+    assert lo == pytest.approx(np.nanmin(v[valid, 2])) and hi == pytest.approx(
+        np.nanmax(v[valid, 2])
+    )
+    assert "all three figures" in panel.get_title() and not panel.get_lines()
+    flat = explore_figure(rows, ("cam.base_radius_mm", "r_b"), ("follower.offset_mm", "e"), two, f2)
+    assert len(flat.axes) == len(fig.axes) - 1 and flat.axes[-1].get_lines()  # the line
+
+
 def test_a_refused_copy_does_not_hide_a_valid_design():
     """A field a follower ignores is still checked against its own limits: a concave
     face swept over roller radius 0 (refused) and 10 is one design, and the valid row
