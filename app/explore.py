@@ -98,14 +98,75 @@ class ExplorePanel:
         self._offers: dict[str, dict] = {}  # dropdown label -> grid point
         self._armed: str | None = None  # the offer a second click loads despite edits
         self._base: dict = {}
+        self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
 
     def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
         self._analyst, self._design, self._load = analyst, design, load
+        for widget in self._setup_widgets():
+            widget.on_update(lambda _: self._keep_setup())
         self.run_btn.on_click(lambda _: self.start())
         self.cancel_btn.on_click(lambda _: self._cancel.set())
         self.load_btn.on_click(lambda _: self.load(self.front_dd.value))
         self.x.on_update(lambda _: self._suggest(self.x, self.x_range, "x"))
         self.y.on_update(lambda _: self._suggest(self.y, self.y_range, "y"))
+
+    # --- the setup, kept in the browser --------------------------------------------
+    def _setup_widgets(self) -> tuple:
+        return (
+            self.x,
+            self.x_range,
+            self.y,
+            self.y_range,
+            self.steps,
+            self.all_kinds,
+            self.fig_a,
+            self.fig_b,
+            self.fig_c,
+        )
+
+    def setup(self) -> dict:
+        """The sweep the widgets describe, as JSON-ready data (apply_setup's input)."""
+        return {
+            "x": self.x.value,
+            "x_range": list(self.x_range.value),
+            "y": self.y.value,
+            "y_range": list(self.y_range.value),
+            "steps": self.steps.value,
+            "all_kinds": self.all_kinds.value,
+            "figures": [self.fig_a.value, self.fig_b.value, self.fig_c.value],
+        }
+
+    def apply_setup(self, data) -> None:
+        """Put a setup (from the browser's storage: untrusted) on the widgets, each entry
+        only if it is one the widget offers; the rest stays as it is."""
+        if not isinstance(data, dict):
+            return
+        for dd, rng, axis in ((self.x, self.x_range, "x"), (self.y, self.y_range, "y")):
+            if data.get(axis) in PARAMETERS:
+                dd.value = data[axis]  # proposes a range, replaced by the kept one below
+            try:
+                rng.value = _finite_pair(data.get(f"{axis}_range"))
+            except (TypeError, ValueError):
+                pass
+        steps = data.get("steps")
+        if isinstance(steps, int | float) and not isinstance(steps, bool):
+            if steps in range(2, MAX_STEPS + 1):  # an integer of the slider's range
+                self.steps.value = int(steps)
+        if isinstance(data.get("all_kinds"), bool):
+            self.all_kinds.value = data["all_kinds"]
+        figs = data.get("figures")
+        if isinstance(figs, list) and len(figs) == 3:
+            for dd, label in zip((self.fig_a, self.fig_b, self.fig_c), figs, strict=True):
+                if label in dd.options:
+                    dd.value = label
+
+    def keep_setup_with(self, write: Callable[[dict], None] | None) -> None:
+        """From now on each change of the setup goes to ``write`` (None: nowhere)."""
+        self._write = write
+
+    def _keep_setup(self) -> None:
+        if self._write is not None:
+            self._write(self.setup())
 
     def _suggest(self, dd, rng, axis: str) -> None:
         """A range around the design's value of a newly chosen field (±30 %), labelled

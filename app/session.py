@@ -414,8 +414,13 @@ class Session:
         gen0 = self.gen
         working = storage.parse_working(self.store.read(storage.WORKING_KEY))
         saved = storage.parse_saved(self.store.read(storage.SAVED_KEY))
+        setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
         if self.closed.is_set():
             return
+        self.ui.explore.apply_setup(setup)
+        self.ui.explore.keep_setup_with(
+            lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
+        )
         with self.lock:
             self._show_saved(saved)
             restore = working is not None and self.gen == gen0 and working != self.design

@@ -19,6 +19,8 @@ from camcore.model import MAX_DESIGN_BYTES, Design, DesignError, design_from_jso
 
 WORKING_KEY = "camdesigner.working"
 SAVED_KEY = "camdesigner.saved"
+EXPLORE_KEY = "camdesigner.explore"  # the Explore tab's setup (not its results)
+MAX_SETUP_BYTES = 4096
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
 READ_TIMEOUT_S = 5.0  # a tab that never answers (e.g. a test client) costs this, once
@@ -55,6 +57,18 @@ def parse_saved(text: str | None) -> dict[str, str]:
         ):
             out[name] = value
     return out
+
+
+def parse_setup(text: str | None) -> dict | None:
+    """The stored Explore setup as a dict (its entries are checked by the panel), or
+    None if absent, too long or not a JSON object."""
+    if not text or len(text) > MAX_SETUP_BYTES:
+        return None
+    try:
+        raw = json.loads(text)
+    except ValueError:
+        return None
+    return raw if isinstance(raw, dict) else None
 
 
 def with_saved(saved: dict[str, str], name: str, design: Design) -> dict[str, str]:

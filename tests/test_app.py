@@ -804,6 +804,41 @@ def test_explore_ranks_by_a_third_figure(tab):
     assert any(f"{least:.4g} °" in o for o in offers)
 
 
+def test_explore_setup_round_trips_and_refuses_junk(tab):
+    """The Explore setup kept in the browser: what setup() gives, apply_setup() puts
+    back (the kept range wins over the one a restored field proposes); entries a
+    tampered storage could hold are ignored one by one; the stored text is bounded."""
+    from app import storage
+
+    e = tab.ui.explore
+    e.x.value, e.y.value = "Speed [rpm]", "Roller radius r_c [mm]"
+    e.x_range.value, e.y_range.value = (900.0, 1500.0), (5.0, 12.5)
+    e.steps.value, e.all_kinds.value = 5, False
+    e.fig_c.value = "max pressure angle"
+    kept = e.setup()
+    e.x.value, e.y.value = "Lift h [mm]", "Rise β_r [°]"
+    e.steps.value, e.all_kinds.value, e.fig_c.value = 9, True, "none"
+    e.apply_setup(storage.parse_setup(__import__("json").dumps(kept)))
+    assert e.setup() == kept
+    junk = {
+        "x": "<b>not a field</b>",
+        "x_range": ["a", 3],
+        "y_range": [float("nan"), 1.0],
+        "steps": 1000,
+        "all_kinds": "yes",
+        "figures": ["max wear depth", "nonsense", "none"],
+    }
+    e.apply_setup(junk)
+    figures = ["max wear depth", kept["figures"][1], "none"]  # "none" is an option of 3
+    assert e.setup() == {**kept, "figures": figures}
+    for bad in ("[1, 2]", "nonsense", "{" + " " * storage.MAX_SETUP_BYTES + "}", None):
+        assert storage.parse_setup(bad) is None
+    e.apply_setup([1, 2])  # not a dict: nothing changes
+    e.steps.value = 4.0  # a client's float: kept as the integer it is
+    e.apply_setup({"steps": e.setup()["steps"]})
+    assert e.steps.value == 4
+
+
 def test_a_resized_view_resizes_the_wide_panel_and_reframes(app, monkeypatch):
     """A window made smaller had left the wide panel 1000 px wide over most of the cam.
     A camera message that keeps the pose and changes the size is a resize: the wide

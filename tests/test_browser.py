@@ -223,7 +223,8 @@ def test_app_in_headless_chromium(tmp_path):
 def test_trust_in_the_browser(tmp_path):
     """Issue 8 in a real browser: an uploaded design whose name is HTML is shown as
     text, never injected; the tab's design survives a reload (browser storage), and a
-    named save too; a download while the input is invalid is refused, with the reason."""
+    named save and the Explore setup too; a download while the input is invalid is
+    refused, with the reason."""
     if not os.path.exists(CHROMIUM):
         pytest.skip("no /usr/bin/chromium")
     import json
@@ -266,6 +267,13 @@ def test_trust_in_the_browser(tmp_path):
                 "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.saved')"
                 " && localStorage.getItem(k).includes('my cam'))"
             )
+            # the Explore tab's setup is kept too
+            session.ui.explore.steps.value = 5
+            session.ui.explore.fig_c.value = "max pressure angle"
+            page.wait_for_function(
+                "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.explore')"
+                " && localStorage.getItem(k).includes('max pressure angle'))"
+            )
             page.reload()
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("tab", name="Files").click()
@@ -273,6 +281,8 @@ def test_trust_in_the_browser(tmp_path):
             (session,) = [s for s in app.sessions.values() if not s.closed.is_set()]
             assert session.design == design_from_json(json.dumps(design))
             assert "my cam" in session.saved
+            setup = session.ui.explore.setup()
+            assert setup["steps"] == 5 and setup["figures"][2] == "max pressure angle"
 
             # a value typed beyond a slider's range is kept, not cut back to the range's
             # end by the browser at the next, unrelated edit
