@@ -231,9 +231,11 @@ def _pareto(args) -> int:
     from .explore import FIGURES, table_front
 
     names = _figure_names(args.figures)
-    f = table_front(args.table, names)
     if args.top < 1:
         raise DesignError("--top: at least 1")
+    f = table_front(args.table, names)
+    if args.design is not None:
+        return _front_design(args.table, f, args.design)
     if args.json:
         print(json.dumps({"figures": names, **vars(f)}, indent=1))
         return EXIT_VALID if f.front else EXIT_BREAKS_LIMITS
@@ -280,6 +282,17 @@ def _pareto(args) -> int:
         print("  ".join(c.ljust(w) for c, w in zip(line, widths, strict=True)).rstrip())
     if len(shown) < len(f.front):
         print(f"({len(shown)} of {len(f.front)} shown; --top N or --json for more)")
+    return EXIT_VALID
+
+
+def _front_design(table: str, f, number: int) -> int:
+    """Print design ``number`` of the front (1-based, as listed) as design JSON."""
+    from .model import design_to_json
+    from .sweep import design_of_row
+
+    if not 1 <= number <= len(f.front):
+        raise DesignError(f"--design {number}: the front lists designs 1 to {len(f.front)}")
+    print(design_to_json(design_of_row(table, f.front[number - 1]["row"])))
     return EXIT_VALID
 
 
@@ -411,6 +424,13 @@ def _parser() -> argparse.ArgumentParser:
     )
     f.add_argument("--top", type=int, default=20, metavar="N", help="designs listed (default 20)")
     f.add_argument("--json", action="store_true", help="print one JSON object, the whole front")
+    f.add_argument(
+        "--design",
+        type=int,
+        metavar="N",
+        help="print design N of the front (as listed) as a design file, e.g. "
+        "> best.json, then camcore report/export best.json",
+    )
     f.set_defaults(run=_pareto)
     return p
 

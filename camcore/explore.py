@@ -170,6 +170,7 @@ def table_front(path, names: list[str]) -> TableFront:
     keep = distinct(rows)
     front = [
         {
+            "row": int(i),  # in the table, from 0 (camcore.sweep.design_of_row)
             "grid": {  # None: a field the follower does not use (any value)
                 k[5:]: None if k[5:] in ignored_fields(r) else v
                 for k, v in r.items()

@@ -29,7 +29,7 @@ import shutil
 import sys
 import time
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -49,6 +49,8 @@ MAX_SPEC_BYTES = 1_000_000
 MAX_DESIGNS = 1_000_000  # designs per sweep
 MAX_VALUES = 100_000  # values per grid axis
 DEFAULT_CHUNK = 32
+SPEC_METADATA = "camcore.sweep"  # the table's key-value metadata: its SPEC (Spec.document)
+VERSION_METADATA = "camcore.version"
 MEMO_ROWS = 1024  # designs an in-process run remembers across its chunks (~10 kB a row)
 
 
@@ -58,6 +60,14 @@ class Spec:
 
     base: dict
     axes: tuple[tuple[str, tuple], ...]
+    grid: object = field(default=None, compare=False)  # the grid as given (ranges kept)
+
+    def document(self) -> str:
+        """The spec as a SPEC document with its base resolved (a preset by its design):
+        parse_spec reads it back to the same spec. Kept in the table it wrote, so the
+        table says which design each row is (design_of_row)."""
+        grid = self.grid if self.grid is not None else {p: list(v) for p, v in self.axes}
+        return json.dumps({"base": self.base, "grid": grid})
 
     @property
     def size(self) -> int:
@@ -168,7 +178,7 @@ def parse_spec(text: str | bytes) -> Spec:
     base_dict = json.loads(design.model_dump_json())
     for path, values in axes:
         _check_values(base_dict, path, values)
-    spec = Spec(base_dict, axes)
+    spec = Spec(base_dict, axes, grid)
     if spec.size > MAX_DESIGNS:
         raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")
     return spec
@@ -507,6 +517,9 @@ def run(
         sys.stderr.write("\n")
     tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
     table = pa.concat_tables(tables, promote_options="permissive")  # e.g. int with float
+    table = table.replace_schema_metadata(
+        {SPEC_METADATA: spec.document(), VERSION_METADATA: package_version()}
+    )
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
     write_atomic(out, buf.getvalue().to_pybytes())
@@ -555,6 +568,27 @@ def _run_dask(client, spec, chunk, todo, how, keep) -> None:
     }
     for fut in as_completed(futures):
         keep(futures[fut], fut.result())
+
+
+def design_of_row(path: str | Path, row: int) -> Design:
+    """The design of row ``row`` (0-based) of the sweep table at ``path``: the table
+    keeps its SPEC and its rows are the SPEC's points in order. FileError for a table
+    without one (written before camcore kept it) or whose rows do not match it."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        meta = pq.read_schema(path).metadata or {}
+        rows = pq.ParquetFile(path).metadata.num_rows
+    except (OSError, pa.ArrowException) as exc:
+        raise FileError(f"{path}: not a readable Parquet table ({exc})") from None
+    text = meta.get(SPEC_METADATA.encode())
+    if text is None:
+        raise FileError(f"{path} does not keep its sweep spec (an older camcore wrote it)")
+    spec = parse_spec(text)
+    if spec.size != rows or not 0 <= row < rows:
+        raise FileError(f"{path}: {rows} rows, its spec {spec.size} designs (row {row})")
+    return design_at(spec.base, spec.point(row))
 
 
 def tally(path: str | Path) -> str:

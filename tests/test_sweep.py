@@ -714,3 +714,48 @@ def test_cli_pareto_and_its_exit_codes(pareto_table, tmp_path):
     assert bad.returncode == 2 and "a --fast sweep leaves it out" in bad.stderr
     none = run(fast)
     assert none.returncode == 1 and "no valid design" in none.stdout
+
+
+def test_a_front_design_comes_out_as_a_design_file(pareto_table, tmp_path):
+    """The table keeps its SPEC, so `camcore pareto --design N` prints the very design
+    of the front's row N: its report gives the figures the front lists, its fields the
+    row's grid values; a table without its SPEC is refused, and so is an N off the
+    front."""
+    import pyarrow.parquet as pq
+
+    from camcore.analysis import analyze
+    from camcore.explore import FIGURES, table_front
+    from camcore.model import design_from_json
+    from camcore.report import summary
+    from camcore.sweep import flatten
+
+    spec = sweep.parse_spec(json.dumps(PARETO_SPEC))
+    assert sweep.parse_spec(spec.document()) == spec
+    names = ["cam_size", "stress", "pressure_angle"]
+    front = table_front(pareto_table, names).front
+    rows = rows_of(pareto_table)
+    for n in (1, len(front)):
+        run = subprocess.run(
+            [sys.executable, "-m", "camcore.cli", "pareto", str(pareto_table), "--design", str(n)],
+            capture_output=True,
+            text=True,
+        )
+        assert run.returncode == 0, run.stderr
+        design = design_from_json(run.stdout)
+        entry = front[n - 1]
+        flat = flatten(summary(analyze(design, verify=False)))
+        assert {m: FIGURES[m].get(flat) for m in names} == entry["figures"]
+        row = rows[entry["row"]]
+        assert design.cam.base_radius_mm == row["grid.cam.base_radius_mm"]
+        assert design.follower.kind.value == row["grid.follower.kind"]
+        assert design.follower.roller_radius_mm == row["grid.follower.roller_radius_mm"]
+    bad = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "pareto", str(pareto_table), "--design", "0"],
+        capture_output=True,
+        text=True,
+    )
+    assert bad.returncode == 2 and f"designs 1 to {len(front)}" in bad.stderr
+    bare = tmp_path / "bare.parquet"
+    pq.write_table(pq.read_table(pareto_table).replace_schema_metadata(None), bare)
+    with pytest.raises(FileError, match="does not keep its sweep spec"):
+        sweep.design_of_row(bare, 0)
