@@ -1,6 +1,7 @@
 """Benchmarks of camcore: one analysis, the four-follower comparison, the geometric
-check, STL/DXF export, and how the analysis time grows with the resolution and with
-the number of designs analysed in one batch.
+check, STL/DXF export, how the analysis time grows with the resolution and with
+the number of designs analysed in one batch, and the Pareto front of a million-row
+sweep (``camcore pareto``) beside the sort it cannot do without.
 
 ``run(quick)`` returns rows {name, median_ms, p10_ms, p90_ms, n, note};
 ``python bench/run.py`` runs it with every other bench module.
@@ -132,7 +133,32 @@ def run(quick: bool = False) -> list[dict]:
                 f"loop of analyze(verify=False); {np.median(ms) / n:.2f} ms/design",
             )
         )
+    rows += _pareto_rows(quick)
     return rows
+
+
+def _pareto_rows(quick: bool) -> list[dict]:
+    """The Pareto front of n random designs x 2 and 3 figures (camcore.sweep.pareto_mask),
+    with its floor in the same run: one lexicographic sort of the same rows (np.unique,
+    which any front search needs first)."""
+    from camcore.sweep import pareto_mask
+
+    n = 100_000 if quick else 1_000_000
+    rng = np.random.default_rng(0)
+    out = []
+    for k in (2, 3):
+        v = rng.random((n, k))
+        floor = float(np.median(_time(lambda v=v: np.unique(v, axis=0), 3, warmup=0)))
+        ms = _time(lambda v=v: pareto_mask(v), 3, warmup=0)
+        front, ratio = int(pareto_mask(v).sum()), np.median(ms) / floor
+        out.append(
+            _row(
+                f"Pareto front, {n:,} designs x {k} figures",
+                ms,
+                f"{front} on it; {ratio:.1f}x one sort of the rows ({floor:.0f} ms)",
+            )
+        )
+    return out
 
 
 if __name__ == "__main__":
