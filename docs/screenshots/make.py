@@ -5,7 +5,8 @@
 Writes studio_station2.png (the teaching view at station 2, Front camera),
 contact_closeup.png (the close-up camera there), curves.png (the designer's curves in
 the wide panel), stations.png (the stations diagram) and explore.png (the Explore tab's map of a
-base radius x offset sweep over the four followers, as camcore.explore draws it).
+base radius x offset sweep over the four followers and its front of three figures, as
+camcore.explore draws it).
 """
 
 from __future__ import annotations
@@ -64,7 +65,7 @@ def explore_map() -> None:
     x, y = ("cam.base_radius_mm", 50.0, 110.0), ("follower.offset_mm", 10.0, 45.0)
     points = grid_points(x, y, 8, [k.value for k in PAPER_FOLLOWERS])
     rows = sweep.run_chunk(base, points, verify=False)
-    names = ["cam_size", "stress"]
+    names = ["cam_size", "stress", "pressure_angle"]  # the third colours the designs
     png = explore.explore_png(
         rows,
         (x[0], "Base radius r_b [mm]"),
