@@ -138,16 +138,17 @@ class ExplorePanel:
 
     def apply_setup(self, data) -> None:
         """Put a setup (from the browser's storage: untrusted) on the widgets, each entry
-        only if it is one the widget offers; the rest stays as it is."""
+        only if it is one the widget offers; a kept range only with its own field."""
         if not isinstance(data, dict):
             return
         for dd, rng, axis in ((self.x, self.x_range, "x"), (self.y, self.y_range, "y")):
-            if data.get(axis) in PARAMETERS:
-                dd.value = data[axis]  # proposes a range, replaced by the kept one below
-            try:
-                rng.value = _finite_pair(data.get(f"{axis}_range"))
-            except (TypeError, ValueError):
-                pass
+            label = data.get(axis)
+            if not isinstance(label, str) or label not in PARAMETERS:
+                continue
+            dd.value = label  # proposes a range, replaced by the kept one below
+            pair = _kept_pair(data.get(f"{axis}_range"))
+            if pair is not None:
+                rng.value = pair
         steps = data.get("steps")
         if isinstance(steps, int | float) and not isinstance(steps, bool):
             if steps in range(2, MAX_STEPS + 1):  # an integer of the slider's range
@@ -157,7 +158,7 @@ class ExplorePanel:
         figs = data.get("figures")
         if isinstance(figs, list) and len(figs) == 3:
             for dd, label in zip((self.fig_a, self.fig_b, self.fig_c), figs, strict=True):
-                if label in dd.options:
+                if isinstance(label, str) and label in dd.options:
                     dd.value = label
 
     def keep_setup_with(self, write: Callable[[dict], None] | None) -> None:
@@ -362,6 +363,18 @@ def _finite_pair(value) -> tuple[float, float]:
     if not (np.isfinite(lo) and np.isfinite(hi)):
         raise ValueError("not finite")
     return lo, hi
+
+
+def _kept_pair(value) -> tuple[float, float] | None:
+    """A stored range: a list of two finite numbers, else None."""
+    if not isinstance(value, list) or len(value) != 2:
+        return None
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in value):
+        return None
+    try:
+        return _finite_pair(value)
+    except (OverflowError, ValueError):  # an integer too large for a float
+        return None
 
 
 def _decode(png: bytes) -> np.ndarray:

@@ -417,7 +417,10 @@ class Session:
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
         if self.closed.is_set():
             return
-        self.ui.explore.apply_setup(setup)
+        try:  # a setup the browser kept must never cost the design or the saved list
+            self.ui.explore.apply_setup(setup)
+        except Exception:
+            logging.getLogger(__name__).exception("a kept Explore setup failed; ignored")
         self.ui.explore.keep_setup_with(
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
         )

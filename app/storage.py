@@ -20,7 +20,7 @@ from camcore.model import MAX_DESIGN_BYTES, Design, DesignError, design_from_jso
 WORKING_KEY = "camdesigner.working"
 SAVED_KEY = "camdesigner.saved"
 EXPLORE_KEY = "camdesigner.explore"  # the Explore tab's setup (not its results)
-MAX_SETUP_BYTES = 4096
+MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
 READ_TIMEOUT_S = 5.0  # a tab that never answers (e.g. a test client) costs this, once
@@ -66,7 +66,7 @@ def parse_setup(text: str | None) -> dict | None:
         return None
     try:
         raw = json.loads(text)
-    except ValueError:
+    except (ValueError, RecursionError):  # (deep nesting fits in 4,096 characters)
         return None
     return raw if isinstance(raw, dict) else None
 

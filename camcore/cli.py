@@ -10,7 +10,7 @@ Exit status (the same for every command, so scripts can rely on it):
 
 ``sweep`` exits 0 when its table is written (each row has its own verdict), 130
 when interrupted (the same command resumes) and 2 on bad input. ``pareto`` exits 0
-when the table holds a valid design, 1 when it holds none, 2 on bad input.
+when it finds a front, 1 when no valid design has the figures, 2 on bad input.
 """
 
 from __future__ import annotations
@@ -252,8 +252,13 @@ def _pareto(args) -> int:
             + ", ".join(f"{code} {n}" for code, n in most)
             + (f" and {more} more" if more else "")
         )
+    if f.lacking:
+        why = " (rows of the batched core have no wear)" if "wear" in names else ""
+        print(
+            f"{_count(f.lacking, 'valid row')} without a value for {', '.join(names)} left out{why}"
+        )
     if not f.front:
-        print("no valid design: no Pareto front")
+        print("no valid design with these figures: no Pareto front")
         return EXIT_BREAKS_LIMITS
     if not f.profile_checked:
         print(
@@ -314,7 +319,8 @@ def _parser() -> argparse.ArgumentParser:
         prog="camcore",
         description="Disk cam design after Chuang, Hsu & Chang (translating followers).",
         epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input "
-        "(sweep: 0 table written, 130 interrupted, 2 bad input).",
+        "(sweep: 0 table written, 130 interrupted, 2 bad input; pareto: 0 a front found, "
+        "1 no valid design with the figures, 2 bad input).",
     )
     p.add_argument("--version", action="version", version=f"%(prog)s {package_version()}")
     sub = p.add_subparsers(dest="command", required=True)

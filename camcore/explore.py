@@ -119,15 +119,17 @@ class TableFront:
     refused: int  # not designs at all (the row's error)
     first_limits: dict[str, int]  # first broken limit -> rows, the commonest first
     profile_checked: bool  # False if any valid row comes from the batched core
-    front: list[dict]  # per distinct front design: {"grid": {...}, "figures": {...}}
+    front: list[dict]  # per distinct front design: {"row", "grid": {...}, "figures": {...}}
     repeats: int  # front rows that repeat a listed design (a field its follower ignores)
+    lacking: int  # valid rows without a value for a figure (not compared)
 
 
 def table_front(path, names: list[str]) -> TableFront:
     """The Pareto front of FIGURES[names] over the valid rows of the sweep table at
     ``path`` (camcore.sweep's Parquet), read column-wise so a million-row table takes
     seconds; the front is ordered by the first figure, each distinct design once.
-    FileError if the file is not a sweep table or lacks a figure's columns."""
+    FileError if the file is not a sweep table or its valid rows lack a figure's
+    column."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -137,36 +139,47 @@ def table_front(path, names: list[str]) -> TableFront:
         have = set(pq.read_schema(path).names)
     except (OSError, pa.ArrowException) as exc:
         raise FileError(f"{path}: not a readable Parquet table ({exc})") from None
-    if not {"valid", "error", "violations"} <= have:
-        raise FileError(f"{path}: not a camcore sweep table (no valid/error/violations)")
-    figure_cols = list(dict.fromkeys(c for n in names for c in FIGURES[n].columns))
-    for n in names:
-        for c in FIGURES[n].columns:
-            if c not in have:
-                raise FileError(
-                    f"{path} has no column {c} for the figure {n}"
-                    + (" (a --fast sweep leaves it out)" if n in PROFILE_FIGURES else "")
-                )
-    grid = sorted(c for c in have if c.startswith("grid."))
-    extra = [c for c in ("profile_checked", "follower") if c in have]
+    if not {"valid", "error"} <= have or not any(c.startswith("grid.") for c in have):
+        raise FileError(f"{path}: not a camcore sweep table (no valid, error and grid columns)")
     try:
-        t = pq.read_table(
-            path, columns=[*grid, "valid", "error", "violations", *figure_cols, *extra]
-        )
-        cols = {
-            c: t.column(c).cast(pa.float64()).to_numpy(zero_copy_only=False) for c in figure_cols
-        }
-    except (OSError, pa.ArrowException) as exc:
-        raise FileError(f"{path}: cannot read its columns ({exc})") from None
+        return _table_front(path, names, have)
+    except FileError:
+        raise
+    except (OSError, pa.ArrowException, ValueError, TypeError, AttributeError) as exc:
+        # columns of the right names holding something else (a hand-made table)
+        why = f"{type(exc).__name__}: {str(exc)[:200]}"
+        raise FileError(f"{path}: not a camcore sweep table ({why})") from None
+
+
+def _table_front(path, names: list[str], have: set[str]) -> TableFront:
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .files import FileError
+
+    wanted = list(dict.fromkeys(c for n in names for c in FIGURES[n].columns))
+    present = [c for c in wanted if c in have]
+    grid = sorted(c for c in have if c.startswith("grid."))
+    extra = [c for c in ("profile_checked", "follower", "violations") if c in have]
+    t = pq.read_table(path, columns=[*grid, "valid", "error", *extra, *present])
     refused = t.column("error").is_valid().to_numpy(zero_copy_only=False)
-    valid = t.column("valid").fill_null(False).to_numpy(zero_copy_only=False).astype(bool)
-    valid &= ~refused
+    valid = _bools(t.column("valid"), False) & ~refused
+    gone = [(n, c) for n in names for c in FIGURES[n].columns if c not in have]
+    if gone and valid.any():  # (a table of no design at all has no figure columns)
+        n, c = gone[0]
+        why = " (a --fast sweep leaves it out)" if n in PROFILE_FIGURES else ""
+        raise FileError(f"{path} has no column {c} for the figure {n}{why}")
+    nan = np.full(t.num_rows, np.nan)
+    cols = {
+        c: t.column(c).cast(pa.float64()).to_numpy(zero_copy_only=False) if c in have else nan
+        for c in wanted
+    }
     values = np.column_stack([FIGURES[n].of_table(cols) for n in names])
     values[~valid] = np.nan
     idx = np.flatnonzero(pareto_mask(values))
     idx = idx[np.lexsort(values[idx].T[::-1])]  # by the first figure, then the next
     # the follower kind tells which grid fields a row's design ignores (distinct)
-    rows = t.select([*grid, *figure_cols, *extra]).take(idx).to_pylist()
+    rows = t.select([*grid, *present, *extra]).take(idx).to_pylist()
     keep = distinct(rows)
     front = [
         {
@@ -181,18 +194,32 @@ def table_front(path, names: list[str]) -> TableFront:
         for r, i, k in zip(rows, idx, keep, strict=True)
         if k
     ]
-    checked = True
-    if "profile_checked" in have:
-        pc = t.column("profile_checked").fill_null(True).to_numpy(zero_copy_only=False)
-        checked = bool(pc.astype(bool)[valid].all())
+    broken = ~valid & ~refused
+    checked = "profile_checked" not in have or bool(
+        _bools(t.column("profile_checked"), True)[valid].all()
+    )
     return TableFront(
         rows=t.num_rows,
         valid=int(valid.sum()),
         refused=int(refused.sum()),
-        first_limits=_first_limits(t.column("violations"), ~valid & ~refused),
+        first_limits=(
+            _first_limits(t.column("violations"), broken)
+            if "violations" in have
+            else ({"invalid": int(broken.sum())} if broken.any() else {})
+        ),
         profile_checked=checked,
         front=front,
         repeats=len(rows) - len(front),
+        lacking=int((valid & ~np.isfinite(values).all(axis=1)).sum()),
+    )
+
+
+def _bools(column, null: bool) -> np.ndarray:
+    """A boolean column as a numpy array, ``null`` where it holds none."""
+    import pyarrow as pa
+
+    return np.asarray(
+        column.cast(pa.bool_()).fill_null(null).to_numpy(zero_copy_only=False), dtype=bool
     )
 
 
@@ -203,12 +230,13 @@ def _first_limits(violations, broken: np.ndarray) -> dict[str, int]:
 
     import pyarrow as pa
 
-    counts = violations.filter(pa.array(broken)).fill_null("[]").value_counts()
+    text = violations.cast(pa.string()).filter(pa.array(broken)).fill_null("[]")
+    counts = text.value_counts()
     out: dict[str, int] = {}
     for text, n in zip(
         counts.field("values").to_pylist(), counts.field("counts").to_pylist(), strict=True
     ):
-        codes = [v.get("code") for v in json.loads(text)] or ["invalid"]
+        codes = [v.get("code") or "invalid" for v in json.loads(text)] or ["invalid"]
         out[str(codes[0])] = out.get(str(codes[0]), 0) + int(n)
     return dict(sorted(out.items(), key=lambda kv: (-kv[1], kv[0])))
 

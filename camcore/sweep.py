@@ -610,12 +610,14 @@ def load_spec(path: str | Path) -> Spec:
 def pareto_mask(values: np.ndarray) -> np.ndarray:
     """Which rows of ``values`` (n designs x k figures, all to be minimized) are on the
     Pareto front: no other row is at least as good in every figure and better in one.
-    Rows with a NaN are never on it; equal rows are both on it or both off.
+    Rows with a NaN or an infinite figure are never on it (a sweep's figures are
+    finite where a design has them); equal rows are both on it or both off.
 
     Equal rows are merged first; sorted lexicographically, a point can then only be
     dominated by one before it. Two figures: by the running minimum of the second
     (O(n log n)). More: blocks of points are tested against the front found so far and
-    against each other (O(n |front| k)), so a million-row sweep takes seconds."""
+    against each other (O(n |front| k)), so a million-row sweep with a front of a few
+    thousand takes about a second; a front of n points would take O(n^2)."""
     v = np.asarray(values, dtype=float)
     ok = np.isfinite(v).all(axis=1)
     front = np.zeros(len(v), dtype=bool)

@@ -834,9 +834,52 @@ def test_explore_setup_round_trips_and_refuses_junk(tab):
     for bad in ("[1, 2]", "nonsense", "{" + " " * storage.MAX_SETUP_BYTES + "}", None):
         assert storage.parse_setup(bad) is None
     e.apply_setup([1, 2])  # not a dict: nothing changes
+    before = e.setup()
+    for hostile in (
+        {"x": [], "y": {}},  # unhashable where a label belongs
+        {"x": before["x"], "x_range": [10**400, 5]},  # no float holds it
+        {"x": before["x"], "x_range": "59"},  # a string is no pair of numbers
+        {"x": "a field renamed since", "x_range": [1.0, 2.0]},  # a range for no field
+        {"figures": [[], {}, None]},
+    ):
+        e.apply_setup(hostile)
+        assert e.setup() == before, hostile
+    assert storage.parse_setup("[" * 2000 + "]" * 2000) is None  # nesting, under 4 kB
     e.steps.value = 4.0  # a client's float: kept as the integer it is
     e.apply_setup({"steps": e.setup()["steps"]})
     assert e.steps.value == 4
+
+
+def test_a_bad_kept_setup_costs_nothing_else(app, monkeypatch):
+    """A setup the browser kept that the panel cannot take (a tampered storage, a
+    setup of a later version) is ignored: the kept design is still restored and the
+    tab goes on saving its work (the restore thread had died and saved nothing)."""
+    from app import storage
+    from app.explore import ExplorePanel
+
+    kept = load_preset("paper_example").model_copy(update={"name": "my kept cam"})
+    stored = {storage.WORKING_KEY: design_to_json(kept), storage.EXPLORE_KEY: '{"x": []}'}
+    writes: list[str] = []
+    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
+    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, key, v: writes.append(key))
+
+    def broken(self, data):
+        raise RuntimeError("a setup this version cannot apply")
+
+    for apply in (ExplorePanel.apply_setup, broken):
+        monkeypatch.setattr(ExplorePanel, "apply_setup", apply)
+        before = set(app.sessions)
+        t = FakeTab(app.port)
+        try:
+            assert wait_for(lambda b=before: set(app.sessions) - b)
+            (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+            s._restorer.join(10)
+            assert s.design.name == "my kept cam" and s._persist
+            s.ui.explore.steps.value = 4  # and the setup is kept from now on
+            assert storage.EXPLORE_KEY in writes
+        finally:
+            t.close()
+        writes.clear()
 
 
 def test_a_resized_view_resizes_the_wide_panel_and_reframes(app, monkeypatch):

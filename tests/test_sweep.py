@@ -707,13 +707,16 @@ def test_cli_pareto_and_its_exit_codes(pareto_table, tmp_path):
         assert bad.returncode == 2 and message in bad.stderr, (args, bad.stderr)
         assert "Traceback" not in bad.stderr
     spec = tmp_path / "spec.json"
-    spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": [12, 14]}}))
-    fast = tmp_path / "fast.parquet"
-    sweep.run(sweep.load_spec(spec), fast, verify=False, fast=True, progress=None)
-    bad = run(fast, "--figures", "cam_size,wear")
-    assert bad.returncode == 2 and "a --fast sweep leaves it out" in bad.stderr
-    none = run(fast)
-    assert none.returncode == 1 and "no valid design" in none.stdout
+    for radii, valid in (([12, 14, 80], True), ([12, 14], False)):
+        spec.write_text(json.dumps({"grid": {"cam.base_radius_mm": radii}}))
+        fast = tmp_path / f"fast{len(radii)}.parquet"
+        sweep.run(sweep.load_spec(spec), fast, verify=False, fast=True, progress=None)
+        wear = run(fast, "--figures", "cam_size,wear")
+        if valid:  # valid rows and no wear column: the figure is refused
+            assert wear.returncode == 2 and "a --fast sweep leaves it out" in wear.stderr
+        else:  # no valid row: nothing to rank, whatever the figures
+            assert wear.returncode == 1 and "no valid design" in wear.stdout
+            assert "0 valid, 2 break a limit" in wear.stdout
 
 
 def test_a_front_design_comes_out_as_a_design_file(pareto_table, tmp_path):
@@ -759,3 +762,62 @@ def test_a_front_design_comes_out_as_a_design_file(pareto_table, tmp_path):
     pq.write_table(pq.read_table(pareto_table).replace_schema_metadata(None), bare)
     with pytest.raises(FileError, match="does not keep its sweep spec"):
         sweep.design_of_row(bare, 0)
+
+
+def test_pareto_of_odd_tables(pareto_table, tmp_path):
+    """A sweep whose every point is no design (its table has no figure columns) has no
+    front (exit 1, not a refusal); valid rows without a chosen figure are counted and
+    said to be left out; a table with the right column names holding something else
+    is refused in one line, never a traceback."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from camcore.explore import table_front
+
+    def cli(path, *args):
+        return subprocess.run(
+            [sys.executable, "-m", "camcore.cli", "pareto", str(path), *args],
+            capture_output=True,
+            text=True,
+        )
+
+    spec = tmp_path / "spec.json"
+    spec.write_text(json.dumps({"grid": {"cam.bore_diameter_mm": [200, 300]}}))
+    none = tmp_path / "none.parquet"
+    sweep.run(sweep.load_spec(spec), none, verify=False, progress=None)
+    run = cli(none)
+    assert run.returncode == 1 and "2 rows: 0 valid, 0 break a limit, 2 not designs" in run.stdout
+
+    t = pq.read_table(pareto_table)
+    col = "contact_stress_max_MPa.cycle"
+    valid = t.column("valid").to_numpy(zero_copy_only=False)
+    lacking = np.flatnonzero(valid)[:3]
+    stress = t.column(col).to_pylist()
+    for i in lacking:
+        stress[i] = None
+    holes = tmp_path / "holes.parquet"
+    pq.write_table(t.set_column(t.schema.get_field_index(col), col, pa.array(stress)), holes)
+    f = table_front(holes, ["cam_size", "stress"])
+    assert f.lacking == 3 and f.valid == int(valid.sum())
+    assert all(d["row"] not in lacking for d in f.front)
+    run = cli(holes, "--figures", "cam_size,stress")
+    assert "3 valid rows without a value for cam_size, stress left out" in run.stdout
+
+    def swapped(name, values):
+        out = tmp_path / f"{name}.parquet"
+        i = t.schema.get_field_index(name)
+        pq.write_table(t.set_column(i, name, pa.array(values)), out)
+        return out
+
+    n = t.num_rows
+    for path in (
+        swapped("violations", ["not json"] * n),
+        swapped("violations", ['["x"]'] * n),
+        swapped("violations", [[1, 2]] * n),
+        swapped("dwell_radius_mm", ["x"] * n),
+        pq.write_table(t.select(["valid", "error"]), tmp_path / "nogrid.parquet")
+        or tmp_path / "nogrid.parquet",
+    ):
+        bad = cli(path)
+        assert bad.returncode == 2 and "not a camcore sweep table" in bad.stderr, bad.stderr
+        assert "Traceback" not in bad.stderr
