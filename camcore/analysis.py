@@ -187,24 +187,47 @@ def stations(design: Design, geo: profile.Geometry) -> np.ndarray:
 
 
 def contact_changes(geo: profile.Geometry, segs: tuple[motion.Segment, ...]) -> np.ndarray:
-    """Segment boundaries and the angles where a face starts or stops resting on a
-    dwell arc (the ends of its window, see profile.contact_windows), sorted in
-    [0, 2 pi); an angle where nothing changes (a face hands over to itself) is kept
-    only if it is a segment boundary."""
+    """Segment boundaries and the angles where a face starts or stops touching (the
+    ends of its windows, see profile.contact_windows), sorted in [0, 2 pi). A face
+    that passes from a curve onto an arc, or from one arc of a run of dwells onto the
+    next (profile.dwell_runs), keeps touching: no station there unless a segment
+    boundary is."""
     two_pi = 2 * np.pi
     cand = {g.start % two_pi for g in segs}
     if len(geo.faces) == 2:
-        for j, g in enumerate(segs):
-            if g.is_motion:
-                continue
-            start, end = profile.arc_span(geo, segs, j)
-            psi_j = profile.dwell_psi(geo, g.S0)
-            for side in profile.face_sides(geo):
-                lo, hi = max(g.start, start - side * psi_j), min(g.end, end - side * psi_j)
+        runs = profile.dwell_runs(segs)
+        for i, side in enumerate(profile.face_sides(geo)):
+            driven = motion.RISE if i == 0 else motion.FALL  # S1 drives rises, S2 falls
+            spans = [(g.start, g.end) for g in segs if g.code == driven]
+            for j, (t0, t1) in runs.items():
+                start, end = profile.arc_span(geo, segs, j)
+                psi_j = profile.dwell_psi(geo, segs[j].S0)
+                lo, hi = max(t0, start - side * psi_j), min(t1, end - side * psi_j)
                 if lo <= hi:
-                    cand |= {lo % two_pi, hi % two_pi}
+                    spans.append((lo, hi))
+            for lo, hi in _merged_on_circle(spans):
+                cand |= {lo % two_pi, hi % two_pi}
     out = sorted(cand)
     return np.array([t for i, t in enumerate(out) if i == 0 or t - out[i - 1] > 1e-12])
+
+
+def _merged_on_circle(spans: list[tuple[float, float]], tol: float = 1e-12):
+    """Closed intervals [lo, hi] [rad] on the circle, touching or overlapping ones
+    merged (also across 2 pi); none if together they cover it."""
+    two_pi = 2 * np.pi
+    spans = sorted((lo % two_pi, lo % two_pi + hi - lo) for lo, hi in spans)
+    out: list[list[float]] = []
+    for lo, hi in spans:
+        if out and lo <= out[-1][1] + tol:
+            out[-1][1] = max(out[-1][1], hi)
+        else:
+            out.append([lo, hi])
+    while len(out) > 1 and out[-1][1] >= out[0][0] + two_pi - tol:  # across 2 pi
+        last = out.pop()
+        out[0] = [last[0], max(last[1], out[0][1] + two_pi)]
+    if out and out[0][1] - out[0][0] >= two_pi - tol:
+        return []
+    return [tuple(x) for x in out]
 
 
 def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None) -> Analysis:

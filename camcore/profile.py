@@ -298,6 +298,34 @@ def contact_windows(
     return windows_on_arcs(prog, segs, len(geo.faces), arc)
 
 
+def dwell_runs(segs: tuple[Segment, ...]) -> dict[int, tuple[float, float]]:
+    """For each dwell segment j, the cam angles [t0, t1] [rad] of the run of dwells
+    around it at its displacement (consecutive, also across theta = 0), in j's own
+    frame: t0 <= start, t1 >= end (t0 < 0 or t1 > 2 pi where the run crosses 0).
+
+    The follower rests at that S throughout a run, so a face may touch arc j while the
+    cam angle lies in a neighbouring dwell of the run: a low dwell split at theta = 0
+    (a program that starts and ends with it), or two dwells in a row."""
+    n, out = len(segs), {}
+    for j, g in enumerate(segs):
+        if g.is_motion:
+            continue
+        t0, t1 = g.start, g.end
+        for step in (-1, 1):
+            k = j
+            for _ in range(n - 1):
+                nxt = segs[(k + step) % n]
+                if nxt.is_motion or nxt.S0 != g.S0:
+                    break
+                k += step
+                if step < 0:
+                    t0 -= nxt.length
+                else:
+                    t1 += nxt.length
+        out[j] = (t0, t1)
+    return out
+
+
 def windows_on_arcs(prog: Program, segs: tuple[Segment, ...], n_faces: int, arc):
     """contact_windows given each dwell arc: ``arc(j)`` -> (start, end, psi) of segment
     j's arc, scalars or one value per angle (camcore.batch: many designs at once)."""
@@ -307,17 +335,18 @@ def windows_on_arcs(prog: Program, segs: tuple[Segment, ...], n_faces: int, arc)
         return np.ones((1, N), dtype=bool), part
     driver = np.where(prog.segment == RISE, 0, np.where(prog.segment == FALL, 1, -1))
     windows = np.stack([driver == 0, driver == 1])
-    tol = 1e-12
-    for j, g in enumerate(segs):
-        if g.is_motion:
-            continue
+    tol, two_pi = 1e-12, 2 * math.pi
+    for j, (t0, t1) in dwell_runs(segs).items():
         start, end, psi_j = arc(j)
-        # the closed interval [g.start, g.end], also reached through theta = 0 (2 pi)
-        th = np.where(prog.theta < g.start - tol, prog.theta + 2 * math.pi, prog.theta)
-        inside = (th >= g.start - tol) & (th <= g.end + tol)
+        # the cam angle in the run's frame, [t0, t0 + 2 pi): inside while <= t1
+        th = t0 + np.mod(prog.theta - t0 + tol, two_pi) - tol
+        inside = th <= t1 + tol
         for i, side in enumerate((1.0, -1.0)):  # face_sides of a double follower
-            c = th + side * psi_j
-            on = inside & (c >= start - tol) & (c <= end + tol)
+            c = th + side * psi_j  # the contact's direction, on arc j up to a turn
+            on_arc = np.zeros(N, dtype=bool)
+            for turn in (-two_pi, 0.0, two_pi):
+                on_arc |= (c + turn >= start - tol) & (c + turn <= end + tol)
+            on = inside & on_arc
             windows[i] |= on
             part[i] = np.where(on & (driver != i), j, part[i])
     return windows, part
@@ -354,19 +383,30 @@ def assemble(
     body_points: np.ndarray,
     windows: np.ndarray,
     parts: np.ndarray,
+    geo: Geometry,
 ) -> Polyline:
     """The profile as the union of every contact point over the cycle, in traversal order.
 
     ``parts`` holds segment indices (see ``contact_windows``). Order: segment by
     segment as the program runs; within a rise or fall by cam angle, within a dwell arc
-    by polar angle (measured from A0, the contact at theta = 0, so the last arc runs up
-    to it). Every analysed cam angle thus has its contact point(s) as exact vertices.
+    by polar angle around the arc (``arc_span``: a contact at direction theta + s psi
+    lies at polar angle theta + s psi + pi/2 in the cam frame), measured from the point
+    opposite the arc's middle. Each arc's own position matters where it reaches across
+    theta = 0: a program that begins with a dwell, or a double follower's low dwell
+    whose arc starts at -psi. Every analysed cam angle thus has its contact point(s)
+    as exact vertices.
     """
     P = body_points[windows]
     index = parts[windows]
     theta = np.broadcast_to(prog.theta, windows.shape)[windows]
-    a0 = math.atan2(body_points[0, 0, 1], body_points[0, 0, 0])  # A0, theta = 0
-    polar = np.mod(np.arctan2(P[:, 1], P[:, 0]) - a0, 2 * math.pi)
+    cut = np.zeros(len(segs))  # polar angle [rad] opposite each dwell arc's middle
+    for j, g in enumerate(segs):
+        if not g.is_motion:
+            cut[j] = 0.5 * sum(arc_span(geo, segs, j)) + 0.5 * math.pi + math.pi
+    # (measured from the opposite point, not the arc's start: an offset single follower
+    # touches a few degrees beside theta + pi/2, and a rounding error must not carry a
+    # point at the start to the end)
+    polar = np.mod(np.arctan2(P[:, 1], P[:, 0]) - cut[index], 2 * math.pi)
     motion = np.array([g.is_motion for g in segs])[index]
     order = np.lexsort((np.where(motion, theta, polar), index))
     P, index, theta, motion = P[order], index[order], theta[order], motion[order]

@@ -180,7 +180,7 @@ def sample_profile(a, geo: profile.Geometry, segs, local, cuts: np.ndarray, tol:
     for _ in range(PASSES):
         th = _angles(theta, g, cuts, motion, boost)
         loc = local(th)
-        poly = profile.assemble(loc.prog, segs, loc.point_body, loc.in_contact, loc.part)
+        poly = profile.assemble(loc.prog, segs, loc.point_body, loc.in_contact, loc.part, geo)
         poly = fill_arcs(poly, tol)
         err = chord_errors(poly, local)
         worst = float(err.max()) if err.size else 0.0

@@ -62,7 +62,7 @@ def test_roller_dwell_radius_is_pitch_minus_roller():
 
 def grid_polyline(a):
     """The profile through the contact points of the analysis grid itself."""
-    return profile.assemble(a.prog, a.segments, a.point_body, a.in_contact, a.part)
+    return profile.assemble(a.prog, a.segments, a.point_body, a.in_contact, a.part, a.geo)
 
 
 @pytest.mark.parametrize("kind", KINDS)
