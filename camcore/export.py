@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .model import Design, design_to_json, omega_rad_s
-from .motion import SEGMENT_NAMES, per_second
+from .motion import RISE, SEGMENT_NAMES, per_second
 from .train import on_grid
 from .units import to_deg, to_mm, to_mpa, to_um_per_mcycle
 from .wear import depth_per_pass, sliding_speed
@@ -205,7 +205,21 @@ def stl_bytes(a) -> bytes:
     return extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
 
 
-DATUM_TEXT = "THETA=0: follower here as the rise starts; cam turns CW"
+def datum_note(a) -> str:
+    """The DXF's note on the theta = 0 ray: what the follower does when the cam stands
+    there (the program's first segment, and where the first rise starts if it is not
+    that), and where the follower's axis is if it is offset."""
+    segs = a.segments
+    first = segs[0]
+    if first.is_motion:
+        what = f"as the {'rise' if first.code == RISE else 'fall'} starts"
+    else:
+        rise = next((g for g in segs if g.code == RISE), None)
+        what = f"in a dwell at S={to_mm(first.S0) + 0.0:g} mm" + (  # (no -0)
+            f", the rise starts at THETA={to_deg(rise.start):g} deg" if rise else ""
+        )
+    axis = "" if a.geo.stem_x == 0 else f"; follower axis at X={to_mm(a.geo.stem_x):g} mm"
+    return f"THETA=0: follower on this ray {what}{axis}; cam turns CW"
 
 
 def dxf_bytes(a) -> bytes:
@@ -215,8 +229,8 @@ def dxf_bytes(a) -> bytes:
     circle, or with a keyway its outline of three lines and a true arc, which CAM
     software recognizes as the bore), and two reference layers that are not
     features and are set not to plot: CENTERLINES (a centre cross at the axis, CENTER
-    linetype) and DATUM (the angular datum: a radial line on the theta = 0 ray, where
-    the follower sits when the rise begins, with a note; the cam turns clockwise).
+    linetype) and DATUM (the angular datum: a radial line on the theta = 0 ray, with a
+    note saying what the follower does there, ``datum_note``; the cam turns clockwise).
     """
     import ezdxf
 
@@ -236,7 +250,7 @@ def dxf_bytes(a) -> bytes:
     msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
     top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
     msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
-    msp.add_text(DATUM_TEXT, height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
+    msp.add_text(datum_note(a), height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
         (0.02 * r_min, 0.35 * r_min)
     )
     hole = bore_outline(cam)

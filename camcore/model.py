@@ -434,7 +434,7 @@ class Cam(_Part):
         ge=0,
         le=5000,
         description="width b of a keyway in the bore [mm]; 0 = none. It is centred on "
-        "the theta = 0 ray (where the follower sits when the rise starts): the phase datum",
+        "the theta = 0 ray (the DXF's datum: where the follower sits at theta = 0)",
     )
     keyway_depth_mm: float = Field(
         0.0,

@@ -147,6 +147,53 @@ def test_keyway_in_dxf_and_datum_layers():
 
 
 @pytest.mark.parametrize(
+    "segments, offset, says",
+    [
+        (None, 0.0, "as the rise starts"),
+        ("dwell first", 0.0, "in a dwell at S=0 mm, the rise starts at THETA=60 deg"),
+        ("fall first", 0.0, "as the fall starts"),
+        (None, 6.0, "as the rise starts; follower axis at X=-6 mm"),
+    ],
+)
+def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset, says):
+    """A maker times the cam by the DXF's note: it had said 'as the rise starts' for a
+    program that starts with a dwell (the rise 60 deg later) or a fall. The note is
+    checked against the analysis: S at theta = 0 and where S first grows."""
+    rise = {"kind": "rise", "angle_deg": 100, "lift_mm": 15, "law": "cycloidal"}
+    fall = {"kind": "fall", "angle_deg": 130, "lift_mm": 15, "law": "cycloidal"}
+    programs = {
+        "dwell first": [
+            {"kind": "dwell", "angle_deg": 60},
+            rise,
+            {"kind": "dwell", "angle_deg": 70},
+            fall,
+        ],
+        "fall first": [
+            fall,
+            {"kind": "dwell", "angle_deg": 60},
+            rise,
+            {"kind": "dwell", "angle_deg": 70},
+        ],
+    }
+    data = load_preset("paper_example").with_kind("single_roller").model_dump(mode="json")
+    data["follower"]["single_offset_mm"] = offset
+    if segments:
+        data["motion"] = {"segments": programs[segments]}
+    a = analyze(Design.model_validate(data), verify=False)
+    doc = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
+    (text,) = [e.dxf.text for e in doc.modelspace() if e.dxftype() == "TEXT"]
+    assert text == f"THETA=0: follower on this ray {says}; cam turns CW"
+    grows = a.theta[np.argmax(a.prog.V > 1e-9)]  # where the rise starts
+    if "dwell" in says:
+        assert a.prog.S[0] == 0.0 and math.degrees(grows) == pytest.approx(60.0, abs=0.2)
+    elif "rise" in says:
+        assert a.prog.S[0] == 0.0 and a.prog.V[1] > 0
+    else:
+        assert a.prog.S[0] == pytest.approx(0.015) and a.prog.V[1] < 0
+    assert a.geo.stem_x == pytest.approx(-offset * 1e-3)
+
+
+@pytest.mark.parametrize(
     "change, message",
     [
         ({"keyway_width_mm": 8.0}, "give both"),
