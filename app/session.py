@@ -390,9 +390,11 @@ class Session:
                     f"({esc(type(exc).__name__)}, in the server's log). Please report it; "
                     "the other files may still work."
                 )
+            note = export.warning(a)
             say(
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
                 f"{d.follower.kind.label}."
+                + ("" if note is None else f"<br>⚠ **Before you make it:** {esc(note)}.")
             )
         self.client.send_file_download(name, data, save_immediately=True)
 

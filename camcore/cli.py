@@ -148,31 +148,17 @@ def _outputs(args) -> dict[str, str]:
     return outputs
 
 
-# the limits whose breach leaves a sharp corner in an exported profile (checks.py)
-CORNERED = frozenset({"roller_undercut", "curvature_convex"})
-
-
 def _export(args) -> int:
     from .analysis import analyze
+    from .export import warning
 
     design = _design(args)
     outputs = _outputs(args)
     a = analyze(design)
     _write(a, outputs)
-    if a.violations:
-        codes = {v.code for v in a.violations}
-        print(
-            f"note: the design breaks {len(a.violations)} limit(s) ({', '.join(sorted(codes))}); "
-            "run `camcore report` for details",
-            file=sys.stderr,
-        )
-        if codes & CORNERED:
-            print(
-                "note: the profile is undercut or cusped: the part written has a sharp "
-                "corner where the cam cannot follow the motion (it wears fast); do not "
-                "make it as it is",
-                file=sys.stderr,
-            )
+    note = warning(a)
+    if note is not None:
+        print(f"note: {note}. Run `camcore report` for details", file=sys.stderr)
         return EXIT_BREAKS_LIMITS
     return EXIT_VALID
 

@@ -9,7 +9,7 @@ with a clear error rather than exported as a broken part. A profile that breaks 
 limit but is still star-shaped is exported as the envelope of the follower's
 positions: a slight undercut (roller_undercut) or cusp (curvature_convex) is then a
 sharp corner where the cam cannot follow the motion, and the CLI exits 1 and says
-so (the app's status box names the broken limits).
+so (``warning``: also under the app's download buttons and in the G-code header).
 """
 
 from __future__ import annotations
@@ -203,6 +203,27 @@ def stl_bytes(a) -> bytes:
     """Binary STL of the cam solid [mm], built from the float32-welded profile."""
     p = weld_float32(_profile_mm(a))
     return extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
+
+
+# the limits whose breach leaves a sharp corner in an exported profile (checks.py)
+CORNERED = frozenset({"roller_undercut", "curvature_convex"})
+
+
+def warning(a) -> str | None:
+    """What a maker must read before making the part of ``a`` (an Analysis): the limits
+    it breaks, and for an undercut or cusp that the part must not be made as it is;
+    None if it breaks none."""
+    if not a.violations:
+        return None
+    codes = sorted({v.code for v in a.violations})
+    n = len(a.violations)
+    text = f"the design breaks {n} limit{'s' if n > 1 else ''}: {', '.join(codes)}"
+    if CORNERED & set(codes):
+        text += (
+            ". The profile is undercut or cusped: the part has a sharp corner where the "
+            "cam cannot follow the motion, and wears fast. Do not make it as it is"
+        )
+    return text
 
 
 def datum_note(a) -> str:

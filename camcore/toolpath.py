@@ -25,11 +25,12 @@ from __future__ import annotations
 
 import math
 import re
+import textwrap
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .export import ExportError, require_star_shaped
+from .export import ExportError, require_star_shaped, warning
 from .units import MM, to_deg, to_mm
 
 SAFE_Z_MM = 5.0  # rapid height above the blank's top face
@@ -162,6 +163,12 @@ def _check_size(cam, moves_per_pass: int) -> None:
     )
 
 
+def _warning_comments(a) -> list[str]:
+    """export.warning in comments of at most 80 characters (none for a valid design)."""
+    text = warning(a)
+    return [] if text is None else [_comment(x) for x in textwrap.wrap("WARNING: " + text, 78)]
+
+
 def _xy(p) -> str:
     """The X and Y words of a point [mm], to DECIMALS places."""
     return f"X{p[0]:.{DECIMALS}f} Y{p[1]:.{DECIMALS}f}"
@@ -202,6 +209,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"{passes}, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"),
         _comment(bottom),
         _comment("check them, and set the spindle speed: M3 carries no S word"),
+        *_warning_comments(a),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
         f"G0 {_xy(lead)}",

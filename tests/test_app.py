@@ -486,6 +486,32 @@ def test_browser_storage_values_are_untrusted():
         storage.with_saved({}, "   ", d)
 
 
+def test_a_part_that_breaks_a_limit_comes_with_a_warning(tab, downloads):
+    """A maker's review downloaded the G-code of a cusped cam and read only 'Sent': the
+    download now says which limits it breaks and, for a cusp, not to make it as it is
+    (the CLI's note), and the G-code carries it in its header. A valid design's does
+    not."""
+    s = tab
+    s.ui.download_btns["toolpath"].value = True
+    assert "Before you make it" not in s.ui.files_md.content
+    assert b"WARNING" not in downloads[-1][1]
+    data = load_preset("paper_example").with_kind("single_concave").model_dump(mode="json")
+    data["motion"].update(lift_mm=12.0, rise_deg=65.0)
+    data["cam"]["speed_rpm"] = 100.0
+    s.set_design(Design.model_validate(data))
+    assert "curvature_convex" in {v.code for v in s.analysis.violations}
+    for kind, quick in (("toolpath", False), ("stl", True)):
+        if quick:
+            s.ui.quick_stl_btn.value = True
+        else:
+            s.ui.download_btns[kind].value = True
+        shown = s.ui.quick_md.content if quick else s.ui.files_md.content
+        assert "Before you make it" in shown and "curvature\\_convex" in shown  # (escaped)
+        assert "Do not make it as it is" in shown
+    gcode = downloads[-2][1].decode()
+    assert "(WARNING: the design breaks" in gcode and "Do not make it as it is)" in gcode
+
+
 def test_an_export_that_fails_unexpectedly_says_so(tab, downloads, monkeypatch):
     """A defect in an exporter had left the button silent: the tab says what failed."""
     from dataclasses import replace

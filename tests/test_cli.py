@@ -185,3 +185,14 @@ def test_stl_bytes_roundtrip():
     a = analyze(load_preset("paper_example"), verify=False)
     mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
     assert mesh.is_watertight
+
+
+def test_export_of_a_cusped_cam_says_not_to_make_it(tmp_path, capsys):
+    """The files are written (exit 1) with the warning on stderr, and in the G-code."""
+    out = tmp_path / "cam.nc"
+    args = ["export", "--preset", "paper_example", "--follower", "single_concave"]
+    args += ["--set", "motion.lift_mm=12", "--set", "motion.rise_deg=65"]
+    assert main([*args, "--toolpath", str(out)]) == 1
+    err = capsys.readouterr().err
+    assert "curvature_convex" in err and "Do not make it as it is" in err
+    assert "(WARNING: the design breaks" in out.read_text()
