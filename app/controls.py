@@ -116,6 +116,21 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 hint="shaft bore of the exported solid; 0 = solid blank",
             ),
             Spec(
+                "cam.keyway_width_mm",
+                "Keyway width b [mm]",
+                "number",
+                step=0.1,
+                hint="in the bore, on the theta = 0 ray (e.g. 8 in a 30 mm bore, DIN 6885); "
+                "0 = none",
+            ),
+            Spec(
+                "cam.keyway_depth_mm",
+                "Keyway depth t2 [mm]",
+                "number",
+                step=0.1,
+                hint="beyond the bore radius (e.g. 3.3 for an 8 mm key)",
+            ),
+            Spec(
                 "cam.cutter_diameter_mm",
                 "Cutter diameter [mm]",
                 "number",

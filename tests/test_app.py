@@ -512,6 +512,28 @@ def test_a_part_that_breaks_a_limit_comes_with_a_warning(tab, downloads):
     assert "(WARNING: the design breaks" in gcode and "Do not make it as it is)" in gcode
 
 
+def test_a_keyway_is_edited_and_removed_in_the_tab(tab, downloads):
+    """A maker opened a keyed design and could neither remove the keyway nor resize
+    it: with the bore set to 0 the tab stayed invalid ('a keyway needs a bore') with
+    no control to clear it. The keyway's width and depth are controls."""
+    s = tab
+    c = s.ui.controls
+    c["cam.bore_diameter_mm"].value = 30.0
+    c["cam.keyway_width_mm"].value = 8.0
+    c["cam.keyway_depth_mm"].value = 3.3
+    assert s.error is None and s.design.cam.keyway_width_mm == 8.0
+    s.ui.download_btns["stl"].value = True
+    mesh = trimesh.load(io.BytesIO(downloads[-1][1]), file_type="stl")
+    inner = mesh.vertices[np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1]) < 20]
+    assert inner[:, 1].max() == pytest.approx(15.0 + 3.3)  # the slot on the +Y ray
+    c["cam.bore_diameter_mm"].value = 0.0
+    assert s.error is not None and "keyway" in s.error
+    c["cam.keyway_width_mm"].value = 0.0  # the way out: no keyway ...
+    assert "give both, or neither" in s.error  # ... the message says how
+    c["cam.keyway_depth_mm"].value = 0.0
+    assert s.error is None and s.design.cam.bore_diameter_mm == 0.0
+
+
 def test_an_export_that_fails_unexpectedly_says_so(tab, downloads, monkeypatch):
     """A defect in an exporter had left the button silent: the tab says what failed."""
     from dataclasses import replace
