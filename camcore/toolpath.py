@@ -163,6 +163,18 @@ def _check_size(cam, moves_per_pass: int) -> None:
     )
 
 
+def _bore_comments(cam) -> list[str]:
+    """What this program leaves to other operations: the design's bore and keyway."""
+    if cam.bore_diameter_mm <= 0:
+        return []
+    key = (
+        f" and its {cam.keyway_width_mm:g} x {cam.keyway_depth_mm:g} mm keyway"
+        if cam.keyway_width_mm > 0
+        else ""
+    )
+    return [_comment(f"not cut here: the {cam.bore_diameter_mm:g} mm bore{key}")]
+
+
 def _warning_comments(a) -> list[str]:
     """export.warning in comments of at most 80 characters (none for a valid design)."""
     text = warning(a)
@@ -181,16 +193,22 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     cam.breakthrough_mm below it, in cam.passes equal passes (cam.pass_depth_mm at
     most each). Cam frame: the axis at X = Y = 0, theta = 0 on +Y (the DXF datum).
     Climb milling with a clockwise spindle: the path runs clockwise around the cam.
-    Each pass: a plunge at a point 1 D outside the path along its outward normal (off
-    the part), a straight feed onto the path, the contour, and back the same way."""
+    Each pass: a plunge at a point D beyond the path's outermost point on its ray (off
+    the cam and off a blank up to the cam's largest radius + D), a straight feed in
+    onto the path, the contour, and back out the same way."""
     cam = a.design.cam
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
     _check_size(cam, path.shape[0] + 2)
     stated = _round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
-    n = vertex_normals(to_mm(a.profile.points))[::-1]
-    start, lead = path[0], path[0] + to_mm(D) * n[0]
+    # start at the path's outermost point and plunge D further out along its ray: the
+    # cam and the blank (up to the cam's largest radius + D) lie inside that radius
+    radius = np.hypot(path[:, 0], path[:, 1])
+    path = np.roll(path, -int(np.argmax(radius)), axis=0)
+    start = path[0]
+    lead = start * (1.0 + to_mm(D) / float(radius.max()))
+    clear = float(np.hypot(*to_mm(a.profile.points).T).max()) + to_mm(D)
     depths = cam.cut_depth_mm * np.arange(1, cam.passes + 1) / cam.passes
     bottom = (
         f"Z-{cam.cut_depth_mm:g} = the cam width and {cam.breakthrough_mm:g} mm breakthrough"
@@ -208,6 +226,8 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
         _comment(f"{passes}, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"),
         _comment(bottom),
+        _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
+        *_bore_comments(cam),
         _comment("check them, and set the spindle speed: M3 carries no S word"),
         *_warning_comments(a),
         "G21 G90 G17 G40 G49 G80",

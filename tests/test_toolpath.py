@@ -79,16 +79,23 @@ def test_gcode_reads_back_to_the_path():
     )
     path = toolpath.cutter_path(a, D)[0] / MM
     lead, cut = xy[0], xy[1:-1]
-    # every path vertex is cut, clockwise (climb), and the contour closes
+    # every path vertex is cut, clockwise (climb), from the outermost, and it closes
     assert cut.shape[0] == path.shape[0] + 1
-    np.testing.assert_allclose(cut[:-1], path[::-1], atol=1e-4)
+    out = int(np.argmax(np.hypot(*path[::-1].T)))
+    np.testing.assert_allclose(cut[:-1], np.roll(path[::-1], -out, axis=0), atol=1e-4)
     np.testing.assert_allclose(cut[-1], cut[0])
     area = 0.5 * np.sum(
         cut[:-1, 0] * np.roll(cut[:-1, 1], -1) - np.roll(cut[:-1, 0], -1) * cut[:-1, 1]
     )
     assert area < 0  # clockwise
-    # the plunge happens off the part: a cutter there clears the cam by D/2 at least
-    assert brute_distance(lead[None] * MM, a.profile.points)[0] >= 1.5 * D - 1e-6
+    # the plunge happens off the part and off the blank: a cutter there clears a disc
+    # of the cam's largest radius + D (a maker's review: it had plunged at r_b + 1.5 D,
+    # half inside a blank of the cam's size), and the feed in runs along the ray
+    R = np.hypot(*a.profile.points.T).max() / MM
+    assert np.hypot(*lead) - D / MM / 2 >= R + D / MM - 1e-3
+    assert abs(lead[0] * cut[0][1] - lead[1] * cut[0][0]) < 1e-3 * np.hypot(*lead)
+    head = [line for line in text.splitlines() if line.startswith("(")]
+    assert f"(plunge off the part, clear of a blank of radius up to {R + D / MM:.1f} mm)" in head
     z = [float(m) for m in re.findall(r"Z(-?\d+\.\d+)", text)]
     assert z[0] > 0 and min(z) == pytest.approx(-PAPER.cam.width_mm) and z[-1] > 0
 
@@ -110,7 +117,7 @@ def test_gcode_header_says_what_the_operator_must_set():
     from camcore.model import load_preset
     from camcore.toolpath import gcode
 
-    head = gcode(analyze(load_preset("paper_example"), verify=False)).splitlines()[:8]
+    head = gcode(analyze(load_preset("paper_example"), verify=False)).splitlines()[:10]
     assert "(one pass, full depth, feed 200 plunge 50 mm/min)" in head
     assert "(check them, and set the spindle speed: M3 carries no S word)" in head
 
@@ -132,7 +139,9 @@ def test_the_header_bound_holds_for_the_written_coordinates(tol_mm):
     xy = np.array(
         [(float(m[1]), float(m[2])) for m in re.finditer(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", text)]
     )[1:-2]  # the path's vertices, clockwise (not the lead-in and the closing ones)
-    moved = np.hypot(*(xy - path[::-1] / MM).T).max()
+    cw = path[::-1] / MM
+    cw = np.roll(cw, -int(np.argmax(np.hypot(*cw.T))), axis=0)  # from the outermost
+    moved = np.hypot(*(xy - cw).T).max()
     assert moved <= toolpath.ROUNDING_MM
     assert bound / MM + moved <= stated <= 1.01 * (bound / MM + toolpath.ROUNDING_MM)
     # Z is the cam width exactly, and the header says so in a whole comment
@@ -228,3 +237,13 @@ def test_a_gcode_file_beyond_a_million_moves_is_refused_with_a_pass_depth_that_f
     fits = Design.model_validate(data)
     assert fits.cam.passes * moves <= toolpath.MAX_MOVES
     assert fits.cam.passes > 80  # the least that fits, not any
+
+
+def test_the_header_says_the_bore_is_not_cut():
+    """The program cuts the outside contour only; a maker must know the bore and its
+    keyway are left to another operation."""
+    data = PAPER.model_dump()
+    assert "not cut here" not in toolpath.gcode(analyze(PAPER, verify=False))
+    data["cam"].update(bore_diameter_mm=30.0, keyway_width_mm=8.0, keyway_depth_mm=3.3)
+    text = toolpath.gcode(analyze(Design.model_validate(data), verify=False))
+    assert "(not cut here: the 30 mm bore and its 8 x 3.3 mm keyway)" in text.splitlines()
