@@ -285,6 +285,12 @@ def dxf_bytes(a) -> bytes:
             msp.add_circle(
                 (0.0, 0.0), radius=cam.bore_diameter_mm / 2, dxfattribs={"layer": "BORE"}
             )
+    # the drawing's extents in the header: viewers that zoom to extents find the cam
+    # (a maker's review: $EXTMIN/$EXTMAX were left at their empty defaults)
+    from ezdxf import bbox
+
+    ext = bbox.extents(msp)  # written as $EXTMIN, $EXTMAX (zoom to extents finds the cam)
+    msp.reset_extents(ext.extmin, ext.extmax)
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue().encode("utf-8")

@@ -163,6 +163,16 @@ def _check_size(cam, moves_per_pass: int) -> None:
     )
 
 
+def _deep_pass_comments(depth: float, diameter: float) -> list[str]:
+    """A pass deeper than the cutter's diameter [mm]: the operator checks the tool."""
+    if depth <= diameter:
+        return []
+    return [
+        _comment(f"CAUTION: {depth:g} mm per pass, more than the cutter diameter {diameter:g} mm:"),
+        _comment("check the flute length, or set a smaller depth per pass"),
+    ]
+
+
 def _bore_comments(cam) -> list[str]:
     """What this program leaves to other operations: the design's bore and keyway."""
     if cam.bore_diameter_mm <= 0:
@@ -228,6 +238,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(bottom),
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
         *_bore_comments(cam),
+        *_deep_pass_comments(depths[0], to_mm(D)),
         _comment("check them, and set the spindle speed: M3 carries no S word"),
         *_warning_comments(a),
         "G21 G90 G17 G40 G49 G80",

@@ -182,6 +182,10 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
     a = analyze(Design.model_validate(data), verify=False)
     doc = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
     (text,) = [e.dxf.text for e in doc.modelspace() if e.dxftype() == "TEXT"]
+    lo, hi = np.array(doc.header["$EXTMIN"])[:2], np.array(doc.header["$EXTMAX"])[:2]
+    P = a.profile.points * 1e3  # the extents hold the cam (viewers zoom to them)
+    assert np.all(lo <= P.min(axis=0) + 1e-6) and np.all(hi >= P.max(axis=0) - 1e-6)
+    assert np.all(hi - lo < 2 * np.ptp(P, axis=0))
     assert text == f"THETA=0: follower on this ray {says}; cam turns CW"
     grows = a.theta[np.argmax(a.prog.V > 1e-9)]  # where the rise starts
     if "dwell" in says:

@@ -117,7 +117,8 @@ def test_gcode_header_says_what_the_operator_must_set():
     from camcore.model import load_preset
     from camcore.toolpath import gcode
 
-    head = gcode(analyze(load_preset("paper_example"), verify=False)).splitlines()[:10]
+    text = gcode(analyze(load_preset("paper_example"), verify=False))
+    head = [line for line in text.splitlines() if line.startswith("(")]
     assert "(one pass, full depth, feed 200 plunge 50 mm/min)" in head
     assert "(check them, and set the spindle speed: M3 carries no S word)" in head
 
@@ -247,3 +248,13 @@ def test_the_header_says_the_bore_is_not_cut():
     data["cam"].update(bore_diameter_mm=30.0, keyway_width_mm=8.0, keyway_depth_mm=3.3)
     text = toolpath.gcode(analyze(Design.model_validate(data), verify=False))
     assert "(not cut here: the 30 mm bore and its 8 x 3.3 mm keyway)" in text.splitlines()
+
+
+def test_a_pass_deeper_than_the_cutter_is_flagged():
+    """The full 15 mm width in one pass of a 10 mm cutter: the header cautions; in
+    passes of 5 mm it does not."""
+    text = toolpath.gcode(analyze(PAPER, verify=False))
+    assert "(CAUTION: 15 mm per pass, more than the cutter diameter 10 mm:)" in text.splitlines()
+    data = PAPER.model_dump()
+    data["cam"]["pass_depth_mm"] = 5.0
+    assert "CAUTION" not in toolpath.gcode(analyze(Design.model_validate(data), verify=False))
