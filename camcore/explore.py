@@ -85,7 +85,11 @@ def distinct(rows: list[dict]) -> np.ndarray:
     for i, r in enumerate(rows):
         drop = {f"grid.{p}" for p in ignored_fields(r)}
         key = tuple(
-            sorted((k, repr(v)) for k, v in r.items() if k.startswith("grid.") and k not in drop)
+            sorted(
+                (k, repr(v + 0.0 if isinstance(v, float) else v))  # -0.0 is 0.0
+                for k, v in r.items()
+                if k.startswith("grid.") and k not in drop
+            )
         )
         j = kept.get(key)
         # an ignored field is still checked against its own limits (a roller radius of 0

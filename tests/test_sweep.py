@@ -435,6 +435,10 @@ def test_explore_counts_a_design_swept_over_a_field_it_ignores_once():
     )
     first = distinct(rows)
     assert len(rows) == 8 and int(first.sum()) == 6  # 2 single (e ignored) + 4 double
+    signed = [
+        dict(r, **{"grid.follower.single_offset_mm": z}) for r in rows[:1] for z in (0.0, -0.0)
+    ]
+    assert distinct(signed).tolist() == [True, False]  # -0.0 and 0.0 are one design
     singles = [r for r in rows if r["grid.follower.kind"] == "single_concave"]
     assert all(ignored_fields(r) == ["follower.offset_mm"] for r in singles)
     names = ["cam_size", "stress"]
