@@ -207,7 +207,7 @@ def contact_changes(geo: profile.Geometry, segs: tuple[motion.Segment, ...]) -> 
                     spans.append((lo, hi))
             for lo, hi in _merged_on_circle(spans):
                 cand |= {lo % two_pi, hi % two_pi}
-    out = sorted(cand)
+    out = sorted(t for t in cand if t < two_pi - 1e-12)  # (2 pi to round-off is 0)
     return np.array([t for i, t in enumerate(out) if i == 0 or t - out[i - 1] > 1e-12])
 
 

@@ -287,21 +287,29 @@ def _dwell_arcs(a) -> list[Violation]:
     such a dwell of length 0): beta >= 4 psi at the dwell's own radius, so that both
     faces can rest on its arc (Eq. 24: the arc is beta - 2 psi). Dwells between a fall
     and a rise (Eqs. 26, 27) or between two motions the same way need nothing."""
+    from dataclasses import replace
+
     from .motion import FALL, RISE, segments
-    from .profile import dwell_psi
+    from .profile import dwell_psi, dwell_run
 
     out: list[Violation] = []
     if len(a.geo.faces) != 2:
         return out
     segs = segments(a.design)
     for i, g in enumerate(segs):
-        before, after = segs[i - 1], segs[(i + 1) % len(segs)]
+        after = segs[(i + 1) % len(segs)]
         if g.code == RISE and after.code == FALL:  # no dwell at all between them
-            g, before, after = replace_dwell(g), g, after
-        elif g.is_motion or not (before.code == RISE and after.code == FALL):
+            g, length = replace_dwell(g), 0.0
+        elif g.is_motion:
             continue
+        else:  # a run of dwells in a row is one dwell (profile.dwell_run)
+            run = dwell_run(segs, i)
+            if run.head != i or not (run.before.code == RISE and run.after.code == FALL):
+                continue
+            start = run.t0 % (2 * math.pi)
+            g, length = replace(g, start=start, end=start + run.t1 - run.t0), run.t1 - run.t0
         need = to_deg(4 * dwell_psi(a.geo, g.S0))
-        have = to_deg(g.length)
+        have = to_deg(length)
         if have < need - 1e-9:
             name = (
                 "high dwell beta_h"

@@ -215,9 +215,10 @@ def warning(a) -> str | None:
     None if it breaks none."""
     if not a.violations:
         return None
-    codes = sorted({v.code for v in a.violations})
-    n = len(a.violations)
-    text = f"the design breaks {n} limit{'s' if n > 1 else ''}: {', '.join(codes)}"
+    codes = sorted({v.code for v in a.violations})  # (a limit broken twice named once)
+    text = (
+        f"the design breaks {'these limits' if len(codes) > 1 else 'a limit'}: {', '.join(codes)}"
+    )
     if CORNERED & set(codes):
         text += (
             ". The profile is undercut or cusped: the part has a sharp corner where the "

@@ -256,21 +256,71 @@ def dwell_psi(geo: Geometry, S: float) -> float:
 
 def arc_span(geo: Geometry, segs: tuple[Segment, ...], j: int) -> tuple[float, float]:
     """Cam-frame polar interval [start, end] [rad, relative to the cam angle] that the
-    dwell arc of segment j occupies.
+    dwell arc of segment j occupies, in j's own frame: the arc of the whole run of
+    dwells j belongs to (``dwell_run``; one dwell, usually).
 
     A face at world side s (+1 left) touches the cam at direction s psi from vertical,
     i.e. at cam-frame angle theta + s psi. The arc starts where the face driving the
-    segment before it left off and ends where the face driving the one after it takes
-    over (rise: S1, fall: S2). Between a rise and a fall (the high dwell) this gives
-    beta - 2 psi (Eq. 24), between a fall and a rise (the low dwell) beta + 2 psi
+    motion before the run left off and ends where the face driving the one after it
+    takes over (rise: S1, fall: S2). Between a rise and a fall (the high dwell) this
+    gives beta - 2 psi (Eq. 24), between a fall and a rise (the low dwell) beta + 2 psi
     (Eq. 26), and beta between two rises or two falls.
     """
-    g, n = segs[j], len(segs)
-    before, after = segs[(j - 1) % n], segs[(j + 1) % n]
-    psi_j = dwell_psi(geo, g.S0)
-    s_before = 1.0 if before.code == RISE else -1.0
-    s_after = 1.0 if after.code == RISE else -1.0
-    return g.start + s_before * psi_j, g.end + s_after * psi_j
+    run = dwell_run(segs, j)
+    psi_j = dwell_psi(geo, segs[j].S0)
+    s_before = 1.0 if run.before.code == RISE else -1.0
+    s_after = 1.0 if run.after.code == RISE else -1.0
+    return run.t0 + s_before * psi_j, run.t1 + s_after * psi_j
+
+
+@dataclass(frozen=True)
+class DwellRun:
+    """The run of consecutive dwells (also across theta = 0) at one displacement."""
+
+    head: int  # the run's lowest segment index: the one its arc's contacts are put on
+    t0: float  # the run's cam angles [rad] in the asking segment's frame (t0 < 0 or
+    t1: float  # t1 > 2 pi where the run crosses theta = 0)
+    before: Segment  # the motion before the run and the one after it
+    after: Segment
+
+
+SAME_S = 1e-12  # [m]: dwells this close in displacement are one rest (lifts close to
+# round-off: a dwell split at theta = 0 may sit at -0.0 and 8.7e-19 m)
+
+
+def dwell_run(segs: tuple[Segment, ...], j: int) -> DwellRun:
+    """The run of dwells segment j belongs to. The follower rests at one S throughout
+    a run, so its faces touch one arc: a low dwell split at theta = 0 (a program that
+    starts and ends with it) or two dwells in a row are one dwell to the geometry."""
+    n, g = len(segs), segs[j]
+    t0, t1, members = g.start, g.end, [j]
+    ends = {}
+    for step in (-1, 1):
+        k = j
+        for _ in range(n - 1):
+            nxt = segs[(k + step) % n]
+            if nxt.is_motion or abs(nxt.S0 - g.S0) > SAME_S:
+                break
+            k += step
+            members.append(k % n)
+            if step < 0:
+                t0 -= nxt.length
+            else:
+                t1 += nxt.length
+        ends[step] = segs[(k + step) % n]
+    return DwellRun(min(members), t0, t1, ends[-1], ends[1])
+
+
+def dwell_runs(segs: tuple[Segment, ...]) -> dict[int, tuple[float, float]]:
+    """Each run of dwells once: its head's index -> the run's cam angles [t0, t1]
+    [rad] in the head's frame (see ``dwell_run``)."""
+    out = {}
+    for j, g in enumerate(segs):
+        if not g.is_motion:
+            run = dwell_run(segs, j)
+            if run.head == j:
+                out[j] = (run.t0, run.t1)
+    return out
 
 
 def contact_windows(
@@ -296,34 +346,6 @@ def contact_windows(
         return (*arc_span(geo, segs, j), dwell_psi(geo, segs[j].S0))
 
     return windows_on_arcs(prog, segs, len(geo.faces), arc)
-
-
-def dwell_runs(segs: tuple[Segment, ...]) -> dict[int, tuple[float, float]]:
-    """For each dwell segment j, the cam angles [t0, t1] [rad] of the run of dwells
-    around it at its displacement (consecutive, also across theta = 0), in j's own
-    frame: t0 <= start, t1 >= end (t0 < 0 or t1 > 2 pi where the run crosses 0).
-
-    The follower rests at that S throughout a run, so a face may touch arc j while the
-    cam angle lies in a neighbouring dwell of the run: a low dwell split at theta = 0
-    (a program that starts and ends with it), or two dwells in a row."""
-    n, out = len(segs), {}
-    for j, g in enumerate(segs):
-        if g.is_motion:
-            continue
-        t0, t1 = g.start, g.end
-        for step in (-1, 1):
-            k = j
-            for _ in range(n - 1):
-                nxt = segs[(k + step) % n]
-                if nxt.is_motion or nxt.S0 != g.S0:
-                    break
-                k += step
-                if step < 0:
-                    t0 -= nxt.length
-                else:
-                    t1 += nxt.length
-        out[j] = (t0, t1)
-    return out
 
 
 def windows_on_arcs(prog: Program, segs: tuple[Segment, ...], n_faces: int, arc):
@@ -387,28 +409,28 @@ def assemble(
 ) -> Polyline:
     """The profile as the union of every contact point over the cycle, in traversal order.
 
-    ``parts`` holds segment indices (see ``contact_windows``). Order: segment by
-    segment as the program runs; within a rise or fall by cam angle, within a dwell arc
-    by polar angle around the arc (``arc_span``: a contact at direction theta + s psi
-    lies at polar angle theta + s psi + pi/2 in the cam frame), measured from the point
-    opposite the arc's middle. Each arc's own position matters where it reaches across
-    theta = 0: a program that begins with a dwell, or a double follower's low dwell
-    whose arc starts at -psi. Every analysed cam angle thus has its contact point(s)
-    as exact vertices.
+    ``parts`` holds segment indices (see ``contact_windows``: a run of dwells puts its
+    arc's contacts on its head). Order: segment by segment as the program runs; within
+    a rise or fall by cam angle, within a dwell arc by the contact's direction theta +
+    s psi (face side s, ``face_sides``), theta taken in the run's frame: the contacts
+    sweep the arc that way, whether it reaches across theta = 0 (a program that starts
+    with a dwell, a double follower's low dwell arc from -psi) or, for an offset single
+    follower, sits a few degrees beside theta + pi/2. Every analysed cam angle thus
+    has its contact point(s) as exact vertices.
     """
     P = body_points[windows]
     index = parts[windows]
     theta = np.broadcast_to(prog.theta, windows.shape)[windows]
-    cut = np.zeros(len(segs))  # polar angle [rad] opposite each dwell arc's middle
+    side = np.broadcast_to(np.array(face_sides(geo))[:, None], windows.shape)[windows]
+    t0, psi = np.zeros(len(segs)), np.zeros(len(segs))  # each dwell's frame and psi
     for j, g in enumerate(segs):
         if not g.is_motion:
-            cut[j] = 0.5 * sum(arc_span(geo, segs, j)) + 0.5 * math.pi + math.pi
-    # (measured from the opposite point, not the arc's start: an offset single follower
-    # touches a few degrees beside theta + pi/2, and a rounding error must not carry a
-    # point at the start to the end)
-    polar = np.mod(np.arctan2(P[:, 1], P[:, 0]) - cut[index], 2 * math.pi)
+            t0[j], psi[j] = dwell_run(segs, j).t0, dwell_psi(geo, g.S0)
+    # (1e-12 rad of slack: a contact at the run's start stays at its start)
+    lifted = t0[index] + np.mod(theta - t0[index] + 1e-12, 2 * math.pi) - 1e-12
     motion = np.array([g.is_motion for g in segs])[index]
-    order = np.lexsort((np.where(motion, theta, polar), index))
+    key = np.where(motion, theta, lifted + side * psi[index])
+    order = np.lexsort((key, index))
     P, index, theta, motion = P[order], index[order], theta[order], motion[order]
     # a point reached twice (where an arc meets a curve, B2 = A1, A3 = B4, ...) is kept
     # once, as the end of the rise or fall curve

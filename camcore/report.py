@@ -70,19 +70,19 @@ def _classic_arcs(a: Analysis) -> dict:
 
 def _dwells(a: Analysis) -> list[dict]:
     """Every dwell of the program with its own arc (Eq. 20 radius, Eqs. 23-26 psi, and
-    the arc it subtends on the cam) and its Eq. 28 margin where it applies."""
-    from .profile import arc_span, dwell_psi
+    the arc it subtends on the cam) and its Eq. 28 margin where it applies; dwells in
+    a row at one displacement (also across theta = 0) are one dwell."""
+    from .profile import arc_span, dwell_psi, dwell_runs
 
     out = []
-    for j, g in enumerate(a.segments):
-        if g.is_motion:
-            continue
+    for j, (t0, t1) in dwell_runs(a.segments).items():  # dwells in a row: one dwell
+        g = a.segments[j]
         start, end = arc_span(a.geo, a.segments, j)
         psi = dwell_psi(a.geo, g.S0)
         out.append(
             {
-                "start_deg": g.start * R2D,
-                "angle_deg": g.length * R2D,
+                "start_deg": (t0 * R2D) % 360.0,
+                "angle_deg": (t1 - t0) * R2D,
                 "S_mm": g.S0 * 1e3,
                 "psi_deg": psi * R2D,
                 "arc_deg": (end - start) * R2D,

@@ -116,8 +116,9 @@ def chord_errors(poly: profile.Polyline, local) -> np.ndarray:
     )
     err[arc] = (R * (1 - np.cos(delta / 2)))[arc]
     curve = np.flatnonzero(~arc & (part == np.roll(part, -1)))
-    if curve.size:
-        t0, t1 = th[curve], np.roll(th, -1)[curve]
+    if curve.size:  # (a chord across theta = 0, two rises meeting there: the short way)
+        t0 = th[curve]
+        t1 = t0 + np.mod(np.roll(th, -1)[curve] - t0, 2 * math.pi)
         fr = np.array([0.25, 0.5, 0.75])
         mid = (t0[:, None] + (t1 - t0)[:, None] * fr).ravel()
         loc = local(mid)
@@ -149,7 +150,11 @@ def fill_arcs(poly: profile.Polyline, tol: float) -> profile.Polyline:
     with np.errstate(divide="ignore", invalid="ignore"):
         step = 2 * np.arccos(np.clip(1 - tol / R, -1.0, 1.0))  # sagitta = tol
         extra = np.where(on_arc, np.ceil(delta / step) - 1, 0)
-    extra = np.nan_to_num(extra, nan=0.0).clip(0, MAX_VERTICES).astype(int)
+    extra = np.nan_to_num(extra, nan=0.0).clip(0, MAX_VERTICES)
+    room = max(0, 2 * MAX_VERTICES - P.shape[0])  # the profile's bound: two faces' points
+    if extra.sum() > room:  # (only a crossed, invalid profile asks for more)
+        extra *= room / extra.sum()
+    extra = extra.astype(int)
     if not extra.any():
         return poly
     src = np.repeat(np.arange(P.shape[0]), extra + 1)  # each vertex then its new ones
@@ -161,7 +166,11 @@ def fill_arcs(poly: profile.Polyline, tol: float) -> profile.Polyline:
     )
     th_next = np.roll(th, -1)
     dth = np.mod(th_next - th, 2 * math.pi)
-    return profile.Polyline(pts, part[src], np.mod(th[src] + f * dth[src], 2 * math.pi))
+    # the new vertices lie on the dwell arc: its part, whichever end of the chord is on
+    # it (a curve's last point can start the chord: the empty dwell of a fall into a rise)
+    arc_part = np.where(np.isin(part, MOTIONS), np.roll(part, -1), part)
+    new_part = np.where(k == 0, part[src], arc_part[src])
+    return profile.Polyline(pts, new_part, np.mod(th[src] + f * dth[src], 2 * math.pi))
 
 
 def sample_profile(a, geo: profile.Geometry, segs, local, cuts: np.ndarray, tol: float) -> Sampled:

@@ -218,7 +218,8 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     path = np.roll(path, -int(np.argmax(radius)), axis=0)
     start = path[0]
     lead = start * (1.0 + to_mm(D) / float(radius.max()))
-    clear = float(np.hypot(*to_mm(a.profile.points).T).max()) + to_mm(D)
+    clear = math.floor(10 * (float(np.hypot(*lead)) - to_mm(D) / 2)) / 10  # the cutter's
+    # nearest edge at the plunge, rounded down: a clearance must not be overstated
     depths = cam.cut_depth_mm * np.arange(1, cam.passes + 1) / cam.passes
     bottom = (
         f"Z-{cam.cut_depth_mm:g} = the cam width and {cam.breakthrough_mm:g} mm breakthrough"
