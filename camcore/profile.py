@@ -360,15 +360,19 @@ def windows_on_arcs(prog: Program, segs: tuple[Segment, ...], n_faces: int, arc)
     tol, two_pi = 1e-12, 2 * math.pi
     for j, (t0, t1) in dwell_runs(segs).items():
         start, end, psi_j = arc(j)
-        # the cam angle in the run's frame, [t0, t0 + 2 pi): inside while <= t1
-        th = t0 + np.mod(prog.theta - t0 + tol, two_pi) - tol
+        # the cam angle (in [0, 2 pi)) in the run's frame [t0, t0 + 2 pi): inside while
+        # <= t1 (comparisons, not np.mod: this runs for every evaluation)
+        if t0 >= 0.0:
+            th = np.where(prog.theta < t0 - tol, prog.theta + two_pi, prog.theta)
+        else:
+            th = np.where(prog.theta >= t0 + two_pi - tol, prog.theta - two_pi, prog.theta)
         inside = th <= t1 + tol
         for i, side in enumerate((1.0, -1.0)):  # face_sides of a double follower
-            c = th + side * psi_j  # the contact's direction, on arc j up to a turn
-            on_arc = np.zeros(N, dtype=bool)
-            for turn in (-two_pi, 0.0, two_pi):
-                on_arc |= (c + turn >= start - tol) & (c + turn <= end + tol)
-            on = inside & on_arc
+            # the contact's direction theta + s psi from the arc's start (it lies within
+            # 2 psi before the run's start: a turn later, then)
+            along = th + side * psi_j - start
+            along = np.where(along < -tol, along + two_pi, along)
+            on = inside & (along <= end - start + tol)
             windows[i] |= on
             part[i] = np.where(on & (driver != i), j, part[i])
     return windows, part
