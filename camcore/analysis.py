@@ -187,15 +187,18 @@ def stations(design: Design, geo: profile.Geometry) -> np.ndarray:
 
 
 def contact_changes(geo: profile.Geometry, segs: tuple[motion.Segment, ...]) -> np.ndarray:
-    """Segment boundaries and the angles where a face starts or stops touching (the
-    ends of its windows, see profile.contact_windows), sorted in [0, 2 pi). A face
-    that passes from a curve onto an arc, or from one arc of a run of dwells onto the
-    next (profile.dwell_runs), keeps touching: no station there unless a segment
+    """0, the segment boundaries and the angles where a face starts or stops touching
+    (the ends of its windows, see profile.contact_windows), sorted in [0, 2 pi). A run
+    of dwells (profile.dwell_runs) is one dwell: no station inside it; a face that
+    passes from a curve onto an arc keeps touching: no station there unless a segment
     boundary is."""
     two_pi = 2 * np.pi
-    cand = {g.start % two_pi for g in segs}
+    runs = profile.dwell_runs(segs)
+    # the boundaries, but those inside a run of dwells (one dwell: nothing begins there)
+    cand = {0.0} | {
+        g.start % two_pi for j, g in enumerate(segs) if g.is_motion or segs[j - 1].is_motion
+    }
     if len(geo.faces) == 2:
-        runs = profile.dwell_runs(segs)
         for i, side in enumerate(profile.face_sides(geo)):
             driven = motion.RISE if i == 0 else motion.FALL  # S1 drives rises, S2 falls
             spans = [(g.start, g.end) for g in segs if g.code == driven]

@@ -322,11 +322,18 @@ def _dwell_arcs(a) -> list[Violation]:
                     "Eq. 28",
                     f"{name} = {have:g} deg is below 4 psi = {need:.3f} deg "
                     f"(short by {need - have:.3f} deg): both faces cannot rest on the dwell arc",
-                    ((to_deg(g.start), to_deg(g.end)),),
+                    _on_circle_deg(to_deg(g.start), to_deg(g.end)),
                     need - have,
                 )
             )
     return out
+
+
+def _on_circle_deg(lo: float, hi: float) -> tuple[tuple[float, float], ...]:
+    """The range [lo, hi] [deg] within [0, 360]: split in two where it passes 360."""
+    if hi <= 360.0:
+        return ((lo, hi),)
+    return ((lo, 360.0), (0.0, hi - 360.0))
 
 
 def replace_dwell(rise):

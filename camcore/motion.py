@@ -215,6 +215,12 @@ class Segment:
         return (H * n.v[0] / beta, H * n.a[0] / beta**2, H * n.v[1] / beta, H * n.a[1] / beta**2)
 
 
+REST_TOL_M = 1e-7  # [m]: a dwell this near the base circle is the low dwell, and dwells
+# this near each other in displacement are one rest (profile.dwell_run): the lifts of a
+# program close to 1e-9 of their sum (model.Motion), e.g. 3 x 3.33333333 mm down after
+# 10 mm up leaves 1e-11 m
+
+
 def segments(design: Design) -> tuple[Segment, ...]:
     """The program as segments covering [0, 2 pi), in order from theta = 0.
 
@@ -235,11 +241,14 @@ def segments(design: Design) -> tuple[Segment, ...]:
         S1 = S + m.signed_lift_mm * MM
         t1 = t + m.angle_deg * DEG
         if m.kind.value == "dwell":
-            raw.append(Segment(LOW if abs(S) <= 1e-15 else HIGH, t, t1, S, S))
+            raw.append(Segment(LOW if abs(S) <= REST_TOL_M else HIGH, t, t1, S, S))
         else:
             raw.append(Segment(RISE if m.kind.value == "rise" else FALL, t, t1, S, S1, m.law))
         S, t = S1, t1
-    raw[-1] = replace(raw[-1], end=2 * math.pi)  # the angles sum to 360 deg to round-off
+    # the angles sum to 360 deg to round-off (1e-6 deg): no segment runs past 2 pi
+    two_pi = 2 * math.pi
+    raw = [replace(g, start=min(g.start, two_pi), end=min(g.end, two_pi)) for g in raw]
+    raw[-1] = replace(raw[-1], end=two_pi)
     kept: list[Segment] = []
     for i, g in enumerate(raw):
         before, after = raw[i - 1], raw[(i + 1) % len(raw)]
@@ -251,7 +260,7 @@ def segments(design: Design) -> tuple[Segment, ...]:
     for i, g in enumerate(given):  # a fall straight into a rise: add the empty dwell
         after = given[(i + 1) % len(given)]
         if g.code == FALL and after.code == RISE:
-            code = LOW if abs(g.S1) <= 1e-15 else HIGH
+            code = LOW if abs(g.S1) <= REST_TOL_M else HIGH
             kept.insert(kept.index(g) + 1, Segment(code, g.end, g.end, g.S1, g.S1))
     return _fit_polynomials(tuple(kept))
 

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .model import Design
-from .motion import FALL, RISE, Program, Segment
+from .motion import FALL, REST_TOL_M, RISE, Program, Segment
 from .units import MM
 
 MIN_OFFSET = 1e-12  # [m] offsets below this are 0: the faces coincide
@@ -284,10 +284,6 @@ class DwellRun:
     after: Segment
 
 
-SAME_S = 1e-12  # [m]: dwells this close in displacement are one rest (lifts close to
-# round-off: a dwell split at theta = 0 may sit at -0.0 and 8.7e-19 m)
-
-
 def dwell_run(segs: tuple[Segment, ...], j: int) -> DwellRun:
     """The run of dwells segment j belongs to. The follower rests at one S throughout
     a run, so its faces touch one arc: a low dwell split at theta = 0 (a program that
@@ -299,7 +295,7 @@ def dwell_run(segs: tuple[Segment, ...], j: int) -> DwellRun:
         k = j
         for _ in range(n - 1):
             nxt = segs[(k + step) % n]
-            if nxt.is_motion or abs(nxt.S0 - g.S0) > SAME_S:
+            if nxt.is_motion or abs(nxt.S0 - g.S0) > REST_TOL_M:
                 break
             k += step
             members.append(k % n)

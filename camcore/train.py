@@ -111,15 +111,18 @@ def on_grid(resp: Response, theta: np.ndarray, values: np.ndarray) -> np.ndarray
 
 def residual_vibration(design: Design, resp: Response) -> list[dict]:
     """The ringing each rise or fall leaves in the dwell after it: half the peak-to-peak
-    of x - s over that dwell (the train's static compression, constant there, drops
-    out). A well-chosen law leaves little."""
+    of x - s over that dwell, all of it where dwells follow each other (the train's
+    static compression, constant there, drops out). A well-chosen law leaves little."""
+    from .profile import dwell_run
+
     segs = motion.segments(design)
     out = []
     th = resp.theta
     for j, g in enumerate(segs):
         if g.is_motion or not segs[j - 1].is_motion:
             continue
-        m = (th >= g.start) & (th < g.end)
+        run = dwell_run(segs, j)  # dwells in a row are one dwell (also across 2 pi)
+        m = ((th >= run.t0) & (th < run.t1)) | (th + 2 * math.pi < run.t1)
         if m.any():
             e = resp.x[m] - resp.s[m]
             out.append(

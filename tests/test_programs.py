@@ -402,3 +402,55 @@ def test_eq_28_holds_for_a_run_of_dwells():
 
     split = short([_R, _dwell(5), _dwell(5), _F, _dwell(120)])
     assert split == pytest.approx(short([_R, _dwell(10), _F, _dwell(120)]), abs=1e-12)
+
+
+def test_a_run_of_dwells_is_one_dwell_everywhere():
+    """Dwells in a row (and a dwell split at theta = 0) are one dwell: no station
+    between the pieces, the residual vibration over the whole of it, Eq. 28's range
+    within [0, 360] where the run crosses 0, and lifts that close to the model's
+    tolerance (3 x 3.33333333 mm down after 10 mm up) leave one low dwell."""
+    from camcore import train
+    from camcore.analysis import stations
+    from camcore.profile import geometry
+
+    d = with_program([_R, _dwell(3), _dwell(67), _F, _dwell(60)])
+    assert not np.any(np.isclose(np.degrees(stations(d, geometry(d))), 103.0))
+    stiff = {"train_stiffness_N_per_m": 2e5}
+    paper, split = (
+        x.model_copy(update={"dynamics": x.dynamics.model_copy(update=stiff)})
+        for x in (with_program(_PAPER), d)
+    )
+    ring = [
+        [r["amplitude_mm"] for r in train.residual_vibration(x, train.respond(x))]
+        for x in (paper, split)
+    ]
+    assert ring[1] == pytest.approx(ring[0], rel=1e-9)
+    crossing = with_program([_dwell(5), _F, _dwell(120), _R, _dwell(5)])
+    (v,) = [v for v in analyze(crossing, verify=False).violations if v.code == "high_dwell_arc"]
+    assert v.ranges_deg == ((355.0, 360.0), (0.0, 5.0))
+    third = _move("fall", 50, 3.33333333)
+    near = with_program(
+        [_dwell(30), _move("rise", 100, 10), _dwell(60), third, third, third, _dwell(20)]
+    )
+    codes = [g.code for g in motion.segments(near) if not g.is_motion]
+    assert codes == [motion.LOW, motion.HIGH, motion.LOW]
+    a = analyze(near)
+    assert a.valid, [v.message for v in a.violations]
+    assert len(summary(a)["dwells"]) == 2  # the high dwell and the split low one
+
+
+def test_angles_summing_past_360_to_round_off_stay_within_the_cycle():
+    """A program whose angles sum to 360.000001 deg (within the model's tolerance) and
+    end with an empty dwell: no segment runs past 2 pi and the grid increases."""
+    d = with_program(
+        [
+            _move("rise", 80, 7.5),
+            _move("rise", 80, 7.5),
+            _dwell(40),
+            _move("fall", 160.000001, 15),
+            _dwell(0),
+        ],
+        "single_roller",
+    )
+    assert all(0 <= g.start <= g.end <= 2 * math.pi for g in motion.segments(d))
+    assert np.all(np.diff(analyze(d, verify=False).theta) > 0)
