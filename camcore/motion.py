@@ -319,7 +319,10 @@ def segment_index(segs: tuple[Segment, ...], theta: np.ndarray) -> np.ndarray:
     nxt = np.minimum(idx + 1, len(segs) - 1)
     motion = np.array([g.is_motion for g in segs])
     at_end = theta >= ends[idx]
-    return np.where(at_end & ~motion[idx] & motion[nxt] & (nxt > idx), nxt, idx)
+    idx = np.where(at_end & ~motion[idx] & motion[nxt] & (nxt > idx), nxt, idx)
+    if motion[-1] and not motion[0]:  # theta = 0 is 2 pi: the end of the last motion
+        idx = np.where(theta <= 0.0, len(segs) - 1, idx)
+    return idx
 
 
 def segment_of(design: Design, theta: np.ndarray) -> np.ndarray:
@@ -339,6 +342,8 @@ def program(design: Design, theta: np.ndarray, segs: tuple[Segment, ...] | None 
     segs = segments(design) if segs is None else segs
     th = np.mod(np.asarray(theta, dtype=float), 2 * math.pi)
     idx = segment_index(segs, th)
+    last = (idx == len(segs) - 1) & (th < segs[-1].start)  # theta = 0 as 2 pi
+    at = np.where(last, th + 2 * math.pi, th)  # theta as its segment sees it
     S, V, A, J = (np.zeros_like(th) for _ in range(4))
     for i, g in enumerate(segs):
         m = idx == i
@@ -346,11 +351,11 @@ def program(design: Design, theta: np.ndarray, segs: tuple[Segment, ...] | None 
             S[m] = g.S0
             continue
         if g.coeffs is not None:
-            S[m], V[m], A[m], J[m] = _polynomial(g, th[m])
+            S[m], V[m], A[m], J[m] = _polynomial(g, at[m])
             continue
         H, beta = g.S1 - g.S0, g.length
         assert g.law is not None  # a motion segment without coefficients has a law
-        n = rise(g.law, (th[m] - g.start) / beta)
+        n = rise(g.law, (at[m] - g.start) / beta)
         S[m] = g.S0 + H * n.s
         V[m], A[m], J[m] = H * n.v / beta, H * n.a / beta**2, H * n.j / beta**3
     codes = np.array([g.code for g in segs], dtype=np.int8)

@@ -429,7 +429,9 @@ def assemble(
     # (1e-12 rad of slack: a contact at the run's start stays at its start)
     lifted = t0[index] + np.mod(theta - t0[index] + 1e-12, 2 * math.pi) - 1e-12
     motion = np.array([g.is_motion for g in segs])[index]
-    key = np.where(motion, theta, lifted + side * psi[index])
+    start = np.array([g.start for g in segs])[index]  # a last motion ends at 0 = 2 pi
+    along = np.where(theta < start - 1e-12, theta + 2 * math.pi, theta)
+    key = np.where(motion, along, lifted + side * psi[index])
     order = np.lexsort((key, index))
     P, index, theta, motion = P[order], index[order], theta[order], motion[order]
     # a point reached twice (where an arc meets a curve, B2 = A1, A3 = B4, ...) is kept

@@ -454,3 +454,24 @@ def test_angles_summing_past_360_to_round_off_stay_within_the_cycle():
     )
     assert all(0 <= g.start <= g.end <= 2 * math.pi for g in motion.segments(d))
     assert np.all(np.diff(analyze(d, verify=False).theta) > 0)
+
+
+def test_theta_0_is_the_end_of_a_last_motion():
+    """A program that ends with a motion and starts with a dwell: theta = 0 is that
+    motion's end (2 pi), evaluated with its law. It had been the dwell's, so the fall
+    lost its last sample and a roller undercut just there (r_b 16.08 mm, a 40 deg
+    harmonic rise) was found in one rotation of the program and not in the other."""
+    rise = _move("rise", 40, 15) | {"law": "simple_harmonic"}
+    fall = _move("fall", 130, 15) | {"law": "simple_harmonic"}
+    found = []
+    for program in ([rise, _dwell(130), fall, _dwell(60)], [_dwell(130), fall, _dwell(60), rise]):
+        data = with_program(program, "single_roller").model_dump(mode="json")
+        data["cam"].update(base_radius_mm=16.0846, speed_rpm=100.0)
+        data["limits"].update(max_pressure_angle_deg=89.0, require_continuous_acceleration=False)
+        found.append(
+            sorted(v.code for v in analyze(Design.model_validate(data), verify=False).violations)
+        )
+    assert found[0] == found[1] and "roller_undercut" in found[0]
+    d = with_program([_dwell(60), _R, _dwell(70), _F])
+    p = motion.program(d, np.array([0.0, 2 * math.pi - 1e-9]))
+    assert p.segment[0] == motion.FALL and p.S[0] == pytest.approx(0.0, abs=1e-15)
