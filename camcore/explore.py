@@ -271,11 +271,16 @@ def explore_png(
     return buf.getvalue()
 
 
-def _limits(values) -> tuple[float, float]:
-    """An axis' limits around the finite ``values``, with a margin for the markers."""
+def _extent(values) -> tuple[float, float]:
+    """(least, largest) of the finite ``values``; (0, 1) if there are none."""
     values = np.asarray(values, dtype=float)
     v = values[np.isfinite(values)]
-    lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+    return (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+
+
+def _limits(values) -> tuple[float, float]:
+    """An axis' limits around the finite ``values``, with a margin for the markers."""
+    lo, hi = _extent(values)
     pad = 0.05 * (hi - lo) if hi > lo else 0.5 * abs(lo) or 1.0
     return lo - pad, hi + pad
 
@@ -408,9 +413,8 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
 
 
 def _span(values: np.ndarray) -> tuple[float, float]:
-    """(least, largest) of the finite ``values``; a width of one where they are equal."""
-    v = values[np.isfinite(values)]
-    lo, hi = (float(v.min()), float(v.max())) if v.size else (0.0, 1.0)
+    """_extent of ``values``, a width of one where they are all equal (a colour scale)."""
+    lo, hi = _extent(values)
     return (lo, hi) if hi > lo else (lo - 0.5, hi + 0.5)
 
 
