@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from enum import StrEnum
 from pathlib import Path
 from typing import Final, Literal
@@ -35,6 +36,9 @@ MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd f
 MIN_LENGTH_MM = 1e-3
 MIN_MODULUS_GPa = 1e-3
 MIN_MOTION_DEG = 0.01  # a rise or fall over less than this: V, A, J overflow (Eq. 21)
+
+
+NAME_MAX: Final = 200  # characters of a design's name
 
 
 class FollowerKind(StrEnum):
@@ -688,7 +692,7 @@ class Design(_Part):
     """A complete disk-cam design. Save with :func:`save_design`, load with :func:`load_design`."""
 
     schema_version: Literal[2] = SCHEMA_VERSION
-    name: str = Field("untitled", max_length=200)
+    name: str = Field("untitled", max_length=NAME_MAX)
     motion: Motion = Motion()
     follower: Follower = Follower()
     cam: Cam = Cam()
@@ -765,7 +769,38 @@ class Design(_Part):
         """
         data = self.model_dump()
         data["follower"]["kind"] = FollowerKind(kind)
+        data["name"] = _renamed(self.name, self.follower.kind, FollowerKind(kind))
         return Design.model_validate(data)
+
+
+# how a design's name says its follower: what with_kind writes in place of the old one
+KIND_PHRASES: Final = {
+    FollowerKind.single_roller: "single roller",
+    FollowerKind.double_roller: "double rollers",
+    FollowerKind.single_concave: "single concave face",
+    FollowerKind.double_concave: "double concave faces",
+    FollowerKind.flat_face: "flat face",
+    FollowerKind.knife_edge: "knife edge",
+}
+
+
+def _renamed(name: str, old: FollowerKind, new: FollowerKind) -> str:
+    """``name`` with its mention of the ``old`` follower ("double concave", "double
+    concave faces", "Single roller", ...) replaced by the ``new`` one's phrase, so a
+    header does not name one follower over another's part; unchanged if it names none
+    (a user's own name), if the kind is the same, or if the new name would pass
+    NAME_MAX."""
+    if old == new:
+        return name
+    words = r"[\s_-]+".join(map(re.escape, old.value.split("_")))
+    pattern = rf"\b{words}(?:s|\s+faces?|\s+rollers?|\s+followers?)?\b"
+    phrase = KIND_PHRASES[new]
+
+    def keep_case(m: re.Match[str]) -> str:
+        return phrase[0].upper() + phrase[1:] if m.group(0)[0].isupper() else phrase
+
+    out = re.sub(pattern, keep_case, name, count=1, flags=re.IGNORECASE)
+    return out if len(out) <= NAME_MAX else name
 
 
 class DesignError(ValueError):

@@ -75,3 +75,18 @@ def test_with_kind_revalidates():
     d = Design.model_validate(data)
     with pytest.raises(ValidationError, match="offset_mm"):
         d.with_kind(FollowerKind.double_roller)
+
+
+def test_with_kind_renames_the_follower_a_name_mentions():
+    """`--follower` on the paper's preset must not leave '(double concave faces)' in the
+    headers of a single roller's files; a name that names no follower is the user's."""
+    paper = load_preset("paper_example")
+    roller = paper.with_kind("single_roller")
+    assert roller.name == "Chuang, Hsu & Chang, Section 6 example (single roller)"
+    assert roller.with_kind("double_concave").name == paper.name  # and back
+    shop = load_preset("valve_lift_roller")  # "Single roller, modified sine, ..."
+    assert shop.with_kind("knife_edge").name.startswith("Knife edge, modified sine")
+    own = paper.model_copy(update={"name": "Line 3 feeder"})
+    assert own.with_kind("flat_face").name == "Line 3 feeder"
+    knife = paper.with_kind("knife_edge").model_copy(update={"name": "x" * 188 + " knife edge"})
+    assert knife.with_kind("double_concave").name == knife.name  # 209 chars: kept
