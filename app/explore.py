@@ -149,6 +149,8 @@ class ExplorePanel:
             pair = _kept_pair(data.get(f"{axis}_range"))
             if pair is not None:
                 rng.value = pair
+            else:  # around the design's value (dd.value proposes only when it changes)
+                self._suggest(dd, rng, axis)
         steps = data.get("steps")
         if isinstance(steps, int | float) and not isinstance(steps, bool):
             if steps in range(2, MAX_STEPS + 1):  # an integer of the slider's range

@@ -419,6 +419,17 @@ class Session:
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
         if self.closed.is_set():
             return
+        with self.lock:
+            self._show_saved(saved)
+            restore = working is not None and self.gen == gen0 and working != self.design
+            self._persist = True
+            if not restore:
+                self._save_working()
+        if working is not None and restore:
+            self.set_design(working)
+            self._say(f"Restored your last design from this browser: *{esc(working.name)}*.")
+        # after the design: a kept field whose range the setup cannot give gets one
+        # around the restored design's value, not the default's
         try:  # a setup the browser kept must never cost the design or the saved list
             self.ui.explore.apply_setup(setup)
         except Exception:
@@ -426,14 +437,6 @@ class Session:
         self.ui.explore.keep_setup_with(
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
         )
-        with self.lock:
-            self._show_saved(saved)
-            restore = working is not None and self.gen == gen0 and working != self.design
-            self._persist = True
-            if working is None or not restore:
-                return self._save_working()
-        self.set_design(working)
-        self._say(f"Restored your last design from this browser: *{esc(working.name)}*.")
 
     def _save_working(self) -> None:
         if self._persist and self.error is None:

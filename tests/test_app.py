@@ -885,13 +885,20 @@ def test_explore_setup_round_trips_and_refuses_junk(tab):
     before = e.setup()
     for hostile in (
         {"x": [], "y": {}},  # unhashable where a label belongs
-        {"x": before["x"], "x_range": [10**400, 5]},  # no float holds it
-        {"x": before["x"], "x_range": "59"},  # a string is no pair of numbers
         {"x": "a field renamed since", "x_range": [1.0, 2.0]},  # a range for no field
         {"figures": [[], {}, None]},
     ):
         e.apply_setup(hostile)
         assert e.setup() == before, hostile
+    rpm = tab.design.cam.speed_rpm  # a kept field with a refused range: the range the
+    proposed = [round(0.7 * rpm, 1), round(1.3 * rpm, 1)]  # field proposes (±30 %)
+    for hostile in (
+        {"x": before["x"], "x_range": [10**400, 5]},  # no float holds it
+        {"x": before["x"], "x_range": "59"},  # a string is no pair of numbers
+    ):
+        e.x_range.value = tuple(before["x_range"])
+        e.apply_setup(hostile)
+        assert e.setup() == {**before, "x_range": proposed}, hostile
     assert storage.parse_setup("[" * 2000 + "]" * 2000) is None  # nesting, under 4 kB
     e.steps.value = 4.0  # a client's float: kept as the integer it is
     e.apply_setup({"steps": e.setup()["steps"]})
@@ -1140,3 +1147,35 @@ def test_the_pressure_angle_label_is_clear_of_the_follower(tab, kind):
         u, v = np.meshgrid(np.linspace(-half_w, half_w, 15), np.linspace(-h / 2, h / 2, 5))
         box = np.column_stack([x + u.ravel(), y - float(a.prog.S[k]) + v.ravel()])
         assert not _inside_any(box, parts), (kind, view, deg, lab.text)
+
+
+def test_a_rejected_kept_range_is_proposed_around_the_restored_design(app, monkeypatch):
+    """A kept Explore field whose kept range is refused gets the range the panel
+    proposes (±30 %) around the restored design's value, not the default design's (the
+    setup had been applied before the design was restored)."""
+    from app import storage
+
+    kept = load_preset("paper_example")
+    data = kept.model_dump(mode="json")
+    data["cam"]["base_radius_mm"] = 120.0
+    data["motion"]["lift_mm"] = 20.0
+    setup = {"x": "Base radius r_b [mm]", "x_range": "junk", "y": "Lift h [mm]"}
+    stored = {
+        storage.WORKING_KEY: design_to_json(Design.model_validate(data)),
+        storage.EXPLORE_KEY: __import__("json").dumps(setup),
+    }
+    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
+    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, key, v: None)
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    try:
+        assert wait_for(lambda: set(app.sessions) - before)
+        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+        s._restorer.join(10)
+        assert s.design.cam.base_radius_mm == 120.0
+        e = s.ui.explore
+        assert e.x.value == "Base radius r_b [mm]"  # the default field: no change fired
+        assert tuple(e.x_range.value) == (84.0, 156.0)  # 0.7 and 1.3 x 120 mm
+        assert tuple(e.y_range.value) == (14.0, 26.0)  # around the kept 20 mm lift
+    finally:
+        t.close()
