@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from camcore import explore, sweep
+from camcore import explore, sweep, toolpath
 from camcore.analysis import Analysis, analyze, compare
 from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import summary
@@ -49,9 +49,11 @@ class Result:
 @dataclass(frozen=True)
 class Refined(Result):
     """The verified analysis, plus the four followers compared on the same design:
-    {kind: {"summary": dict, "theta_deg", "FN_N", "stress_MPa": arrays} | error str}."""
+    {kind: {"summary": dict, "theta_deg", "FN_N", "stress_MPa": arrays} | error str},
+    and why the design's cutter cannot cut it (camcore.toolpath.GougeError), or None."""
 
     compare: dict[Any, Any]
+    cutter: str | None = None
 
 
 def fast(design: Design) -> Result:
@@ -75,7 +77,20 @@ def refined(design: Design) -> Refined:
             "FN_N": r.guide.FN[idx],
             "stress_MPa": to_mpa(r.stress.max(axis=0))[idx],
         }
-    return Refined(a, summary(a), curve_data(a), out)
+    return Refined(a, summary(a), curve_data(a), out, _cutter_gouges(a))
+
+
+def _cutter_gouges(a: Analysis) -> str | None:
+    """The G-code download's refusal of the design's cutter, said before the download
+    (~10-20 ms: the geometric gouge test of camcore.toolpath); None if it fits or the
+    profile has no part at all (the panel's 'No solid' says that)."""
+    try:
+        toolpath.cutter_path(a)
+    except toolpath.GougeError as exc:
+        return str(exc)
+    except Exception:  # noqa: BLE001  (not a part: said elsewhere, not by the cutter)
+        return None
+    return None
 
 
 def _warm(background: bool) -> int:

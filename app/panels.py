@@ -98,6 +98,7 @@ def status_html(
     verified: bool,
     mesh_error: str | None = None,
     file_error: str | None = None,
+    cutter_note: str | None = None,
 ) -> str:
     """The always-visible panel (STATUS_CSS): input errors (red), limit violations
     (amber), or OK; a file that could not be opened (``file_error``) above them.
@@ -105,7 +106,9 @@ def status_html(
     With an input error the panel says so and nothing green: the limits shown below it
     are those of the last valid design, which stays on screen (and in the downloads'
     refusal) until the input is fixed. A file that could not be opened changes nothing:
-    the design on screen is still the one the controls describe."""
+    the design on screen is still the one the controls describe. ``cutter_note``: the
+    design's cutter does not fit its concave stretches (the G-code download refuses).
+    """
     file_box = (
         _BOX.format(
             bg="#fde2e2",
@@ -117,7 +120,7 @@ def status_html(
         else ""
     )
     boxes = _status_boxes(error, violations, lift_error, verified, mesh_error)
-    return f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}</div>"
+    return f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}{_cutter_box(cutter_note)}</div>"
 
 
 def _field_name(path: str) -> str:
@@ -190,6 +193,18 @@ def _mesh_box(mesh_error: str | None) -> str:
         return ""
     return _BOX.format(
         bg="#fde2e2", fg="#d62728", body=f"<b>No solid:</b> {html.escape(mesh_error)}"
+    )
+
+
+def _cutter_box(note: str | None) -> str:
+    """The cutter does not fit the cam (found when the tab is still, with the check)."""
+    if not note:
+        return ""
+    return _BOX.format(
+        bg="#fff3d6",
+        fg="#e08a00",
+        body=f"<b>⚠ Cutter:</b> {html.escape(note)}. The G-code download refuses it: "
+        "change <i>Cutter diameter [mm]</i> (Cam) or the design.",
     )
 
 

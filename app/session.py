@@ -91,6 +91,7 @@ class Session:
         # but the controls still describe the design on screen, so downloads go on
         self.file_error: str | None = None
         self.verified = False  # self.analysis is the geometrically checked one
+        self.cutter_note: str | None = None  # the cutter gouges (found with the check)
         self.gen = 0  # bumped by every new design: background results of older ones drop
         self.theta_deg = 0.0
         self.speed = 45.0  # animation, cam degrees per second
@@ -245,7 +246,7 @@ class Session:
         a, s = r.analysis, r.summary
         self.design, self.analysis = design, a
         self.gen += 1
-        self.verified = False
+        self.verified, self.cutter_note = False, None
         k = self._index()
         ui = self.ui
         with self.client.atomic():
@@ -296,6 +297,7 @@ class Session:
             self.verified,
             self.view.mesh_error,
             self.file_error,
+            self.cutter_note,
         )
 
     def _show_summary(self, s: dict) -> None:
@@ -320,7 +322,7 @@ class Session:
             if self._stale(gen):
                 return
             old = [(v.code, v.ranges_deg) for v in self.analysis.violations]
-            self.analysis, self.verified = r.analysis, True
+            self.analysis, self.verified, self.cutter_note = r.analysis, True, r.cutter
             if [(v.code, v.ranges_deg) for v in r.analysis.violations] != old:
                 self.view.build(r.analysis)
                 self._show_curves(r.curves, self._index())

@@ -1179,3 +1179,28 @@ def test_a_rejected_kept_range_is_proposed_around_the_restored_design(app, monke
         assert tuple(e.y_range.value) == (14.0, 26.0)  # around the kept 20 mm lift
     finally:
         t.close()
+
+
+def test_a_cutter_that_gouges_is_said_before_the_download(tab, downloads):
+    """A cutter too large for the cam's concave flank had been found only when the
+    G-code was downloaded: the still tab's check says so in the status panel (with the
+    largest cutter that fits, the download's own words), and a cutter that fits clears
+    it."""
+    s = tab
+    data = load_preset("paper_example").with_kind("single_roller").model_dump(mode="json")
+    data["cam"].update(base_radius_mm=40.0, cutter_diameter_mm=190.0)
+    data["motion"].update(lift_mm=30.0, rise_deg=80.0)
+    data["limits"]["max_pressure_angle_deg"] = 45.0
+    s.set_design(Design.model_validate(data))
+    assert not s.analysis.violations  # a valid design: only its cutter is wrong
+    assert "Cutter" not in s.ui.status.content  # the fast path does not know yet
+    s.refine()
+    status = s.ui.status.content
+    assert "⚠ Cutter:" in status and "a 190 mm cutter would gouge" in status
+    s.ui.download_btns["toolpath"].value = True
+    refusal = s.ui.files_md.content
+    assert "gouge" in refusal and "use a cutter of at most" in refusal
+    s.ui.controls["cam.cutter_diameter_mm"].value = 20.0
+    assert "Cutter" not in s.ui.status.content  # the next design: not said before checked
+    s.refine()
+    assert "Cutter" not in s.ui.status.content and s.verified

@@ -397,3 +397,10 @@ def test_viser_cast_patch_equals_viser_except_float32_plot_data():
     kept = viser_speedups._cast_value_recursive(None, tuple[f64, ...], plot, "data")
     assert all(k is p for k, p in zip(kept, plot, strict=True))
     assert Viser()._cast_value_recursive(tuple[f64, ...], plot, "data")[0].dtype == np.float64
+
+
+def test_status_panel_says_a_cutter_that_gouges_escaped():
+    html = panels.status_html(None, [], 1e-7, True, cutter_note="a <b>190</b> mm cutter")
+    assert "⚠ Cutter:" in html and "All design limits met" in html
+    assert "<b>190</b>" not in html and "&lt;b&gt;190" in html
+    assert "Cutter" not in panels.status_html(None, [], 1e-7, True)
