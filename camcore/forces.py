@@ -39,10 +39,22 @@ MODES = ((1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0))
 TWO_CONTACTS = 4  # mode code of a two-contact dwell (Eqs. 36-38); -1 = self-locking
 
 
-def inertia_load(design: Design, A: np.ndarray) -> np.ndarray:
-    """M (g + a) with a = A omega^2 [N]: the part of Eq. 29 the spring must overcome."""
+def moving_mass(design: Design) -> float:
+    """m = M + m_s / 3 [kg]: the follower's mass M and a third of the return spring's
+    own mass m_s (a uniform spring's kinetic energy is that of a third of its mass
+    moving with its free end: Rayleigh; Norton, Cam Design and Manufacturing Handbook,
+    ch. 8). The paper's M of Eq. 29 when the spring's mass is 0 (its example); the
+    rigid model, the jump speed and the elastic train (camcore.train) all use it, so
+    they agree on when the follower leaves the cam."""
     d = design.dynamics
-    return d.mass_g * GRAM * (d.gravity_m_s2 + A * omega_rad_s(design) ** 2)
+    return (d.mass_g + d.spring_mass_g / 3.0) * GRAM
+
+
+def inertia_load(design: Design, A: np.ndarray) -> np.ndarray:
+    """m (g + a) with a = A omega^2 and m = moving_mass [N]: the part of Eq. 29 the
+    spring must overcome."""
+    d = design.dynamics
+    return moving_mass(design) * (d.gravity_m_s2 + A * omega_rad_s(design) ** 2)
 
 
 def spring_load(design: Design, S: np.ndarray) -> np.ndarray:

@@ -32,7 +32,7 @@ import numpy as np
 
 from . import extremes, forces, motion
 from .model import Design, omega_rad_s
-from .units import GRAM, MM, RPM
+from .units import MM, RPM
 
 
 def spring_free_load(design: Design, prog: motion.Program) -> np.ndarray:
@@ -98,7 +98,7 @@ def _preload_need(design: Design):
 def _jump_need(design: Design):
     """1 / w^2 at which F_N reaches zero at each angle (jump_speed_rpm)."""
     d = design.dynamics
-    M, k, s_p = d.mass_g * GRAM, d.spring_rate_N_per_m, d.preload_mm * MM
+    M, k, s_p = forces.moving_mass(design), d.spring_rate_N_per_m, d.preload_mm * MM
     return lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p))
 
 

@@ -560,7 +560,8 @@ class Dynamics(_Part):
         0.0,
         ge=0,
         le=1e7,
-        description="return spring's own mass [g]; a third of it moves with the follower",
+        description="return spring's own mass [g]; a third of it moves with the follower "
+        "(in every model: the forces of Eq. 29, the jump speed, the elastic train)",
     )
     spring_safety_factor: float = Field(
         1.5,

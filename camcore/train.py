@@ -33,8 +33,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import motion
+from .forces import moving_mass
 from .model import Design, omega_rad_s
-from .units import GRAM, MM
+from .units import MM
 
 MIN_SAMPLES = 4096
 MAX_SAMPLES = 1 << 16  # 4096 natural periods per turn; stiffer trains are ~rigid
@@ -69,12 +70,7 @@ def natural_frequency(design: Design) -> float:
     d = design.dynamics
     if d.train_stiffness_N_per_m is None:
         return math.nan
-    return math.sqrt((d.train_stiffness_N_per_m + d.spring_rate_N_per_m) / _mass(design))
-
-
-def _mass(design: Design) -> float:
-    d = design.dynamics
-    return (d.mass_g + d.spring_mass_g / 3.0) * GRAM
+    return math.sqrt((d.train_stiffness_N_per_m + d.spring_rate_N_per_m) / moving_mass(design))
 
 
 def respond(design: Design) -> Response | None:
@@ -83,7 +79,7 @@ def respond(design: Design) -> Response | None:
     if d.train_stiffness_N_per_m is None:
         return None
     w = omega_rad_s(design)
-    m, k1, k2 = _mass(design), d.train_stiffness_N_per_m, d.spring_rate_N_per_m
+    m, k1, k2 = moving_mass(design), d.train_stiffness_N_per_m, d.spring_rate_N_per_m
     K = k1 + k2
     c = 2.0 * d.damping_ratio * math.sqrt(K * m)
     wn = math.sqrt(K / m)

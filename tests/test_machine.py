@@ -321,3 +321,28 @@ def test_contact_friction_power_balance(kind):
     else:  # friction changes the forces and costs power
         assert np.abs(a.guide.FN - base.guide.FN).max() > 0.1
         assert machine.shaft(a).power_mean > machine.shaft(base).power_mean
+
+
+def test_a_third_of_the_spring_mass_moves_with_the_follower_in_every_model():
+    """A designer's review: the spring's own mass m_s reached only the elastic train, so
+    the rigid model passed a design that jumps (and the train, made as stiff as rigid,
+    said it jumps). m = M + m_s / 3 everywhere: a 108 g follower with a 90 g spring is a
+    138 g follower with a massless one, in every figure; the train agrees."""
+    heavy_spring = tweak(PAPER, dynamics__spring_mass_g=90.0)
+    heavier = tweak(PAPER, dynamics__mass_g=108.0 + 90.0 / 3)
+    a, b = analyze(heavy_spring, verify=False), analyze(heavier, verify=False)
+    np.testing.assert_allclose(a.Ft, b.Ft, rtol=1e-12)
+    np.testing.assert_allclose(a.guide.FN, b.guide.FN, rtol=1e-12)
+    for figure in (machine.spring_rate_min, machine.preload_min, machine.jump_speed_rpm):
+        assert figure(heavy_spring, a.theta) == pytest.approx(figure(heavier, b.theta))
+    assert (
+        machine.jump_speed_rpm(heavy_spring, a.theta)[0] < machine.jump_speed_rpm(PAPER, a.theta)[0]
+    )
+    # just past the rigid model's jump speed, a train as stiff as rigid jumps too
+    w_j = machine.jump_speed_rpm(heavy_spring, a.theta)[0]
+    fast = tweak(heavy_spring, cam__speed_rpm=1.02 * w_j)
+    assert jumps(fast)
+    rigid_train = tweak(fast, dynamics__train_stiffness_N_per_m=1e12)
+    assert any(v.code == "dynamic_jump" for v in analyze(rigid_train, verify=False).violations)
+    slow = tweak(heavy_spring, cam__speed_rpm=0.98 * w_j)
+    assert not jumps(slow)
