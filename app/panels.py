@@ -237,6 +237,11 @@ def summary_markdown(s: dict) -> str:
         ("ρ rise", f"{f(rho['rise'], 1)} mm"),
         ("ρ fall", f"{f(rho['fall'], 1)} mm"),
         (
+            "ρ convex min / concave min (cutter at most 2×)",
+            f"{f(s['radius_of_curvature_mm']['convex_min'], 1)} / "
+            f"{f(s['radius_of_curvature_mm']['concave_min'], 1)} mm",
+        ),
+        (
             "Max F_N per contact: whole cycle / high dwell (one-face windows included)",
             f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N",
         ),

@@ -549,6 +549,8 @@ def _grid_figures(bt: Batch, loc) -> list[dict]:
         _max(phi, fall),
         _range(rho * 1e3, rise),
         _range(rho * 1e3, fall),
+        _min(rho * 1e3, inc & (rho > 0) & np.isfinite(rho)),  # report._radii_mm
+        _min(-rho * 1e3, inc & (rho < 0) & np.isfinite(rho)),
         _max(FN),
         _max(FN, high),
         _max(FN, two),
@@ -566,6 +568,7 @@ def _grid_figures(bt: Batch, loc) -> list[dict]:
         {
             "pressure_angle_max_deg": {"rise": pa_r, "fall": pa_f},
             "curvature_radius_mm": {"rise": rho_r, "fall": rho_f},
+            "radius_of_curvature_mm": {"convex_min": convex, "concave_min": concave},
             "contact_force_max_N": {
                 "cycle": fn,
                 "high_dwell": fn_h,
@@ -579,7 +582,25 @@ def _grid_figures(bt: Batch, loc) -> list[dict]:
             "total_load_high_dwell_N": ft_h,
             "flat_face_width_min_mm": None if wid is None else float(wid),
         }
-        for pa_r, pa_f, rho_r, rho_f, fn, fn_h, fn_2, f1, f2, s, s_h, b, ft_h, wid, has_high in cols
+        for (
+            pa_r,
+            pa_f,
+            rho_r,
+            rho_f,
+            convex,
+            concave,
+            fn,
+            fn_h,
+            fn_2,
+            f1,
+            f2,
+            s,
+            s_h,
+            b,
+            ft_h,
+            wid,
+            has_high,
+        ) in cols
     ]
 
 

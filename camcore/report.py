@@ -46,6 +46,23 @@ def _range_mm(a: Analysis, part: int) -> list[float] | None:
     return [float(rho.min()), float(rho.max())]
 
 
+def _radii_mm(a: Analysis) -> dict[str, float | None]:
+    """The smallest convex radius of curvature rho > 0 and the tightest concave one
+    |rho|, rho < 0 (Eq. 21, signed as profile.curvature_radius) over the contact
+    windows of the whole cycle [mm]; None where the cam has no such stretch. A signed
+    [min, max] (curvature_radius_mm) mixes the two on a roller cam with a concave
+    flank; these are the figures a designer sizes with (the convex one sets the
+    stress, the concave one the largest cutter and grinding wheel)."""
+    rho = a.rho[a.in_contact] * 1e3
+    rho = rho[np.isfinite(rho)]  # (inf: a straight pitch curve, neither)
+    return {"convex_min": _min(rho, rho > 0), "concave_min": _min(-rho, rho < 0)}
+
+
+def _min(x: np.ndarray, mask: np.ndarray) -> float | None:
+    m = _max(-x, mask)
+    return None if m is None else -m
+
+
 def _flat_face_width_mm(a: Analysis) -> float | None:
     """A flat face must reach the contact wherever it wanders: X = -V about the axis,
     so a face symmetric about the stem needs width 2 max |V + stem_x| (plus the edge
@@ -234,6 +251,7 @@ def summary(a: Analysis) -> dict:
             "fall": _max(phi[on & (a.segment_code == FALL)]),
         },
         "curvature_radius_mm": {"rise": _range_mm(a, RISE), "fall": _range_mm(a, FALL)},
+        "radius_of_curvature_mm": _radii_mm(a),
         "contact_force_max_N": {
             "cycle": _max(a.guide.FN),
             "high_dwell": _max(a.guide.FN, high),
@@ -363,6 +381,11 @@ def report_text(s: dict) -> str:
         ),
         ("rho rise (min .. max)", f"{_fmt(s['curvature_radius_mm']['rise'], 2)} mm"),
         ("rho fall (min .. max)", f"{_fmt(s['curvature_radius_mm']['fall'], 2)} mm"),
+        (
+            "rho convex min / concave min",
+            f"{_fmt(s['radius_of_curvature_mm']['convex_min'], 2)} / "
+            f"{_fmt(s['radius_of_curvature_mm']['concave_min'], 2)} mm",
+        ),
         (
             "max F_N cycle / high dwell",
             f"{_fmt(s['contact_force_max_N']['cycle'])} / "

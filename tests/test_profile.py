@@ -469,3 +469,45 @@ def test_a_vanishing_offset_is_no_offset():
     a, b = analyze(tiny, verify=False), analyze(zero, verify=False)
     assert len(a.geo.faces) == 1 and a.geo.e == 0.0
     assert [v.code for v in a.violations] == [v.code for v in b.violations]
+
+
+def _norton_radial_roller_rho_mm(rb, rc, h, rise, dwell, fall, n=400_000):
+    """The cam's radius of curvature [mm] of a radial roller follower with cycloidal rise
+    and fall, by Norton's closed form (Design of Machinery, Eq. 8.33): rho_pitch =
+    ((R_p + s)^2 + s'^2)^1.5 / ((R_p + s)^2 + 2 s'^2 - s'' (R_p + s)), rho = rho_pitch
+    - R_f, R_p = r_b + R_f; s', s'' per radian. Nothing of camcore's."""
+    th = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    b1, t2, b3 = math.radians(rise), math.radians(rise + dwell), math.radians(fall)
+    s, v, acc = np.zeros(n), np.zeros(n), np.zeros(n)
+    for lo, beta, sign in ((0.0, b1, 1.0), (t2, b3, -1.0)):
+        m = (th >= lo) & (th < lo + beta)
+        x = (th[m] - lo) / beta
+        cyc = h * (x - np.sin(2 * np.pi * x) / (2 * np.pi))
+        s[m] = cyc if sign > 0 else h - cyc
+        v[m] = sign * h / beta * (1 - np.cos(2 * np.pi * x))
+        acc[m] = sign * 2 * np.pi * h / beta**2 * np.sin(2 * np.pi * x)
+    s[(th >= b1) & (th < t2)] = h
+    R = rb + rc + s
+    return (R**2 + v**2) ** 1.5 / (R**2 + 2 * v**2 - acc * R) - rc
+
+
+def test_convex_and_concave_radii_match_the_textbook_closed_form():
+    """A designer's review: a roller cam with a concave flank reported rho as a signed
+    [min, max] (-24057 .. 13031 mm: a near-inflection and the flattest concave point).
+    The report gives the smallest convex rho and the tightest concave |rho|, here
+    against Norton's closed form for a radial roller on a fine grid of its own."""
+    from camcore.report import summary
+
+    data = load_preset("paper_example").with_kind("single_roller").model_dump(mode="json")
+    data["follower"]["single_offset_mm"] = 0.0
+    data["cam"]["base_radius_mm"] = 40.0
+    data["motion"].update(lift_mm=30.0, rise_deg=80.0, high_dwell_deg=70.0, fall_deg=130.0)
+    data["limits"]["max_pressure_angle_deg"] = 45.0
+    s = summary(analyze(Design.model_validate(data), verify=False))["radius_of_curvature_mm"]
+    rho = _norton_radial_roller_rho_mm(40.0, 8.0, 30.0, 80.0, 70.0, 130.0)
+    assert s["convex_min"] == pytest.approx(rho[rho > 0].min(), rel=1e-4)
+    assert s["concave_min"] == pytest.approx(-rho[rho < 0].max(), rel=1e-4)
+    paper = summary(analyze(load_preset("paper_example"), verify=False))
+    assert paper["radius_of_curvature_mm"]["concave_min"] is None  # Eq. 22: convex
+    lo = min(paper["curvature_radius_mm"]["rise"][0], paper["curvature_radius_mm"]["fall"][0])
+    assert paper["radius_of_curvature_mm"]["convex_min"] <= lo  # dwells included
