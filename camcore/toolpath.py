@@ -30,6 +30,7 @@ import textwrap
 import numpy as np
 from scipy.spatial import cKDTree
 
+from . import profile
 from .export import ExportError, require_star_shaped, warning
 from .units import MM, to_deg, to_mm
 
@@ -123,14 +124,27 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
         raise GougeError(
             f"a {to_mm(D):g} mm cutter would gouge the cam (a concave stretch tighter than "
             f"its radius) at cam angles {where} deg; the tightest concave radius is "
-            f"{to_mm(_tightest_concave(pts)):.3g} mm: use a cutter of at most twice that"
+            f"{to_mm(_tightest_concave(a)):.5g} mm: use a cutter of at most twice that"
         )
     kappa = max(float(discrete_curvature(pts).max()), 0.0)
     return path, a.chord_error * (1.0 + d * kappa)
 
 
-def _tightest_concave(points: np.ndarray) -> float:
-    k = discrete_curvature(points)
+def _tightest_concave(a) -> float:
+    """The tightest concave radius |rho| [m] of the cam (Eq. 21, rho < 0) where the
+    follower touches it: the grid's and the refined extreme of the pitch curvature
+    (camcore.extremes), as the report's radius_of_curvature_mm; the polyline's own
+    (the circle through three vertices, coarser: 66.4 mm for 66.04) only if the
+    analysis has none."""
+    rho = a.rho[a.in_contact]
+    tight = list(-rho[rho < 0])
+    w = a.worst.get("kappa_pitch_min")
+    if w is not None and w.value < 0:
+        r = float(profile.curvature_radius(a.geo, a.geo.faces[w.face], np.array([w.value]))[0])
+        tight += [-r] if r < 0 else []
+    if tight:
+        return float(min(tight))
+    k = discrete_curvature(a.profile.points)
     return 1.0 / -k.min() if k.min() < 0 else math.inf
 
 

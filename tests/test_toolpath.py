@@ -67,6 +67,10 @@ def test_the_cutter_may_not_be_wider_than_the_tightest_concave_stretch():
         for r in re.search(r"cam angles (.*) deg", str(err.value)).group(1).split(", ")
     ]
     assert any(lo - 1 <= at <= hi + 1 for lo, hi in ranges)
+    # and the radius it names is the analytic one (the polyline's circle through three
+    # vertices had said 66.4 mm for 66.04 in a designer's review)
+    said = float(re.search(r"tightest concave radius is ([\d.]+) mm", str(err.value)).group(1))
+    assert said == pytest.approx(rho_min / MM, rel=1e-4)
 
 
 def test_gcode_reads_back_to_the_path():
