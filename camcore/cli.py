@@ -87,7 +87,19 @@ def _report(args) -> int:
     s = summary(a)
     print(json.dumps(s, indent=2) if args.json else report_text(s))
     _write(a, documents)
-    return EXIT_VALID if s["valid"] else EXIT_BREAKS_LIMITS
+    return _verdict(a, "the report above has the details")
+
+
+def _verdict(a, details: str = "run `camcore report` for details") -> int:
+    """EXIT_VALID, or EXIT_BREAKS_LIMITS with the broken limits named on stderr (a
+    script reading only the exit status and stderr learns which)."""
+    from .export import warning
+
+    note = warning(a)
+    if note is None:
+        return EXIT_VALID
+    print(f"note: {note}; {details}", file=sys.stderr)
+    return EXIT_BREAKS_LIMITS
 
 
 def _write(a, outputs: dict[str, str]) -> None:
@@ -135,6 +147,9 @@ def _compare(args) -> int:
         kinds = tuple(FollowerKind(n) for n in dict.fromkeys(names))
     rows = compare_rows(_design(args), kinds)
     print(json.dumps(rows, indent=2) if args.json else compare_text(rows))
+    for r in rows:
+        if r["breaks"]:
+            print(f"note: {r['follower']} breaks {', '.join(r['breaks'])}", file=sys.stderr)
     return EXIT_VALID if all(r["valid"] for r in rows) else EXIT_BREAKS_LIMITS
 
 
@@ -150,17 +165,12 @@ def _outputs(args) -> dict[str, str]:
 
 def _export(args) -> int:
     from .analysis import analyze
-    from .export import warning
 
     design = _design(args)
     outputs = _outputs(args)
     a = analyze(design)
     _write(a, outputs)
-    note = warning(a)
-    if note is not None:
-        print(f"note: {note}. Run `camcore report` for details", file=sys.stderr)
-        return EXIT_BREAKS_LIMITS
-    return EXIT_VALID
+    return _verdict(a)
 
 
 EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "toolpath", "json", "html", "pdf")

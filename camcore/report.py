@@ -461,6 +461,7 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
             {
                 "follower": kind.value,
                 "valid": s["valid"],
+                "breaks": sorted({f"{v.code} ({v.equation})" for v in a.violations}),
                 "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
                 "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
                 "paper_table1_N": PAPER_TABLE1_N.get(kind),

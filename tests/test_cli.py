@@ -196,3 +196,22 @@ def test_export_of_a_cusped_cam_says_not_to_make_it(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "curvature_convex" in err and "Do not make it as it is" in err
     assert "(WARNING: the design breaks" in out.read_text()
+
+
+def test_a_design_that_breaks_a_limit_names_it_on_stderr(capsys):
+    """The README's exit status: 1 with the broken limits named on stderr, for report
+    and compare as for export (a designer's review found report and compare silent
+    there: a script saw exit 1 and nothing else)."""
+    fast = ["--preset", "paper_example", "--set", "cam.speed_rpm=6000"]  # the spring lets go
+    assert main(["report", *fast, "--json"]) == 1
+    out, err = capsys.readouterr()
+    assert json.loads(out)["valid"] is False
+    assert err.startswith("note: the design breaks") and "jump" in err
+    assert main(["report", "--preset", "paper_example"]) == 0
+    assert capsys.readouterr().err == ""
+    assert main(["compare", *fast, "--followers", "single_roller,double_concave"]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 2 and all("breaks jump (Eqs. 29-41)" in line for line in err)
+    assert err[0].startswith("note: single_roller") and err[1].startswith("note: double_concave")
+    rows = run_json(capsys, "compare", "--preset", "paper_example", "--json")
+    assert all(r["breaks"] == [] for r in rows)
