@@ -340,7 +340,7 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         ),
         (
             "pitting life",
-            "endurance (stress within the allowable)"
+            _life_text(s["follower"], long=True)
             if s["pitting_life_cycles"] is None
             else f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)",
         ),
@@ -520,13 +520,23 @@ def compare_text(rows: list[dict]) -> str:
         life = r["pitting_life_cycles"]
         cells = (
             _fmt(r["wear_depth_max_um_per_Mcycle"], 4),
-            "endurance" if life is None else f"{life:.3g}",
+            _life_text(r["follower"]) if life is None else f"{life:.3g}",
             _fmt(r["spring_rate_min_N_per_m"], 1),
             _fmt(r["jump_speed_rpm"], 1),
             _fmt(r["cam_torque_drive_max_Nm"], 3),
         )
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in cells))
     return "\n".join(lines)
+
+
+def _life_text(follower: str, long: bool = False) -> str:
+    """A pitting life of None (no finite estimate) in words: a knife edge has no Hertz
+    stress to estimate it from (a line of zero radius: the stress is unbounded,
+    contact.contact_stress), any other follower is in the endurance region (stress
+    within the allowable)."""
+    if follower == FollowerKind.knife_edge:
+        return "not estimated (knife edge: no Hertz stress)" if long else "n/a"
+    return "endurance (stress within the allowable)" if long else "endurance"
 
 
 def analyze_summary(design: Design) -> dict:

@@ -215,3 +215,13 @@ def test_a_design_that_breaks_a_limit_names_it_on_stderr(capsys):
     assert err[0].startswith("note: single_roller") and err[1].startswith("note: double_concave")
     rows = run_json(capsys, "compare", "--preset", "paper_example", "--json")
     assert all(r["breaks"] == [] for r in rows)
+
+
+def test_a_knife_edge_has_no_pitting_life_in_the_endurance_region(capsys):
+    """A knife edge has no Hertz stress (unbounded): its pitting life is not estimated,
+    not 'endurance (stress within the allowable)' as a designer's review read."""
+    assert main(["report", "--preset", "paper_example", "--follower", "knife_edge"]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "pitting life" in ln)
+    assert "not estimated (knife edge" in line and "endurance" not in line
+    assert main(["report", "--preset", "paper_example"]) == 0
+    assert "endurance (stress within the allowable)" in capsys.readouterr().out
