@@ -408,6 +408,9 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
                 "preload_mm": d0.dynamics.preload_mm,
             },
             "jump_speed_rpm": _finite(machine._rpm(float(inv_w2[b]))),
+            "jump_margin": machine.margins(
+                bt.designs[b], float(k_min[b]), machine._rpm(float(inv_w2[b]))
+            ),
         }
         for b in range(B)
     ]

@@ -26,6 +26,7 @@ n k_min does this, since n k_min (S + s_p) >= n (-D) everywhere.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -183,6 +184,18 @@ class Spring:
     jump_at: float  # [rad]
     safety_factor: float
     proposed_rate: float  # [N/m], n k_min at the design's preload (inf if none)
+
+
+def margins(design: Design, rate_min: float, jump_rpm: float) -> dict[str, float | None]:
+    """How far the design is from jump, as ratios a designer compares with the
+    spring's safety factor n: ``spring_rate`` = k / k_min and ``jump_speed`` = the jump
+    speed / the running speed (both > 1 keeps contact; None where unbounded: no spring
+    suffices, nothing pulls the follower off, or k_min = 0). Not a limit: a design at
+    1.03 meets every limit, only closer to jump than n asks."""
+    k = design.dynamics.spring_rate_N_per_m
+    rate = k / rate_min if 0.0 < rate_min < math.inf else None
+    speed = jump_rpm / design.cam.speed_rpm if math.isfinite(jump_rpm) else None
+    return {"spring_rate": rate, "jump_speed": speed}
 
 
 def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None) -> Spring:

@@ -177,6 +177,7 @@ def _machine(a: Analysis) -> dict:
             "preload_mm": a.design.dynamics.preload_mm,
         },
         "jump_speed_rpm": _finite(sp.jump_speed_rpm),
+        "jump_margin": machine.margins(a.design, sp.rate_min, sp.jump_speed_rpm),
         "cam_torque_max_Nm": {"drive": sh.drive_max, "brake": sh.brake_max},
         "power_max_W": sh.power_max,
         "power_mean_W": sh.power_mean,
@@ -305,6 +306,20 @@ def _train_text(t: dict | None) -> str:
     )
 
 
+def _margin_text(s: dict) -> str:
+    """k / k_min and jump speed / running speed, flagged below the safety factor n."""
+    m, n = s["jump_margin"], s["spring_proposal"]["safety_factor"]
+    parts = []
+    if m["spring_rate"] is not None:
+        parts.append(f"k = {m['spring_rate']:.3g} k_min")
+    if m["jump_speed"] is not None:
+        parts.append(f"jumps at {m['jump_speed']:.3g} x this speed")
+    text = ", ".join(parts) or "-"
+    if m["spring_rate"] is not None and m["spring_rate"] < n:
+        text += f" (below the safety factor {n:g}: close to jump)"
+    return text
+
+
 def machine_rows(s: dict) -> list[tuple[str, str]]:
     """The running machine's figures of a summary as (label, value) rows: the text
     report and the app's key numbers show the same lines."""
@@ -323,6 +338,7 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
             if s["jump_speed_rpm"] is None
             else f"{_fmt(s['jump_speed_rpm'], 1)} rpm",
         ),
+        ("margin to jump", _margin_text(s)),
         (
             "shaft torque drive / brake",
             f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "

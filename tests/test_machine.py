@@ -346,3 +346,24 @@ def test_a_third_of_the_spring_mass_moves_with_the_follower_in_every_model():
     assert any(v.code == "dynamic_jump" for v in analyze(rigid_train, verify=False).violations)
     slow = tweak(heavy_spring, cam__speed_rpm=0.98 * w_j)
     assert not jumps(slow)
+
+
+def test_the_margin_to_jump_is_said_beside_the_safety_factor():
+    """A designer's review: a design at 98.7 % of its jump speed read 'All limits met'
+    and nothing said how close it was. The report gives k / k_min and the jump speed
+    over the running speed, flagged below the spring's safety factor (not a limit)."""
+    from camcore.report import machine_rows, summary
+
+    s = summary(analyze(PAPER, verify=False))
+    m = s["jump_margin"]
+    assert m["spring_rate"] == pytest.approx(6772.5 / s["spring_rate_min_N_per_m"])
+    assert m["jump_speed"] == pytest.approx(s["jump_speed_rpm"] / PAPER.cam.speed_rpm)
+    row = dict(machine_rows(s))["margin to jump"]
+    assert "close to jump" not in row and f"k = {m['spring_rate']:.3g} k_min" in row
+    # k_min grows as w^2: at 1.4 x the speed, k / k_min falls below 1.5 (still valid)
+    near = tweak(PAPER, cam__speed_rpm=1.4 * PAPER.cam.speed_rpm)
+    s2 = summary(analyze(near, verify=False))
+    assert s2["valid"] and s2["jump_margin"]["spring_rate"] < 1.5
+    assert "below the safety factor 1.5: close to jump" in dict(machine_rows(s2))["margin to jump"]
+    loose = tweak(PAPER, dynamics__spring_rate_N_per_m=0.0, dynamics__gravity_m_s2=0.0)
+    assert summary(analyze(loose, verify=False))["jump_margin"]["spring_rate"] == 0.0
