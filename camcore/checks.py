@@ -101,7 +101,7 @@ def runs_deg(
 
 
 def _where(ranges: tuple[tuple[float, float], ...]) -> str:
-    shown = ", ".join(f"{s:g}-{e:g}" for s, e in ranges[:4])
+    shown = ", ".join(f"{s:g}" if f"{s:g}" == f"{e:g}" else f"{s:g}-{e:g}" for s, e in ranges[:4])
     more = f" (+{len(ranges) - 4} more)" if len(ranges) > 4 else ""
     return f"theta = {shown} deg{more}"
 

@@ -36,6 +36,7 @@ from .model import MM, Design, omega_rad_s
 from .units import GRAM
 
 MODES = ((1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0))
+V_REST = 1e-12  # [m/rad]: |V| below this is the follower at rest (1 pm per radian)
 TWO_CONTACTS = 4  # mode code of a two-contact dwell (Eqs. 36-38); -1 = self-locking
 
 
@@ -116,7 +117,9 @@ def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> Guid
     d = dyn.guide_width_mm * MM
     l1 = dyn.overhang_mm * MM - (S if dyn.overhang_shrinks else 0.0)
     arm1, arm2 = l1 - r, l1 + dyn.guide_length_mm * MM - r
-    mu_sv = dyn.guide_friction * np.sign(V)  # no friction while the follower is at rest
+    # no friction while the follower is at rest, round-off included (a law's V at its
+    # own end is 1e-18 m/rad either side of 0: its sign had flipped the friction there)
+    mu_sv = dyn.guide_friction * np.sign(np.where(np.abs(V) < V_REST, 0.0, V))
     tol = 1e-9 * (np.abs(Ft) + 1.0)
     todo = None  # the angles without a mode yet (None: all of them)
     for i, (s1, s2) in enumerate(MODES):

@@ -193,9 +193,12 @@ def margins(design: Design, rate_min: float, jump_rpm: float) -> dict[str, float
     suffices, nothing pulls the follower off, or k_min = 0). Not a limit: a design at
     1.03 meets every limit, only closer to jump than n asks."""
     k = design.dynamics.spring_rate_N_per_m
-    rate = k / rate_min if 0.0 < rate_min < math.inf else None
-    speed = jump_rpm / design.cam.speed_rpm if math.isfinite(jump_rpm) else None
-    return {"spring_rate": rate, "jump_speed": speed}
+    rate = k / rate_min if 0.0 < rate_min < math.inf else math.inf
+    speed = jump_rpm / design.cam.speed_rpm  # (a crawling cam's can overflow)
+    return {
+        n: float(x) if math.isfinite(x) else None
+        for n, x in (("spring_rate", rate), ("jump_speed", speed))
+    }
 
 
 def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None) -> Spring:

@@ -291,7 +291,7 @@ def _fmt(x, nd=3) -> str:
         return "-"
     if isinstance(x, list):
         return " .. ".join(_fmt(v, nd) for v in x)
-    return f"{x:.{nd}f}"
+    return f"{x:.{nd}f}".replace(f"-{0:.{nd}f}", f"{0:.{nd}f}")  # no "-0.00 W"
 
 
 def _train_text(t: dict | None) -> str:
@@ -315,7 +315,10 @@ def _margin_text(s: dict) -> str:
     if m["jump_speed"] is not None:
         parts.append(f"jumps at {m['jump_speed']:.3g} x this speed")
     text = ", ".join(parts) or "-"
-    if m["spring_rate"] is not None and m["spring_rate"] < n:
+    rate = m["spring_rate"]
+    if rate is not None and rate < 1.0:
+        text += " (below k_min: the follower jumps)"
+    elif rate is not None and rate < n:
         text += f" (below the safety factor {n:g}: close to jump)"
     return text
 

@@ -225,3 +225,15 @@ def test_a_knife_edge_has_no_pitting_life_in_the_endurance_region(capsys):
     assert "not estimated (knife edge" in line and "endurance" not in line
     assert main(["report", "--preset", "paper_example"]) == 0
     assert "endurance (stress within the allowable)" in capsys.readouterr().out
+
+
+def test_round_off_does_not_show_in_the_text_report(capsys):
+    """A designer's review: 'power mean -0.00 W' (a frictionless cam's mean power is 0
+    to round-off) and a jump 'at theta = 0-0 deg' (one sample)."""
+    from camcore.checks import _where
+
+    args = ["report", "--preset", "paper_example", "--set", "dynamics.guide_friction=0"]
+    assert main(args) == 0
+    power = next(ln for ln in capsys.readouterr().out.splitlines() if "power max" in ln)
+    assert power.endswith("/ 0.00 W")
+    assert _where(((0.0, 0.0), (50.1, 234.9))) == "theta = 0, 50.1-234.9 deg"

@@ -8,7 +8,7 @@ import pytest
 from camcore import forces
 from camcore.analysis import analyze, compare
 from camcore.contact import hertz_line_stress
-from camcore.model import FollowerKind, load_preset
+from camcore.model import Design, FollowerKind, load_preset
 from camcore.motion import FALL, HIGH, RISE
 
 PAPER = load_preset("paper_example")
@@ -304,3 +304,17 @@ def test_equilibrium_with_contact_friction(kind):
         Msum = sum(p[0] * F[1] - p[1] * F[0] for p, F in forces)
         assert np.abs(Fsum).max() < 1e-9 * a.Ft[k]
         assert abs(Msum) < 1e-9 * a.Ft[k]
+
+
+@pytest.mark.parametrize("law", ["modified_trapezoid", "modified_sine", "polynomial"])
+def test_no_guide_friction_where_a_law_ends_at_rest(law):
+    """A designer's review: at the end of a modified-trapezoid rise V was -3e-15 (round-
+    off), and the guide friction was applied as if falling (F_N 319 N, not 324). Where a
+    rise ends at rest with A = 0, the end sample is the dwell's state: same F_N."""
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(rise_law=law, fall_law=law)
+    a = analyze(Design.model_validate(data), verify=False)
+    for deg in (100.0, 300.0):  # the ends of the rise and of the fall
+        k = int(np.argmin(np.abs(a.theta - np.radians(deg))))
+        assert abs(a.prog.V[k]) < 1e-12 and abs(a.prog.A[k]) < 1e-9
+        assert a.guide.FN[k] == pytest.approx(a.guide.FN[k + 1], rel=1e-9)
