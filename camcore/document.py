@@ -99,8 +99,14 @@ def _profile_figure(a: Analysis):
 
 def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     """The paper's Fig. 4 for this design: the mechanism at each station side by side,
-    zoomed on the contact region, with the touching faces' contact points filled (open
-    where a face is near but not touching) and what happens there in words."""
+    zoomed on the contact region, with the contact points of the faces touching at the
+    station filled and labelled (open where a face is near but not touching) and what
+    happens there in words.
+
+    A face touches at a station if it touches just before or just after it: at station
+    0 of the paper's program S2 leaves as S1 takes over, and both touch (a teacher's
+    review found S2 drawn open there, as the state just after the station was drawn).
+    """
     from matplotlib.figure import Figure
 
     from .report import summary
@@ -116,12 +122,15 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     t = np.linspace(0, 2 * np.pi, 721)
     for ax in axes[n:]:
         ax.set_axis_off()
-    after = a.local(np.mod(a.stations + 1e-7, 2 * np.pi))
+    at = a.local(np.mod(a.stations, 2 * np.pi))
+    n_st = a.stations.size
+    near = a.local(np.mod(np.concatenate([a.stations - 1e-7, a.stations + 1e-7]), 2 * np.pi))
+    touching = near.in_contact[:, :n_st] | near.in_contact[:, n_st:]
     for k, (ax, th) in enumerate(zip(axes, a.stations, strict=False)):
         c, s_ = np.cos(th), np.sin(th)
         X, Y = c * P[:, 0] + s_ * P[:, 1], -s_ * P[:, 0] + c * P[:, 1]  # R(-theta), Eq. 11
         ax.fill(to_mm(X), to_mm(Y), color="#c8d4e6", ec="#28508c", lw=1)
-        S = float(after.prog.S[k])
+        S = float(at.prog.S[k])
         for i, f in enumerate(a.geo.faces):
             yc = a.geo.y0 + S
             if a.geo.flat:
@@ -131,7 +140,7 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                     color="#cd6e1e",
                     lw=2,
                 )
-            p = after.point_world[i, k]
+            p = at.point_world[i, k]
             if not a.geo.flat and f.r != 0:  # the face near its contact, not its whole circle
                 near = np.abs(f.x_c + abs(f.r) * np.cos(t) - p[0]) < 0.22 * rb
                 arc = np.where(near & (np.sign(np.sin(t)) == np.sign(p[1] - yc)), 1.0, np.nan)
@@ -141,9 +150,19 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                     color="#cd6e1e",
                     lw=2,
                 )
-            on = bool(after.in_contact[i, k])
+            on = bool(touching[i, k])
             ax.plot(
-                to_mm(p[0]), to_mm(p[1]), "o", ms=6, mfc="#d62728" if on else "white", mec="#d62728"
+                to_mm(p[0]), to_mm(p[1]), "o", ms=7, mfc="#d62728" if on else "white", mec="#d62728"
+            )
+            ax.annotate(
+                f.name.split(" ")[0],  # "S1", "S2": the names the app and the report use
+                (to_mm(p[0]), to_mm(p[1])),
+                xytext=(0, -14),
+                textcoords="offset points",
+                ha="center",
+                fontsize=9,
+                color="#d62728" if on else "#888888",
+                fontweight="bold" if on else "normal",
             )
         y = to_mm(rb + S)
         ax.set_xlim(-0.45 * to_mm(rb), 0.45 * to_mm(rb))
@@ -151,9 +170,9 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(f"station {k}: theta = {to_deg(th):.1f} deg", fontsize=9)
+        ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°", fontsize=11)
         text = events[k].split(": ", 1)[-1]
-        ax.set_xlabel(text, fontsize=7, wrap=True)
+        ax.set_xlabel(text, fontsize=8.5, wrap=True)
     return fig
 
 

@@ -227,9 +227,28 @@ def test_stations_figure_has_a_panel_per_station():
     fig = document.stations_figure(a)
     drawn = [ax for ax in fig.axes if ax.axison]
     assert len(drawn) == len(a.stations)
-    assert drawn[2].get_title().startswith("station 2: theta = ")
+    assert drawn[2].get_title().startswith("station 2: θ = ")
     assert drawn[2].get_xlabel() == summary(a)["stations"][2]["event"].split(": ", 1)[1]
     assert "Stations (the paper's Fig. 4" in document.html_report(a)
+
+
+def test_stations_figure_fills_the_faces_touching_at_each_station():
+    """A teacher's review: the diagram drew S2 open at station 0 and S1 open at station
+    3, where the paper's Fig. 4 (and the app's 3D view) has both faces touching: one
+    leaves as the other takes over. Filled = touching at the station (just before or
+    just after it): for the paper's program S1 alone at 1 (the rise ends) and S2 alone
+    at 4 (the fall begins); both at 0 (S2 leaves), 2 (S2 arrives), 3 (S1 leaves) and 5
+    (S1 arrives)."""
+    from camcore import document
+
+    fig = document.stations_figure(analyze(PAPER, verify=False))
+    filled = []
+    for ax in [ax for ax in fig.axes if ax.axison]:
+        dots = [ln for ln in ax.lines if ln.get_marker() == "o"]
+        filled.append(sum(ln.get_markerfacecolor() != "white" for ln in dots))
+        labels = {t.get_text() for t in ax.texts}
+        assert labels == {"S1", "S2"}
+    assert filled == [2, 1, 2, 2, 1, 2]
 
 
 def test_every_fall_into_a_rise_gets_its_empty_dwell():
