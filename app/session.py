@@ -20,7 +20,14 @@ import threading
 
 from camcore import export
 from camcore.analysis import Analysis
-from camcore.model import Design, DesignError, design_from_json, design_to_json, preset_names
+from camcore.model import (
+    Design,
+    DesignError,
+    design_from_json,
+    design_to_json,
+    preset_names,
+    renamed_for_kind,
+)
 from camcore.model import load_preset as load_preset_design
 
 from . import controls, plots, storage, uploads
@@ -175,7 +182,24 @@ class Session:
                 self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
                 return
             self.error = self.file_error = None
-            self._apply(design)
+            self._apply(self._renamed_for_kind(design))
+
+    def _renamed_for_kind(self, design: Design) -> Design:
+        """A new follower kind renames the follower the design's name mentions ("...
+        (double concave faces)" -> "... (single roller)", camcore.model.renamed_for_kind),
+        unless the name was edited too; the name box follows. Lock held."""
+        old = self.design
+        if design.follower.kind == old.follower.kind or design.name != old.name:
+            return design
+        name = renamed_for_kind(old.name, old.follower.kind, design.follower.kind)
+        if name == design.name:
+            return design
+        self._syncing = True  # (the box's own change must not start another edit)
+        try:
+            self.ui.controls["name"].value = name
+        finally:
+            self._syncing = False
+        return design.model_copy(update={"name": name})
 
     def on_segments(self, segs: list[dict]) -> None:
         """The program table changed: the program is its segments, every other control
@@ -429,7 +453,12 @@ class Session:
                 self._save_working()
         if working is not None and restore:
             self.set_design(working)
-            self._say(f"Restored your last design from this browser: *{esc(working.name)}*.")
+            note = (  # where the user looks (above the tabs) and in Files
+                f"Restored the design last edited in this browser: *{esc(working.name)}* "
+                "(its tabs share one working design: the browser keeps it per site)."
+            )
+            self._say(note)
+            self._say_quick(note)
         # after the design: a kept field whose range the setup cannot give gets one
         # around the restored design's value, not the default's
         try:  # a setup the browser kept must never cost the design or the saved list

@@ -770,7 +770,7 @@ class Design(_Part):
         """
         data = self.model_dump()
         data["follower"]["kind"] = FollowerKind(kind)
-        data["name"] = _renamed(self.name, self.follower.kind, FollowerKind(kind))
+        data["name"] = renamed_for_kind(self.name, self.follower.kind, FollowerKind(kind))
         return Design.model_validate(data)
 
 
@@ -785,7 +785,7 @@ KIND_PHRASES: Final = {
 }
 
 
-def _renamed(name: str, old: FollowerKind, new: FollowerKind) -> str:
+def renamed_for_kind(name: str, old: FollowerKind, new: FollowerKind) -> str:
     """``name`` with its mention of the ``old`` follower ("double concave", "double
     concave faces", "Single roller", ...) replaced by the ``new`` one's phrase, so a
     header does not name one follower over another's part; unchanged if it names none

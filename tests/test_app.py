@@ -1204,3 +1204,18 @@ def test_a_cutter_that_gouges_is_said_before_the_download(tab, downloads):
     assert "Cutter" not in s.ui.status.content  # the next design: not said before checked
     s.refine()
     assert "Cutter" not in s.ui.status.content and s.verified
+
+
+def test_a_new_follower_kind_renames_the_follower_the_name_mentions(tab, downloads):
+    """A teacher's review: after switching the paper's example to a single roller, its
+    name '... (double concave faces)' stayed on the downloads. The name follows the
+    kind (its box too), unless the user wrote a name of their own."""
+    s = tab
+    s.ui.controls["follower.kind"].value = "single_roller"
+    assert s.design.name == "Chuang, Hsu & Chang, Section 6 example (single roller)"
+    assert s.ui.controls["name"].value == s.design.name
+    s.ui.controls["cam.base_radius_mm"].value = 85.0  # the next edit keeps it
+    assert s.design.name.endswith("(single roller)") and s.design.cam.base_radius_mm == 85.0
+    s.ui.controls["name"].value = "Feeder cam"
+    s.ui.controls["follower.kind"].value = "double_roller"
+    assert s.design.name == "Feeder cam"

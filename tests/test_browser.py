@@ -277,7 +277,7 @@ def test_trust_in_the_browser(tmp_path):
             page.reload()
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("tab", name="Files").click()
-            page.get_by_text("Restored your last design").first.wait_for()
+            page.get_by_text("Restored the design last edited").first.wait_for()
             (session,) = [s for s in app.sessions.values() if not s.closed.is_set()]
             assert session.design == design_from_json(json.dumps(design))
             assert "my cam" in session.saved
