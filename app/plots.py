@@ -11,7 +11,7 @@ server only hands arrays to the widgets (``Curve.show``).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -26,6 +26,7 @@ X_AXIS = {"label": "cam angle θ [°]", "size": 36}
 RED_FILL = "rgba(220,20,30,0.18)"
 NONE = "rgba(0,0,0,0)"
 MARK = "rgba(0,0,0,0.55)"
+STATION_MARK = "rgba(90,90,90,0.45)"  # dashed: where the contacts change
 COLORS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b")
 
 
@@ -77,6 +78,16 @@ class Curve:
                 "points": {"show": False},
             }
         )
+        ser.append(  # the stations (the paper's Fig. 4): where the contacts change
+            {
+                "label": "stations",
+                "scale": "marker",
+                "stroke": STATION_MARK,
+                "width": 1,
+                "dash": [4, 4],
+                "points": {"show": False},
+            }
+        )
         ser.append(
             {
                 "label": "θ now",
@@ -110,40 +121,54 @@ class Curve:
         self.x: np.ndarray | None = None
         self.ys: list[np.ndarray] = []
         self.shade = np.zeros(0)
+        self.stations = np.zeros(0)  # [deg]
         self._at = float("nan")  # the marker's cam angle [deg]
 
-    def show(self, x: np.ndarray, ys: tuple[np.ndarray, ...], shade: np.ndarray, at: float):
-        """New curves (from curve_data) with the marker at cam angle ``at`` [deg]. Curves
-        that did not change (S after a new speed, say) are not sent again: the data of
-        all plots is most of what a redraw sends."""
+    def show(
+        self,
+        x: np.ndarray,
+        ys: tuple[np.ndarray, ...],
+        shade: np.ndarray,
+        at: float,
+        stations: np.ndarray | None = None,
+    ):
+        """New curves (from curve_data) with the marker at cam angle ``at`` [deg] and
+        dashed lines at the ``stations`` [deg]. Curves that did not change (S after a
+        new speed, say) are not sent again: the data of all plots is most of what a
+        redraw sends."""
+        stations = np.zeros(0) if stations is None else stations
         same = (
             self.x is not None
             and self._at == at
             and np.array_equal(x, self.x)
+            and np.array_equal(stations, self.stations)
             and np.array_equal(shade, self.shade)
             and len(ys) == len(self.ys)
             and all(np.array_equal(u, v, equal_nan=True) for u, v in zip(ys, self.ys, strict=True))
         )
         if same:
             return
-        self.x, self.ys, self.shade = x, list(ys), shade
+        self.x, self.ys, self.shade, self.stations = x, list(ys), shade, stations
         self.marker(at)
 
     def marker(self, theta_deg: float) -> None:
+        """Send the curves with the vertical lines: the stations and θ now."""
         if self.x is None:
             return
         self._at = theta_deg
         x = self.x
-        j = int(np.searchsorted(x, theta_deg))
-        xs = np.insert(x, j, [theta_deg, theta_deg])
-        out = [xs]
+        # each line is a spike on its own [0, 1] scale: three samples at its angle,
+        # below, above and below the plot area (a vertical line once clipped)
+        at = np.concatenate([self.stations, [theta_deg]])
+        xi = np.repeat(at, 3)
+        order = np.argsort(np.concatenate([x, xi]), kind="stable")  # a spike's 3 stay together
+        out = [np.concatenate([x, xi])[order]]
         for y in [*self.ys, self.shade]:
-            yi = float(np.interp(theta_deg, x, y))
-            out.append(np.insert(y, j, [yi, yi]))
-        # a spike from below to above the plot area at theta: a vertical line once clipped
-        mk = np.full(xs.shape, -1.0)
-        mk[j + 1] = 2.0
-        out.append(mk)
+            out.append(np.concatenate([y, np.interp(xi, x, y)])[order])
+        for first, last in ((0, self.stations.size), (self.stations.size, at.size)):
+            mk = np.full(x.size + xi.size, -1.0)
+            mk[x.size + 3 * np.arange(first, last) + 1] = 2.0
+            out.append(mk[order])
         self.handle.data = wire(out)
 
 
@@ -169,6 +194,7 @@ class CurveData:
     x: np.ndarray  # cam angles [deg] (stride_index of the analysis grid)
     ys: tuple[tuple[np.ndarray, ...], ...]  # per curve, per series: its values on x
     shades: tuple[np.ndarray, ...]  # per curve: 1.0 where one of its limits is broken
+    stations: np.ndarray = field(default_factory=lambda: np.zeros(0))  # [deg]
 
 
 def curve_data(a) -> CurveData:
@@ -180,6 +206,7 @@ def curve_data(a) -> CurveData:
         x,
         tuple(tuple(np.asarray(s["fn"](a), float)[idx] for s in c["series"]) for c in specs),
         tuple(violation_mask(a.violations, x, c["codes"]).astype(float) for c in specs),
+        np.degrees(a.stations),
     )
 
 

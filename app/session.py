@@ -297,7 +297,7 @@ class Session:
     def _show_curves(self, data: plots.CurveData, k: int) -> None:
         at = math.degrees(self.analysis.theta[k])
         for c, ys, shade in zip(self.ui.curves, data.ys, data.shades, strict=True):
-            c.show(data.x, ys, shade, at)
+            c.show(data.x, ys, shade, at, data.stations)
 
     def _enable_for_kind(self, design: Design) -> None:
         k, c = design.follower.kind, self.ui.controls

@@ -1219,3 +1219,23 @@ def test_a_new_follower_kind_renames_the_follower_the_name_mentions(tab, downloa
     s.ui.controls["name"].value = "Feeder cam"
     s.ui.controls["follower.kind"].value = "double_roller"
     assert s.design.name == "Feeder cam"
+
+
+def test_the_curves_mark_the_stations_and_the_angle_now(tab):
+    """A teacher's review: the curves had only the 'θ now' line, so a class could not
+    find station 2 or 3 on the F_N or stress curves. Each plot has a dashed line at each
+    station and the 'θ now' line, as vertical spikes on their own scale."""
+    s = tab
+    s.goto_station(3)
+    stations = np.degrees(s.analysis.stations)
+    for c in s.ui.curves:
+        data = [np.asarray(col, float) for col in c.handle.data]
+        x, st, now = data[0], data[-2], data[-1]
+        assert np.all(np.diff(x) >= 0)  # still one x axis, in order
+        np.testing.assert_allclose(np.sort(x[st == 2.0]), np.sort(stations), atol=1e-4)
+        np.testing.assert_allclose(x[now == 2.0], [stations[3]], atol=1e-4)
+        assert c.handle.series[-2]["label"] == "stations"
+    S = np.asarray(s.ui.curves[0].handle.data[1], float)  # S stays a curve through them
+    x = np.asarray(s.ui.curves[0].handle.data[0], float)
+    k = int(np.argmin(np.abs(x - stations[2])))
+    assert S[k] == pytest.approx(s.design.motion.lift_mm, abs=1e-3)  # the high dwell
