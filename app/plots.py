@@ -107,6 +107,9 @@ class Curve:
         }
         for scale, _ in axes:
             scales[scale] = {"auto": True}
+        self._scales = scales
+        self._scale_of = [s["scale"] for s in series]  # per data series: its axis
+        self._aligned = len(axes) > 1  # two or three y axes: one level for their zeros
         self.nser = len(ser)
         self.handle = gui.add_uplot(
             tuple(np.zeros(2) for _ in ser),
@@ -149,7 +152,27 @@ class Curve:
         if same:
             return
         self.x, self.ys, self.shade, self.stations = x, list(ys), shade, stations
+        if self._aligned:
+            self._align_zeros()
         self.marker(at)
+
+    def _align_zeros(self) -> None:
+        """Ranges for the y axes that put their zeros on one level (uPlot ranges each
+        axis alone: a teacher's review read A and J as non-zero in the dwells, their
+        zero a few pixels off V's)."""
+        spans = {}
+        for scale in dict.fromkeys(self._scale_of):
+            vals = [y for y, s in zip(self.ys, self._scale_of, strict=True) if s == scale]
+            v = np.concatenate(vals) if vals else np.zeros(1)
+            v = v[np.isfinite(v)]
+            hi = max(float(v.max()), 0.0) if v.size else 1.0
+            lo = min(float(v.min()), 0.0) if v.size else 0.0
+            spans[scale] = (lo, hi) if hi > lo else (-1.0, 1.0)
+        scales = dict(self._scales)
+        for scale, (lo, hi) in zero_aligned(spans).items():
+            scales[scale] = {"auto": False, "range": (lo, hi)}
+        if scales != self.handle.scales:
+            self.handle.scales = scales
 
     def marker(self, theta_deg: float) -> None:
         """Send the curves with the vertical lines: the stations and θ now."""
@@ -170,6 +193,19 @@ class Curve:
             mk[x.size + 3 * np.arange(first, last) + 1] = 2.0
             out.append(mk[order])
         self.handle.data = wire(out)
+
+
+def zero_aligned(spans: dict[str, tuple[float, float]], pad: float = 0.05) -> dict:
+    """Ranges (lo, hi) for axes with data spans (lo <= 0 <= hi, hi > lo) whose zeros sit
+    at the same height: each keeps its span and is widened on one side so that zero is
+    the same fraction f of the way up, f the largest of the spans' own, padded by
+    ``pad`` of each span."""
+    f = max(-lo / (hi - lo) for lo, hi in spans.values())
+    out = {}
+    for name, (lo, hi) in spans.items():
+        total = max(-lo / f if f > 0 else 0.0, hi / (1 - f) if f < 1 else 0.0) * (1 + pad)
+        out[name] = (-f * total, (1 - f) * total)
+    return out
 
 
 def _primary_deg(a):
@@ -383,7 +419,13 @@ def curve_specs(a) -> list[dict]:
             [("N", "force [N]")],
             [
                 {"label": "rigid F_t [N]", "scale": "N", "stroke": COLORS[0], "fn": lambda a: a.Ft},
-                {"label": "elastic F_c [N]", "scale": "N", "stroke": COLORS[1], "fn": _train_force},
+                {  # dashed: on a rigid train it lies exactly on F_t, which must still show
+                    "label": "elastic F_c [N]",
+                    "scale": "N",
+                    "stroke": COLORS[1],
+                    "dash": [6, 4],
+                    "fn": _train_force,
+                },
             ],
             codes={"dynamic_jump"},
         ),
@@ -412,13 +454,13 @@ def curve_specs(a) -> list[dict]:
                     "fn": lambda a: to_um_per_mcycle(wear.total_at_contacts(a)),
                 },
                 {
-                    "label": "face 1 [µm]",
+                    "label": "S1 [µm]",
                     "scale": "um",
                     "stroke": COLORS[3],
                     "fn": lambda a: wear_um(a)[0],
                 },
                 {
-                    "label": "face 2 (double followers) [µm]",
+                    "label": "S2 (double followers) [µm]",
                     "scale": "um",
                     "stroke": COLORS[4],
                     "fn": lambda a: wear_um(a)[-1] if a.FN.shape[0] == 2 else 0 * a.theta,

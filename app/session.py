@@ -291,7 +291,7 @@ class Session:
             ui.where_md.content = self._where(k)
             self._show_status()
         self._save_working()
-        if reset_camera or not 0.5 < _size(a) / self._framed_size < 2:
+        if reset_camera or not 1 / REFRAME < _size(a) / self._framed_size < REFRAME:
             self.reset_camera()  # (r_b 80 -> 5000 mm had put the camera inside the cam)
 
     def _show_curves(self, data: plots.CurveData, k: int) -> None:
@@ -748,6 +748,10 @@ class Session:
         for t in self.threads:
             if t.is_alive() and t is not threading.current_thread():
                 t.join(timeout=2.0)
+
+
+REFRAME = 4 / 3  # the cam grew or shrank this much since it was framed: frame it again
+# (at 2, r_b 80 -> 164 mm ran the cam off a projected screen: a teacher's review)
 
 
 def _size(a: Analysis) -> float:

@@ -729,6 +729,9 @@ def test_the_camera_reframes_when_the_cam_changes_size_a_lot(tab):
     far = cam.position
     tab.ui.controls["cam.base_radius_mm"].value = 80.0
     assert cam.position[2] < far[2] / 20
+    near = cam.position  # a third larger (95 -> 135 mm): off a projected screen at 2x
+    tab.ui.controls["cam.base_radius_mm"].value = 120.0
+    assert cam.position[2] > 1.15 * near[2]  # framed again (it had stayed put)
 
 
 def test_stations_diagram_in_the_view_tab(tab):
@@ -1239,3 +1242,14 @@ def test_the_curves_mark_the_stations_and_the_angle_now(tab):
     x = np.asarray(s.ui.curves[0].handle.data[0], float)
     k = int(np.argmin(np.abs(x - stations[2])))
     assert S[k] == pytest.approx(s.design.motion.lift_mm, abs=1e-3)  # the high dwell
+
+
+def test_two_axis_plots_share_the_level_of_zero(tab):
+    """V and A on one plot: their axes' zeros at the same height (the ranges are set so;
+    uPlot alone ranged each axis apart)."""
+    s = tab
+    va = next(c for c in s.ui.curves if len(c._scales) > 4)  # x, shade, marker + 2 axes
+    ranges = [v["range"] for k, v in va.handle.scales.items() if k in set(va._scale_of)]
+    assert len(ranges) >= 2
+    fracs = [-lo / (hi - lo) for lo, hi in ranges]
+    assert max(fracs) - min(fracs) < 1e-9

@@ -404,3 +404,20 @@ def test_status_panel_says_a_cutter_that_gouges_escaped():
     assert "⚠ Cutter:" in html and "All design limits met" in html
     assert "<b>190</b>" not in html and "&lt;b&gt;190" in html
     assert "Cutter" not in panels.status_html(None, [], 1e-7, True)
+
+
+def test_zero_aligned_axes_put_their_zeros_on_one_level():
+    """Two y axes ranged alone put their zeros at different heights (a teacher read A
+    as non-zero in the dwells): each keeps its data and zero is at the same fraction."""
+    from app.plots import zero_aligned
+
+    spans = {"v": (-10.0, 20.0), "a": (-30.0, 25.0), "j": (0.0, 5.0)}
+    out = zero_aligned(spans)
+    fracs = {k: -lo / (hi - lo) for k, (lo, hi) in out.items()}
+    assert max(fracs.values()) - min(fracs.values()) < 1e-12
+    for k, (lo, hi) in spans.items():  # every curve still inside its axis
+        assert out[k][0] <= lo and out[k][1] >= hi
+    assert zero_aligned({"v": (-2.0, 0.0), "a": (-1.0, 0.0)}) == {
+        "v": (-2.1, 0.0),
+        "a": (-1.05, 0.0),
+    }
