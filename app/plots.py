@@ -197,10 +197,11 @@ class Curve:
 
 def zero_aligned(spans: dict[str, tuple[float, float]], pad: float = 0.05) -> dict:
     """Ranges (lo, hi) for axes with data spans (lo <= 0 <= hi, hi > lo) whose zeros sit
-    at the same height: each keeps its span and is widened on one side so that zero is
-    the same fraction f of the way up, f the largest of the spans' own, padded by
-    ``pad`` of each span."""
-    f = max(-lo / (hi - lo) for lo, hi in spans.values())
+    at the same height: zero at the fraction f of the way up on every axis, f the mean
+    of the spans' own (any f strictly between 0 and 1 holds every span: an axis all
+    below zero gains room above it), each widened to hold its span, padded by ``pad``.
+    """
+    f = sum(-lo / (hi - lo) for lo, hi in spans.values()) / len(spans)
     out = {}
     for name, (lo, hi) in spans.items():
         total = max(-lo / f if f > 0 else 0.0, hi / (1 - f) if f < 1 else 0.0) * (1 + pad)

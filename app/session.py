@@ -13,6 +13,7 @@ inline.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import logging
 import math
@@ -116,6 +117,7 @@ class Session:
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
         self._persist = False  # on once the browser's stored design has been read
         self._syncing = False  # True while the session writes into its own widgets
+        self._syncer: int | None = None  # the thread that does (_quiet)
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -168,6 +170,8 @@ class Session:
         redraws (it reads every control's latest value), so a burst of slider events
         queued on the lock costs one analysis, not one per event.
         """
+        if self._syncing and self._syncer == threading.get_ident():
+            return  # our own write into a control (no ticket: a waiting edit stays newest)
         with self._ticket_lock:
             self._ticket += 1
             mine = self._ticket
@@ -194,11 +198,8 @@ class Session:
         name = renamed_for_kind(old.name, old.follower.kind, design.follower.kind)
         if name == design.name:
             return design
-        self._syncing = True  # (the box's own change must not start another edit)
-        try:
+        with self._quiet():  # (the box's own change must not start another edit)
             self.ui.controls["name"].value = name
-        finally:
-            self._syncing = False
         return design.model_copy(update={"name": name})
 
     def on_segments(self, segs: list[dict]) -> None:
@@ -238,13 +239,24 @@ class Session:
             if (h.min, h.max) != (lo, hi):
                 h.min, h.max = lo, hi
 
+    @contextlib.contextmanager
+    def _quiet(self):
+        """While the session writes into its own widgets: their callbacks, which viser
+        runs at once in this thread, do nothing. (They must not take an edit's ticket
+        either: a user's edit waiting on the lock would be dropped as superseded.)
+        Lock held."""
+        self._syncing, self._syncer = True, threading.get_ident()
+        try:
+            yield
+        finally:
+            self._syncing, self._syncer = False, None
+
     def _values(self) -> dict[str, object]:
         return {p: h.value for p, h in self.ui.controls.items()}
 
     def _sync_controls(self, design: Design) -> None:
         """Write the design's values into the controls (firing no change)."""
-        self._syncing = True
-        try:
+        with self._quiet():
             classic = design.motion.classic is not None
             for spec in controls.SPECS:
                 h, v = self.ui.controls[spec.path], controls.control_value(design, spec)
@@ -255,8 +267,6 @@ class Session:
                 if spec.widget == "slider":
                     h.min, h.max = min(h.min, v), max(h.max, v)
                 h.value = v
-        finally:
-            self._syncing = False
 
     def _apply(self, design: Design, r: Result | None = None, reset_camera: bool = False) -> None:
         """Analyse (fast path, no verification; in the analyst's worker, so that other
@@ -518,11 +528,8 @@ class Session:
         with self.client.atomic():
             self.view.pose(k)
             if slider:
-                self._syncing = True
-                try:
+                with self._quiet():
                     self.ui.angle_slider.value = round(self.theta_deg, 1)  # as the text
-                finally:
-                    self._syncing = False
             if self.camera_view == "Contact close-up":  # follow the contacts as S changes
                 pos, look, _ = self._camera(k)
                 self.client.camera.position, self.client.camera.look_at = pos, look

@@ -785,22 +785,32 @@ KIND_PHRASES: Final = {
 }
 
 
+def _kind_mention(kind: FollowerKind) -> re.Pattern[str]:
+    """How a name mentions ``kind``: its words ("double concave", "single_roller"),
+    a plural or "face(s)" after them, as whole words (not "single concave-faced")."""
+    words = r"[\s_-]+".join(map(re.escape, kind.value.split("_")))
+    return re.compile(rf"\b{words}(?:s|\s+faces?)?(?![\w-])", re.IGNORECASE)
+
+
 def renamed_for_kind(name: str, old: FollowerKind, new: FollowerKind) -> str:
     """``name`` with its mention of the ``old`` follower ("double concave", "double
-    concave faces", "Single roller", ...) replaced by the ``new`` one's phrase, so a
-    header does not name one follower over another's part; unchanged if it names none
-    (a user's own name), if the kind is the same, or if the new name would pass
-    NAME_MAX."""
-    if old == new:
+    concave faces", "Single roller", ...) replaced by the ``new`` one's phrase (in the
+    mention's case), so a header does not name one follower over another's part.
+    Unchanged if it names no follower (a user's own name) or more than one kind (a
+    comparison), if the kind is the same, or if the new name would pass NAME_MAX."""
+    if old == new or not _kind_mention(old).search(name):
         return name
-    words = r"[\s_-]+".join(map(re.escape, old.value.split("_")))
-    pattern = rf"\b{words}(?:s|\s+faces?|\s+rollers?|\s+followers?)?\b"
+    if any(_kind_mention(k).search(name) for k in FollowerKind if k != old):
+        return name
     phrase = KIND_PHRASES[new]
 
     def keep_case(m: re.Match[str]) -> str:
-        return phrase[0].upper() + phrase[1:] if m.group(0)[0].isupper() else phrase
+        said = m.group(0)
+        if said.isupper():
+            return phrase.upper()
+        return phrase[0].upper() + phrase[1:] if said[0].isupper() else phrase
 
-    out = re.sub(pattern, keep_case, name, count=1, flags=re.IGNORECASE)
+    out = _kind_mention(old).sub(keep_case, name, count=1)
     return out if len(out) <= NAME_MAX else name
 
 

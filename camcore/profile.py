@@ -227,6 +227,20 @@ def curvature_radius(geo: Geometry, face: Face, kappa_p: np.ndarray) -> np.ndarr
         return np.where(kappa_p == 0.0, np.inf, geo.sigma / kappa_p - r)
 
 
+def radius_extremes(rho: np.ndarray, in_contact: np.ndarray) -> tuple[float, float]:
+    """(smallest convex rho > 0, tightest concave |rho| with rho < 0) [m] of the signed
+    radii ``rho`` (curvature_radius, per face and angle) where a face touches; inf where
+    the cam has no such stretch, and a straight pitch curve (inf) counts as neither.
+    The report's radius_of_curvature_mm and the G-code's cutter advice."""
+    r = rho[in_contact]
+    r = r[np.isfinite(r)]
+    convex, concave = r[r > 0], -r[r < 0]
+    return (
+        float(convex.min()) if convex.size else math.inf,
+        float(concave.min()) if concave.size else math.inf,
+    )
+
+
 def lever_x(geo: Geometry, face: Face, prog: Program) -> np.ndarray:
     """Horizontal distance [m] from the follower's axis to the point through which the
     contact force acts, per cam angle: the face centre C (x_c - stem_x: +-e for double

@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from . import checks, machine, train, wear
+from . import checks, machine, profile, train, wear
 from .analysis import Analysis, analyze, compare, contacts
 from .contact import hertz_validity
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
@@ -53,14 +53,8 @@ def _radii_mm(a: Analysis) -> dict[str, float | None]:
     [min, max] (curvature_radius_mm) mixes the two on a roller cam with a concave
     flank; these are the figures a designer sizes with (the convex one sets the
     stress, the concave one the largest cutter and grinding wheel)."""
-    rho = a.rho[a.in_contact] * 1e3
-    rho = rho[np.isfinite(rho)]  # (inf: a straight pitch curve, neither)
-    return {"convex_min": _min(rho, rho > 0), "concave_min": _min(-rho, rho < 0)}
-
-
-def _min(x: np.ndarray, mask: np.ndarray) -> float | None:
-    m = _max(-x, mask)
-    return None if m is None else -m
+    convex, concave = profile.radius_extremes(a.rho, a.in_contact)
+    return {"convex_min": _finite(convex, 1e3), "concave_min": _finite(concave, 1e3)}
 
 
 def _flat_face_width_mm(a: Analysis) -> float | None:
@@ -306,14 +300,20 @@ def _train_text(t: dict | None) -> str:
     )
 
 
+def _down(x: float) -> str:
+    """A margin to 2 decimals, rounded down: 1.4996 is '1.49', not '1.5' beside a
+    warning that it is below 1.5."""
+    return f"{math.floor(x * 100) / 100:.2f}"
+
+
 def _margin_text(s: dict) -> str:
     """k / k_min and jump speed / running speed, flagged below the safety factor n."""
     m, n = s["jump_margin"], s["spring_proposal"]["safety_factor"]
     parts = []
     if m["spring_rate"] is not None:
-        parts.append(f"k = {m['spring_rate']:.3g} k_min")
+        parts.append(f"k = {_down(m['spring_rate'])} k_min")
     if m["jump_speed"] is not None:
-        parts.append(f"jumps at {m['jump_speed']:.3g} x this speed")
+        parts.append(f"jumps at {_down(m['jump_speed'])} x this speed")
     text = ", ".join(parts) or "-"
     rate = m["spring_rate"]
     if rate is not None and rate < 1.0:

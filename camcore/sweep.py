@@ -39,9 +39,11 @@ from .files import FileError, read_capped, write_atomic
 from .model import (
     Design,
     DesignError,
+    FollowerKind,
     design_from_json,
     format_validation_error,
     load_preset,
+    renamed_for_kind,
     set_field,
 )
 
@@ -241,11 +243,18 @@ def flatten(node, prefix: str = "", out: dict | None = None) -> dict:
 
 
 def design_at(base: dict, point: dict) -> Design:
-    """The base design with the point's field values, validated strictly."""
+    """The base design with the point's field values, validated strictly; a point that
+    changes the follower's kind renames the follower the name mentions (as
+    Design.with_kind does: Explore's 'Load this design' brings the name along)."""
     data = json.loads(json.dumps(base))
     for path, value in point.items():
         set_field(data, path, value, "grid.")
-    return design_from_json(json.dumps(data))
+    design = design_from_json(json.dumps(data))
+    old = base.get("follower", {}).get("kind")
+    if old in FollowerKind.__members__ and design.follower.kind != old:
+        name = renamed_for_kind(design.name, FollowerKind(old), design.follower.kind)
+        design = design.model_copy(update={"name": name})
+    return design
 
 
 def _grid_values(point: dict) -> dict:

@@ -132,18 +132,12 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
 
 def _tightest_concave(a) -> float:
     """The tightest concave radius |rho| [m] of the cam (Eq. 21, rho < 0) where the
-    follower touches it: the grid's and the refined extreme of the pitch curvature
-    (camcore.extremes), as the report's radius_of_curvature_mm; the polyline's own
-    (the circle through three vertices, coarser: 66.4 mm for 66.04) only if the
-    analysis has none."""
-    rho = a.rho[a.in_contact]
-    tight = list(-rho[rho < 0])
-    w = a.worst.get("kappa_pitch_min")
-    if w is not None and w.value < 0:
-        r = float(profile.curvature_radius(a.geo, a.geo.faces[w.face], np.array([w.value]))[0])
-        tight += [-r] if r < 0 else []
-    if tight:
-        return float(min(tight))
+    follower touches it, as the report's radius_of_curvature_mm gives it; the
+    polyline's own (the circle through three vertices, coarser: 66.4 mm for 66.04) only
+    if the analysis has none."""
+    tight = profile.radius_extremes(a.rho, a.in_contact)[1]
+    if math.isfinite(tight):
+        return tight
     k = discrete_curvature(a.profile.points)
     return 1.0 / -k.min() if k.min() < 0 else math.inf
 

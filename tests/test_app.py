@@ -1253,3 +1253,33 @@ def test_two_axis_plots_share_the_level_of_zero(tab):
     assert len(ranges) >= 2
     fracs = [-lo / (hi - lo) for lo, hi in ranges]
     assert max(fracs) - min(fracs) < 1e-9
+
+
+def test_an_edit_during_a_rename_is_not_lost(tab, monkeypatch):
+    """A review: the rename wrote the name box from inside the kind's callback, which
+    took a new edit ticket, so a user's edit waiting on the lock was dropped as
+    superseded (the box said 90 mm, the design stayed 80 mm). The session's own writes
+    take no ticket."""
+    import threading
+
+    from app import session as session_module
+
+    s = tab
+    real = session_module.renamed_for_kind
+    other: list[threading.Thread] = []
+
+    def rename_while_the_user_edits(*args):
+        before = s._ticket
+        t = threading.Thread(
+            target=lambda: s.ui.controls["cam.base_radius_mm"].__setattr__("value", 90.0)
+        )
+        t.start()
+        other.append(t)
+        assert wait_for(lambda: s._ticket > before)  # the edit took its ticket, waits
+        return real(*args)
+
+    monkeypatch.setattr(session_module, "renamed_for_kind", rename_while_the_user_edits)
+    s.ui.controls["follower.kind"].value = "single_roller"
+    other[0].join(10)
+    assert s.design.follower.kind == "single_roller" and s.design.name.endswith("(single roller)")
+    assert s.design.cam.base_radius_mm == 90.0

@@ -421,3 +421,8 @@ def test_zero_aligned_axes_put_their_zeros_on_one_level():
         "v": (-2.1, 0.0),
         "a": (-1.05, 0.0),
     }
+    # one axis all above zero, one all below (a review: the first had lost its span)
+    for spans in ({"v": (0.0, 5.0), "a": (-3.0, 0.0)}, {"v": (-1.0, 1.0), "a": (-3.0, 0.0)}):
+        out = zero_aligned(spans)
+        for k, (lo, hi) in spans.items():
+            assert out[k][0] <= lo and out[k][1] >= hi and out[k][1] > out[k][0]

@@ -359,7 +359,8 @@ def test_the_margin_to_jump_is_said_beside_the_safety_factor():
     assert m["spring_rate"] == pytest.approx(6772.5 / s["spring_rate_min_N_per_m"])
     assert m["jump_speed"] == pytest.approx(s["jump_speed_rpm"] / PAPER.cam.speed_rpm)
     row = dict(machine_rows(s))["margin to jump"]
-    assert "close to jump" not in row and f"k = {m['spring_rate']:.3g} k_min" in row
+    down = math.floor(6772.5 / s["spring_rate_min_N_per_m"] * 100) / 100
+    assert "close to jump" not in row and f"k = {down:.2f} k_min" in row
     # k_min grows as w^2: at 1.4 x the speed, k / k_min falls below 1.5 (still valid)
     near = tweak(PAPER, cam__speed_rpm=1.4 * PAPER.cam.speed_rpm)
     s2 = summary(analyze(near, verify=False))
@@ -367,3 +368,13 @@ def test_the_margin_to_jump_is_said_beside_the_safety_factor():
     assert "below the safety factor 1.5: close to jump" in dict(machine_rows(s2))["margin to jump"]
     loose = tweak(PAPER, dynamics__spring_rate_N_per_m=0.0, dynamics__gravity_m_s2=0.0)
     assert summary(analyze(loose, verify=False))["jump_margin"]["spring_rate"] == 0.0
+
+
+def test_a_margin_just_under_the_safety_factor_does_not_print_as_it():
+    """A review: k = 1.4996 k_min printed 'k = 1.5 k_min (below the safety factor 1.5)'."""
+    from camcore.report import _margin_text
+
+    s = {"jump_margin": {"spring_rate": 1.4996, "jump_speed": 0.9996}}
+    s["spring_proposal"] = {"safety_factor": 1.5}
+    text = _margin_text(s)
+    assert "k = 1.49 k_min" in text and "jumps at 0.99 x" in text and "close to jump" in text

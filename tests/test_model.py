@@ -90,3 +90,20 @@ def test_with_kind_renames_the_follower_a_name_mentions():
     assert own.with_kind("flat_face").name == "Line 3 feeder"
     knife = paper.with_kind("knife_edge").model_copy(update={"name": "x" * 188 + " knife edge"})
     assert knife.with_kind("double_concave").name == knife.name  # 209 chars: kept
+
+
+@pytest.mark.parametrize(
+    "name, old, new, expected",
+    [
+        ("A single roller follower", "single_roller", "knife_edge", "A knife edge follower"),
+        ("double concave faces vs single roller", "single_roller", "double_concave", None),
+        ("single concave-faced", "single_concave", "single_roller", None),
+        ("SINGLE ROLLER cam", "single_roller", "flat_face", "FLAT FACE cam"),
+        ("double rollers, test", "double_roller", "single_roller", "single roller, test"),
+    ],
+)
+def test_a_rename_keeps_the_rest_of_the_name(name, old, new, expected):
+    """A review's names: the word after the follower stays, a name that compares two
+    followers or says 'single concave-faced' is left alone (None), capitals stay."""
+    out = model.renamed_for_kind(name, FollowerKind(old), FollowerKind(new))
+    assert out == (name if expected is None else expected)

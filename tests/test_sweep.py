@@ -825,3 +825,15 @@ def test_pareto_of_odd_tables(pareto_table, tmp_path):
         bad = cli(path)
         assert bad.returncode == 2 and "not a camcore sweep table" in bad.stderr, bad.stderr
         assert "Traceback" not in bad.stderr
+
+
+def test_a_point_that_changes_the_follower_renames_it():
+    """A review: Explore's 'Load this design' brought '... (double concave faces)' with a
+    single roller; a grid point of another kind renames the follower the name says."""
+    from camcore.model import load_preset
+
+    base = load_preset("paper_example").model_dump(mode="json")
+    roller = sweep.design_at(base, {"follower.kind": "single_roller"})
+    assert roller.name == "Chuang, Hsu & Chang, Section 6 example (single roller)"
+    same = sweep.design_at(base, {"cam.base_radius_mm": 90})
+    assert same.name == base["name"]

@@ -71,6 +71,9 @@ def test_the_cutter_may_not_be_wider_than_the_tightest_concave_stretch():
     # vertices had said 66.4 mm for 66.04 in a designer's review)
     said = float(re.search(r"tightest concave radius is ([\d.]+) mm", str(err.value)).group(1))
     assert said == pytest.approx(rho_min / MM, rel=1e-4)
+    from camcore.report import summary  # the report's figure, to the digits written
+
+    assert f"{summary(a)['radius_of_curvature_mm']['concave_min']:.5g}" == f"{said:.5g}"
 
 
 def test_gcode_reads_back_to_the_path():
