@@ -119,11 +119,11 @@ class App:
             del s
             _trim_heap()
 
-    def _upload_refused(self, client_id: int, filename: str, size: int) -> None:
+    def _upload_refused(self, client_id: int, filename: str, size: int, why: str) -> None:
         with self._lock:
             s = self.sessions.get(client_id)
         if s is not None:
-            s.upload_refused(filename, size)
+            s.upload_refused(filename, size, why)
 
     def _disconnect(self, client) -> None:
         with self._lock:

@@ -31,7 +31,7 @@ from camcore.model import (
 )
 from camcore.model import load_preset as load_preset_design
 
-from . import controls, plots, storage, uploads
+from . import controls, plots, storage
 from .analyst import Analyst, Result
 from .layout import (
     DEFAULT_PRESET,
@@ -383,6 +383,7 @@ class Session:
         self._say(f"Loaded preset **{esc(name)}**.")
 
     def upload(self, name: str, content: bytes) -> None:
+        name = _short(name)  # (a client's file name: shown, so bounded)
         try:
             d = design_from_json(content)
         except DesignError as exc:
@@ -394,11 +395,12 @@ class Session:
         self.set_design(d)
         self._say(f"Opened **{esc(name)}** ({esc(d.name)}).")
 
-    def upload_refused(self, name: str, size: int) -> None:
-        """The upload guard (app.uploads) dropped a transfer larger than its cap."""
+    def upload_refused(self, name: str, size: int, why: str) -> None:
+        """The upload guard (app.uploads) dropped a transfer: too large, larger than it
+        said, or too many unfinished from this tab (``why``)."""
         self._say(
-            f"✖ **{esc(name)}** refused: {size:,} bytes, more than the "
-            f"{uploads.MAX_UPLOAD_BYTES:,}-byte limit (a design file is a few kB)."
+            f"✖ **{esc(_short(name))}** refused: {size:,} bytes, {esc(why)} (a design file "
+            "is a few kB)."
         )
 
     def download(self, kind: str, quick: bool = False) -> None:
@@ -755,6 +757,15 @@ class Session:
         for t in self.threads:
             if t.is_alive() and t is not threading.current_thread():
                 t.join(timeout=2.0)
+
+
+NAME_SHOWN = 80  # characters of a client's file name that a message repeats
+
+
+def _short(name: str) -> str:
+    """A client's file name as messages show it: at most NAME_SHOWN characters (an 8 MB
+    name had been echoed twice, into Files and the status panel)."""
+    return name if len(name) <= NAME_SHOWN else name[: NAME_SHOWN - 1] + "…"
 
 
 REFRAME = 4 / 3  # the cam grew or shrank this much since it was framed: frame it again

@@ -10,8 +10,12 @@ never buffered, and one whose received bytes pass the cap (or its own declared s
 is dropped at once. ``install`` must run before the server is created, because viser
 registers the handlers as bound methods in ``GuiApi.__init__``.
 
-The refusal is reported through ``on_refused(client_id, filename, size_bytes)`` so the
-tab can say why its upload went nowhere.
+The bytes one tab may have in unfinished transfers are capped too (MAX_IN_FLIGHT_BYTES,
+declared sizes): a review started 150 uploads of just under the cap and left them
+unfinished, and the server grew by 145 MB.
+
+The refusal is reported through ``on_refused(client_id, filename, size_bytes, why)`` so
+the tab can say why its upload went nowhere.
 """
 
 from __future__ import annotations
@@ -21,12 +25,14 @@ from collections.abc import Callable
 from viser._gui_api import GuiApi
 
 MAX_UPLOAD_BYTES = 1_000_000  # a design file is a few kB (camcore.model.MAX_DESIGN_BYTES)
+MAX_IN_FLIGHT_BYTES = 2 * MAX_UPLOAD_BYTES  # declared bytes of one tab's unfinished uploads
 
 _state: dict = {"max_bytes": MAX_UPLOAD_BYTES, "on_refused": None, "installed": False}
 
 
 def install(
-    max_bytes: int = MAX_UPLOAD_BYTES, on_refused: Callable[[int, str, int], None] | None = None
+    max_bytes: int = MAX_UPLOAD_BYTES,
+    on_refused: Callable[[int, str, int, str], None] | None = None,
 ) -> None:
     """Cap every upload of every viser server created from now on at ``max_bytes``."""
     _state["max_bytes"], _state["on_refused"] = max_bytes, on_refused
@@ -35,20 +41,34 @@ def install(
     start, part = GuiApi._handle_file_transfer_start, GuiApi._handle_file_transfer_part
 
     def guarded_start(self, client_id, message):
-        if message.size_bytes > _state["max_bytes"] or message.size_bytes < 0:
-            _refuse(client_id, message.filename, message.size_bytes)
+        cap, size = _state["max_bytes"], message.size_bytes
+        if size > cap or size < 0:
+            _refuse(client_id, message.filename, size, f"more than the {cap:,}-byte limit")
             return  # never buffered: its parts find no transfer and are ignored
+        pending = sum(
+            s["total_bytes"]
+            for s in list(self._current_file_upload_states.values())
+            if s.get("client_id") == client_id
+        )
+        if pending + size > MAX_IN_FLIGHT_BYTES:
+            why = f"{pending:,} bytes of earlier uploads from this tab are still unfinished"
+            _refuse(client_id, message.filename, size, why)
+            return
         start(self, client_id, message)
 
     def guarded_part(self, client_id, message):
         state = self._current_file_upload_states.get(message.transfer_uuid)
         if state is not None:
-            limit = min(_state["max_bytes"], state["total_bytes"])
-            if state["transferred_bytes"] + len(message.content) > limit:
+            cap, declared = _state["max_bytes"], state["total_bytes"]
+            got = state["transferred_bytes"] + len(message.content)
+            if got > min(cap, declared):
                 self._current_file_upload_states.pop(message.transfer_uuid, None)
-                _refuse(
-                    client_id, state["filename"], state["transferred_bytes"] + len(message.content)
+                why = (
+                    f"more than the {cap:,}-byte limit"
+                    if got > cap
+                    else f"more than the {declared:,} bytes it announced"
                 )
+                _refuse(client_id, state["filename"], got, why)
                 return
         part(self, client_id, message)
 
@@ -57,7 +77,7 @@ def install(
     _state["installed"] = True
 
 
-def _refuse(client_id: int, filename: str, size: int) -> None:
+def _refuse(client_id: int, filename: str, size: int, why: str) -> None:
     callback = _state["on_refused"]
     if callback is not None:
-        callback(client_id, filename, size)
+        callback(client_id, filename, size, why)

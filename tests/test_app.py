@@ -1283,3 +1283,37 @@ def test_an_edit_during_a_rename_is_not_lost(tab, monkeypatch):
     other[0].join(10)
     assert s.design.follower.kind == "single_roller" and s.design.name.endswith("(single roller)")
     assert s.design.cam.base_radius_mm == 90.0
+
+
+def test_a_tab_cannot_keep_many_uploads_unfinished(app, tab):
+    """A review started 150 uploads of just under the cap and finished none: the server
+    grew by 145 MB. A tab's unfinished uploads are capped (declared bytes), the
+    refusal says why, and a file name is shown shortened."""
+    from viser import _messages
+
+    from app import uploads
+
+    s = tab
+    gui_api, button, cid = s.client.gui, s.ui.upload_btn._impl.uuid, s.client.client_id
+
+    def start(i: int, name: str = "part.json") -> str:
+        uid = f"t-{i}"
+        gui_api._handle_file_transfer_start(
+            cid,
+            _messages.FileTransferStartUpload(
+                source_component_uuid=button,
+                transfer_uuid=uid,
+                filename=name,
+                mime_type="application/json",
+                part_count=2,
+                size_bytes=999_000,
+            ),
+        )
+        return uid
+
+    kept = [start(i) for i in range(uploads.MAX_IN_FLIGHT_BYTES // 999_000)]
+    assert all(u in gui_api._current_file_upload_states for u in kept)
+    extra = start(99, "x" * 10_000)
+    assert extra not in gui_api._current_file_upload_states
+    said = s.ui.files_md.content
+    assert "still unfinished" in said and len(said) < 600  # the name shortened
