@@ -93,6 +93,12 @@ def _cutter_gouges(a: Analysis) -> str | None:
     return None
 
 
+def _export(kind: str, a: Analysis) -> bytes:
+    from camcore.export import EXPORTS
+
+    return EXPORTS[kind].write(a)
+
+
 def _warm(background: bool) -> int:
     """Worker start: the background worker only gets CPU time no one else wants
     (SCHED_IDLE where Linux has it, else the lowest nice), so a class's refinements
@@ -160,6 +166,17 @@ class Analyst:
     def same_designs(self, base: dict, points: list[dict]) -> list[int]:
         """camcore.sweep.same_designs (validates every point), in the background worker."""
         return self._run("bg", sweep.same_designs, base, points)
+
+    def document(self, kind: str, a: Analysis) -> bytes:
+        """camcore.export's ``kind`` file of ``a`` (the reports: ~1 s of matplotlib),
+        made in the background worker, not in the server's interpreter."""
+        return self._run("bg", _export, kind, a)
+
+    def stations_image(self, a: Analysis) -> np.ndarray:
+        """camcore.document.stations_image of ``a``, drawn in the background worker."""
+        from camcore.document import stations_image
+
+        return self._run("bg", stations_image, a)
 
     def explore_png(self, rows, x, y, names, front, limits=None) -> bytes:
         """camcore.explore.explore_png, drawn in the background worker."""

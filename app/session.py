@@ -118,6 +118,7 @@ class Session:
         self._persist = False  # on once the browser's stored design has been read
         self._syncing = False  # True while the session writes into its own widgets
         self._syncer: int | None = None  # the thread that does (_quiet)
+        self._busy = threading.Lock()  # a download or diagram being made (one at a time)
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -406,35 +407,52 @@ class Session:
     def download(self, kind: str, quick: bool = False) -> None:
         """Send the export ``kind`` of the design on screen, or say why not: under the
         Files tab's buttons, or (``quick``: the button above the tabs) under that button,
-        where the user is looking."""
+        where the user is looking. One file at a time per tab, made outside the tab's
+        lock (the documents in the background worker): a review's 50 clicks on
+        *Report PDF* had queued 50 renders in the server, and another tab's edit waited
+        24 s."""
         say = self._say_quick if quick else self._say
-        with self.lock:
-            a, d = self.analysis, self.design
-            if self.error is not None:  # the controls no longer describe d: say so
-                return say(
-                    "✖ Download refused: the input is invalid (see the red "
-                    "panel). Fix it, or load a design, and the files will hold "
-                    "what you see."
-                )
-            try:
-                spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
-                name, data = f"{file_stem(d)}{spec.suffix}", spec.write(a)
-            except (KeyError, export.ExportError) as exc:
-                return say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
-            except Exception as exc:  # a defect of ours: said, not silent (and logged)
-                logging.getLogger(__name__).exception("export %r failed", kind)
-                return say(  # (the type only: its text may name the server's files)
-                    f"✖ Cannot export {esc(kind)}: an internal error "
-                    f"({esc(type(exc).__name__)}, in the server's log). Please report it; "
-                    "the other files may still work."
-                )
+        if not self._busy.acquire(blocking=False):
+            return say("… Still making the previous file: one at a time, please.")
+        try:
+            with self.lock:
+                a, d = self.analysis, self.design
+                if self.error is not None:  # the controls no longer describe d: say so
+                    return say(
+                        "✖ Download refused: the input is invalid (see the red "
+                        "panel). Fix it, or load a design, and the files will hold "
+                        "what you see."
+                    )
+            made = self._export(kind, a, d, say)
+            if made is None:
+                return
+            name, data = made
             note = export.warning(a)
             say(
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
                 f"{d.follower.kind.label}."
                 + ("" if note is None else f"<br>⚠ **Before you make it:** {esc(note)}.")
             )
-        self.client.send_file_download(name, data, save_immediately=True)
+            self.client.send_file_download(name, data, save_immediately=True)
+        finally:
+            self._busy.release()
+
+    def _export(self, kind: str, a: Analysis, d: Design, say) -> tuple[str, bytes] | None:
+        """(file name, bytes) of export ``kind`` of ``a``, or None having said why not."""
+        try:
+            spec = export.EXPORTS[kind]  # a fixed table: the client's value is only a key
+            data = self.analyst.document(kind, a) if kind in DOCUMENTS else spec.write(a)
+            return f"{file_stem(d)}{spec.suffix}", data
+        except (KeyError, export.ExportError) as exc:
+            say(f"✖ Cannot export {esc(kind)}: {esc(exc)}")
+        except Exception as exc:  # a defect of ours: said, not silent (and logged)
+            logging.getLogger(__name__).exception("export %r failed", kind)
+            say(  # (the type only: its text may name the server's files)
+                f"✖ Cannot export {esc(kind)}: an internal error "
+                f"({esc(type(exc).__name__)}, in the server's log). Please report it; "
+                "the other files may still work."
+            )
+        return None
 
     def _say(self, markdown: str) -> None:
         """A line under the Files tab's buttons (user strings already escaped)."""
@@ -647,20 +665,23 @@ class Session:
         button; drawn from the design on screen, replaced on each click, and taken
         away when the geometry changes (_redraw: a diagram of another follower beside
         the 3D view had misled; a new speed or material leaves it)."""
-        from camcore.document import stations_image
-
-        with self.lock:
-            a, key = self.analysis, geometry_key(self.design)
-        image = stations_image(a)  # ~0.5 s of matplotlib, outside the lock
-        with self.lock:
-            if geometry_key(self.design) != key:  # the geometry changed meanwhile
-                return
-            self._diagram_of = key
-            if self.ui.stations_img is not None:
-                self.ui.stations_img.image = image
-            else:
-                with self.ui.view_folder:
-                    self.ui.stations_img = self.client.gui.add_image(image, format="png")
+        if not self._busy.acquire(blocking=False):
+            return  # one at a time (a review's 60 clicks drew 60 diagrams at once)
+        try:
+            with self.lock:
+                a, key = self.analysis, geometry_key(self.design)
+            image = self.analyst.stations_image(a)  # ~0.5 s of matplotlib, in the worker
+            with self.lock:
+                if geometry_key(self.design) != key:  # the geometry changed meanwhile
+                    return
+                self._diagram_of = key
+                if self.ui.stations_img is not None:
+                    self.ui.stations_img.image = image
+                else:
+                    with self.ui.view_folder:
+                        self.ui.stations_img = self.client.gui.add_image(image, format="png")
+        finally:
+            self._busy.release()
 
     def set_wide_panel(self, on: bool) -> None:
         """Widen the control panel for the curves, or give it back its width: through
@@ -759,6 +780,7 @@ class Session:
                 t.join(timeout=2.0)
 
 
+DOCUMENTS = ("html", "pdf")  # exports made in the background worker (~1 s of matplotlib)
 NAME_SHOWN = 80  # characters of a client's file name that a message repeats
 
 

@@ -1317,3 +1317,32 @@ def test_a_tab_cannot_keep_many_uploads_unfinished(app, tab):
     assert extra not in gui_api._current_file_upload_states
     said = s.ui.files_md.content
     assert "still unfinished" in said and len(said) < 600  # the name shortened
+
+
+def test_one_file_at_a_time_per_tab_and_made_outside_its_lock(tab, downloads, monkeypatch):
+    """A review clicked *Report PDF* 50 times: 50 renders queued in the server and
+    another tab's edit waited 24 s. A tab makes one file at a time (a second click says
+    so at once), the reports in the background worker, outside the tab's lock: the tab
+    can still be edited while its PDF is made."""
+    import threading
+
+    s = tab
+    started, release = threading.Event(), threading.Event()
+
+    def slow_document(kind, a):
+        started.set()
+        assert release.wait(10)
+        return b"%PDF-slow"
+
+    monkeypatch.setattr(s.analyst, "document", slow_document)
+    first = threading.Thread(target=s.download, args=("pdf",))
+    first.start()
+    assert started.wait(10)
+    s.download("pdf")  # the second click, while the first is being made
+    assert "one at a time" in s.ui.files_md.content
+    s.ui.controls["motion.lift_mm"].value = 16.0  # the tab is not locked meanwhile
+    assert s.design.motion.lift_mm == 16.0
+    release.set()
+    first.join(10)
+    assert downloads[-1][1] == b"%PDF-slow" and downloads[-1][0].endswith(".pdf")
+    assert len([d for d in downloads if d[0].endswith(".pdf")]) == 1
