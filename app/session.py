@@ -470,13 +470,16 @@ class Session:
         restart, brings the user back to them). Until the read returns nothing is
         written, so the default design never overwrites what the browser kept."""
         gen0 = self.gen
-        working = storage.parse_working(self.store.read(storage.WORKING_KEY))
+        raw = self.store.read(storage.WORKING_KEY)
+        working = storage.parse_working(raw)
         saved = storage.parse_saved(self.store.read(storage.SAVED_KEY))
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
         if self.closed.is_set():
             return
+        why = storage.working_error(raw) if working is None else None
         with self.lock:
-            self._show_saved(saved)
+            kept = storage.keep_unreadable(saved, raw) if raw and why else None
+            self._show_saved(saved if kept is None else kept, write=kept is not None)
             restore = working is not None and self.gen == gen0 and working != self.design
             self._persist = True
             if not restore:
@@ -489,6 +492,16 @@ class Session:
             )
             self._say(note)
             self._say_quick(note)
+        if why is not None:  # what the browser kept is not lost without a word
+            where = (
+                f"it is kept in *Files → Kept in this browser* as “{storage.UNREADABLE_NAME}”"
+                if kept is not None
+                else "it could not be kept (too long, or the kept list is full)"
+            )
+            self._say(
+                f"✖ This browser kept a working design this version cannot open "
+                f"({esc(_short(why))}); {where}. The tab starts on the default design."
+            )
         # after the design: a kept field whose range the setup cannot give gets one
         # around the restored design's value, not the default's
         try:  # a setup the browser kept must never cost the design or the saved list

@@ -43,7 +43,7 @@ def parse_saved(text: str | None) -> dict[str, str]:
         return {}
     try:
         raw = json.loads(text)
-    except ValueError:
+    except (ValueError, RecursionError):  # (a review's deep nesting had killed the restore)
         return {}
     if not isinstance(raw, dict):
         return {}
@@ -57,6 +57,33 @@ def parse_saved(text: str | None) -> dict[str, str]:
         ):
             out[name] = value
     return out
+
+
+UNREADABLE_NAME = "working design this version cannot open"
+
+
+def working_error(text: str | None) -> str | None:
+    """Why a stored working design cannot be opened (DesignError's words), None if it
+    can or there is none."""
+    if not text:
+        return None
+    try:
+        design_from_json(text)
+    except DesignError as exc:
+        return str(exc)
+    return None
+
+
+def keep_unreadable(saved: dict[str, str], text: str) -> dict[str, str] | None:
+    """The saved list with an unreadable working design kept in it under
+    UNREADABLE_NAME (a later version's file, a damaged one: the tab would otherwise
+    overwrite it with the default design), or None if it cannot be kept (too long, or
+    the list is full)."""
+    if len(text) > MAX_DESIGN_BYTES:
+        return None
+    if UNREADABLE_NAME not in saved and len(saved) >= MAX_SAVED:
+        return None
+    return {**saved, UNREADABLE_NAME: text}
 
 
 def parse_setup(text: str | None) -> dict | None:

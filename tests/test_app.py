@@ -1346,3 +1346,40 @@ def test_one_file_at_a_time_per_tab_and_made_outside_its_lock(tab, downloads, mo
     first.join(10)
     assert downloads[-1][1] == b"%PDF-slow" and downloads[-1][0].endswith(".pdf")
     assert len([d for d in downloads if d[0].endswith(".pdf")]) == 1
+
+
+def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
+    """A review: a deeply nested saved list killed the restore thread (RecursionError),
+    after which no edit was ever kept; and a working design this version cannot open
+    (one from a later version) was overwritten by the default design without a word.
+    Now the bad list is ignored, the tab keeps saving, and the unreadable design is
+    kept in the saved list, said in Files."""
+    import json
+
+    from app import storage
+
+    newer = json.loads(design_to_json(load_preset("paper_example")))
+    newer["schema_version"] = 3
+    stored = {
+        storage.WORKING_KEY: json.dumps(newer),
+        storage.SAVED_KEY: "[" * 50_000 + "]" * 50_000,
+    }
+    writes: dict[str, str] = {}
+    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
+    monkeypatch.setattr(
+        storage.BrowserStore, "write", lambda self, key, v: writes.__setitem__(key, v)
+    )
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    try:
+        assert wait_for(lambda: set(app.sessions) - before)
+        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+        s._restorer.join(10)
+        assert s._persist and s._restorer is not None and not s._restorer.is_alive()
+        kept = json.loads(writes[storage.SAVED_KEY])
+        assert kept[storage.UNREADABLE_NAME] == stored[storage.WORKING_KEY]
+        assert "cannot open" in s.ui.files_md.content and "schema" in s.ui.files_md.content
+        s.ui.controls["motion.lift_mm"].value = 17.0  # and the tab keeps its work
+        assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
+    finally:
+        t.close()
