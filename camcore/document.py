@@ -256,7 +256,11 @@ def pdf_report(a: Analysis) -> bytes:
         text += "\n\nThe design breaks the limits listed above (lines starting with '!')."
     page = Figure(figsize=(8.27, 11.69))  # A4
     page.text(0.06, 0.96, "Cam design report", fontsize=16, va="top")
-    page.text(0.06, 0.92, text, family="monospace", fontsize=7, va="top", wrap=True)
+    # "$" escaped: matplotlib reads $...$ as math, even with parse_math=False when it
+    # wraps, and a name such as "a $\foo$ b" (user input) had made the PDF fail
+    page.text(
+        0.06, 0.92, text.replace("$", r"\$"), family="monospace", fontsize=7, va="top", wrap=True
+    )
     buf = io.BytesIO()
     with PdfPages(
         buf, metadata={"Title": f"Cam design report: {s['design']}", "Creator": "camcore"}

@@ -255,3 +255,12 @@ def test_a_hub_wall_below_the_limit_is_a_violation():
     assert s["profile"]["hub_wall_mm"] == checks.hub_wall_mm(keyed)  # reported, in mm
     assert f"{s['profile']['hub_wall_mm']:.3f} mm" in report_text(s)
     assert summary(with_bore(0.0))["profile"]["hub_wall_mm"] is None
+
+
+@pytest.mark.parametrize("name", [r"a $\foo$ b", "cost $5 and $6", "$x^{$"])
+def test_a_name_with_dollars_makes_a_pdf(name):
+    """A review: matplotlib read a name's $...$ as math text, and r'a $\\foo$ b' made
+    the PDF report fail (an internal error in the app)."""
+    d = load_preset("paper_example").model_copy(update={"name": name})
+    data = export.EXPORTS["pdf"].write(analyze(d, verify=False))
+    assert data.startswith(b"%PDF") and len(data) > 10_000
