@@ -565,7 +565,7 @@ class Session:
                     self.ui.angle_slider.value = round(self.theta_deg, 1)  # as the text
             if self.camera_view == "Contact close-up":  # follow the contacts as S changes
                 pos, look, _ = self._camera(k)
-                self.client.camera.position, self.client.camera.look_at = pos, look
+                self._set_camera(pos, look)
                 self._preset_pose = (*pos, *look)
             if markers:
                 self._show_markers(k)
@@ -576,6 +576,11 @@ class Session:
             c.marker(math.degrees(self.analysis.theta[k]))
 
     def _on_angle(self, value: float) -> None:
+        try:
+            if not math.isfinite(float(value)):  # a client's NaN had stopped Play for good
+                return
+        except (TypeError, ValueError):
+            return
         with self.lock:
             if not self._syncing:
                 self._held = 0.0  # the user's own angle: no pause left to wait out
@@ -752,7 +757,7 @@ class Session:
             w, h = self.client.camera.image_width, self.client.camera.image_height
         except AssertionError:  # no camera message yet
             return DEFAULT_FRAME
-        if w <= 0 or h <= 0:
+        if not (w > 0 and h > 0 and math.isfinite(w / h)):  # (also NaN from a client)
             return DEFAULT_FRAME
         return w / h, min(self.panel_px / w, 0.6)
 
@@ -771,12 +776,23 @@ class Session:
             self._framed_size = _size(self.analysis)
             pos, look, fov = self._camera(self.view.k)
             self.view.set_label_height(label_height(pos, look, fov))
-            cam = self.client.camera
-            cam.up_direction = (0.0, 1.0, 0.0)
-            cam.fov = fov
+            self._set_camera(pos, look, fov)
+            self._preset_pose = (*pos, *look)
+
+    def _set_camera(self, pos: tuple, look: tuple, fov: float | None = None) -> None:
+        """Move this tab's camera. viser derives the new orientation from the client's
+        last camera state, and refuses (ValueError) when the client sent a non-finite
+        one (a hostile client's NaN pose had killed the animation thread for good): the
+        move is skipped; the client's next sane camera message makes it work again."""
+        cam = self.client.camera
+        try:
+            if fov is not None:
+                cam.up_direction = (0.0, 1.0, 0.0)
+                cam.fov = fov
             cam.position = pos
             cam.look_at = look
-            self._preset_pose = (*pos, *look)
+        except ValueError:
+            logging.getLogger(__name__).debug("camera not moved: the client's pose is bad")
 
     @property
     def threads(self) -> tuple[threading.Thread, ...]:

@@ -8,6 +8,7 @@ debounced job runs at a time across everything that shares its ``gate``.
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from collections.abc import Callable
@@ -30,6 +31,7 @@ class Ticker:
         self.step, self.period, self.max_dt = step, 1.0 / fps, max_dt
         self.running = False
         self.ticks = 0
+        self.failures = 0  # steps that raised (logged; the animation goes on)
         self._wake = threading.Event()
         self._closed = threading.Event()
         self.thread = threading.Thread(target=self._loop, daemon=True, name=name)
@@ -58,10 +60,14 @@ class Ticker:
             now = time.perf_counter()
             try:
                 self.step(min(now - last, self.max_dt), n)
-            except Exception:  # the owner went away mid-step
+            except Exception:  # the owner went away mid-step, or a defect of a step
                 if self._closed.is_set():
                     return
-                raise
+                # logged, and the animation goes on: one bad step (a review found one
+                # from a client's NaN camera) must not stop a tab's animation for good
+                self.failures += 1
+                if self.failures == 1 or self.failures % 1000 == 0:
+                    logging.getLogger(__name__).exception("animation step failed")
             self.ticks += 1
             last, n = now, n + 1
             time.sleep(max(0.0, self.period - (time.perf_counter() - now)))

@@ -1383,3 +1383,20 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
         assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
     finally:
         t.close()
+
+
+def test_a_clients_nan_camera_or_angle_stops_nothing(tab):
+    """A review: a camera message with a NaN position made the close-up's camera moves
+    raise (viser derives the new pose from the client's), and a NaN angle left the
+    animation at NaN. Both are skipped; the tab animates on."""
+    s = tab
+    s.set_camera_view("Contact close-up")
+    state = s.client.camera._state
+    state.position, state.look_at = np.full(3, np.nan), np.full(3, np.nan)
+    theta = s.theta_deg
+    s._on_angle(float("nan"))
+    assert s.theta_deg == theta
+    s.reset_camera()  # no ValueError
+    s._set_playing(True)
+    s.frame(0.1, 1)
+    assert math.isfinite(s.theta_deg) and s.theta_deg != theta

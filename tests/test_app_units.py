@@ -426,3 +426,28 @@ def test_zero_aligned_axes_put_their_zeros_on_one_level():
         out = zero_aligned(spans)
         for k, (lo, hi) in spans.items():
             assert out[k][0] <= lo and out[k][1] >= hi and out[k][1] > out[k][0]
+
+
+def test_a_failing_animation_step_does_not_stop_the_animation():
+    """A review: one step that raised (a client's NaN camera) killed the tab's
+    animation thread for good. It is logged and the animation goes on."""
+    import time
+
+    from app.ticker import Ticker
+
+    calls = []
+
+    def step(dt, n):
+        calls.append(n)
+        if n == 1:
+            raise ValueError("Camera look_at must be finite")
+
+    t = Ticker(step, fps=200.0).start()
+    t.run(True)
+    try:
+        deadline = time.time() + 5
+        while len(calls) < 5 and time.time() < deadline:
+            time.sleep(0.01)
+        assert t.thread.is_alive() and len(calls) >= 5 and t.failures == 1
+    finally:
+        t.close()
