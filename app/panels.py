@@ -67,14 +67,19 @@ _BOX = (
 
 
 _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
+# GFM turns "https://...", "www.x" and "a@b.c" in text into links, escapes or not (a
+# review: a design named "https://evil.example" became a link in the Files message): a
+# word joiner (U+2060, invisible) inside each breaks the pattern
+_AUTOLINK = re.compile(r"(?<=:)(?=//)|(?<=\bwww)(?=\.)|(?<=@)", re.IGNORECASE)
 
 
 def esc(text: object) -> str:
     """User-provided text (a design or file name, a message quoting input) made safe for
-    viser's Markdown, which renders raw HTML: HTML-escaped, and Markdown's special
-    characters backslash-escaped so they show as typed. Every such string goes through
-    here before it is shown."""
-    return _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
+    viser's Markdown, which renders raw HTML: HTML-escaped, Markdown's special
+    characters backslash-escaped so they show as typed, and no link made of a URL or
+    address in it. Every such string goes through here before it is shown."""
+    escaped = _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
+    return _AUTOLINK.sub("\u2060", escaped)
 
 
 # The status box stays at the top of the panel while the panel scrolls (its wrapper is

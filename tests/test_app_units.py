@@ -451,3 +451,13 @@ def test_a_failing_animation_step_does_not_stop_the_animation():
         assert t.thread.is_alive() and len(calls) >= 5 and t.failures == 1
     finally:
         t.close()
+
+
+def test_escaped_text_makes_no_links():
+    """A review: a design named 'https://evil.example' became a clickable link (GFM
+    autolinks, which backslash escapes do not stop; checked in Chromium: none is made
+    with the word joiners esc() inserts). The text reads the same."""
+    out = panels.esc("see https://evil.example, www.evil.example or a@b.co")
+    for linkable in ("://", "www.", "@b"):
+        assert linkable not in out
+    assert out.replace("\u2060", "") == "see https://evil.example, www.evil.example or a@b.co"
