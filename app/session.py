@@ -536,9 +536,13 @@ class Session:
             self._say(f"Saved **{esc(str(name).strip())}** in this browser.")
 
     def open_saved(self, name: str) -> None:
-        design = storage.parse_working(self.saved.get(name) if isinstance(name, str) else None)
-        if design is None:
+        text = self.saved.get(name) if isinstance(name, str) else None
+        design = storage.parse_working(text)
+        if design is None and text is None:
             return self._say("✖ Choose a saved design first.")
+        if design is None:  # kept, but not a design this version opens: say why
+            why = storage.working_error(text) or "not a design"
+            return self._say(f"✖ Could not open **{esc(name)}**: {esc(_short(why))}.")
         self.set_design(design)
         self._say(f"Opened **{esc(name)}** from this browser.")
 

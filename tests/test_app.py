@@ -1381,6 +1381,8 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
         assert "cannot open" in s.ui.files_md.content and "schema" in s.ui.files_md.content
         s.ui.controls["motion.lift_mm"].value = 17.0  # and the tab keeps its work
         assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
+        s.open_saved(storage.UNREADABLE_NAME)  # opened: says why not
+        assert "Could not open" in s.ui.files_md.content and "newer" in s.ui.files_md.content
     finally:
         t.close()
 
