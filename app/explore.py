@@ -306,7 +306,10 @@ class ExplorePanel:
         would change, a second click on the same design loads it."""
         with self._lock:
             point, base = self._offers.get(label) if isinstance(label, str) else None, self._base
-        if point is None or self._load is None or self._design is None:
+        if self._load is None or self._design is None:
+            return
+        if point is None:  # not an offer of this sweep (a stale or forged value)
+            self.progress.content = "✖ Choose a design of the front first (run a sweep)."
             return
         try:
             design = design_at(base, point)

@@ -807,7 +807,9 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     assert s.design.motion.lift_mm == 25.0
     e.load_btn.value = True  # the second click loads it
     assert wait_for(lambda: s.design.motion.lift_mm == 15.0, 10.0)
-    e.load("not an offer")  # a hostile value is ignored
+    loaded = s.design
+    e.load("not an offer")  # a hostile value loads nothing, and says so
+    assert s.design == loaded and "Choose a design of the front first" in e.progress.content
     e.x.value = e.y.value
     e.run_btn.value = True
     assert "two different fields" in e.progress.content
