@@ -8,6 +8,7 @@ that makes a valid design. Values the session writes in (``show``) fire no edit.
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -76,6 +77,7 @@ class SegmentTable:
         self._extra: list = []
         self.sums: Any = None  # the sums' markdown handle, built with the rows
         self._quiet = False  # True while the session writes values in
+        self.lock: Any = contextlib.nullcontext()  # the session's (bound with on_change)
 
     def kinds(self) -> list[str]:
         return [r["kind"].value for r in self.rows]
@@ -113,10 +115,13 @@ class SegmentTable:
             self.on_change(self.as_dicts())
 
     def act(self, i: int, action: str) -> None:
-        """A row's button (or the add button, i = len(rows), action "+")."""
-        segs = moved(self.as_dicts(), i, action)
-        if segs is not None:
-            self.on_change(segs)
+        """A row's button (or the add button, i = len(rows), action "+"). The rows are
+        read and changed under the session's lock: two quick clicks on "add" had read
+        the same rows and added one segment."""
+        with self.lock:
+            segs = moved(self.as_dicts(), i, action)
+            if segs is not None:
+                self.on_change(segs)
 
     def _build(self, rows: list[Row]) -> None:
         for h in [h for r in self.rows for h in r.values()] + self._extra:

@@ -146,7 +146,7 @@ class Session:
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
         for h in ui.controls.values():
             h.on_update(lambda _e: self.on_control())
-        ui.segments.on_change = self.on_segments
+        ui.segments.on_change, ui.segments.lock = self.on_segments, self.lock
         for name, cb in ui.overlay_boxes.items():
             cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
         ui.view_btns.on_click(lambda e: self.set_camera_view(e.target.value))

@@ -1404,3 +1404,31 @@ def test_a_clients_nan_camera_or_angle_stops_nothing(tab):
     s._set_playing(True)
     s.frame(0.1, 1)
     assert math.isfinite(s.theta_deg) and s.theta_deg != theta
+
+
+def test_two_quick_clicks_on_add_add_two_segments(tab, monkeypatch):
+    """A review: a double click on 'Add a segment' added one row (both clicks read the
+    same rows before either applied). The table's actions run under the tab's lock."""
+    import threading
+
+    s = tab
+    table = s.ui.segments
+    n = len(table.rows)
+    real = table.as_dicts
+    both_read = threading.Barrier(2, timeout=2)
+
+    def slow_read():  # each click reads the rows; give the other click its chance
+        rows = real()
+        try:
+            both_read.wait()  # (under the lock the second never gets here in time)
+        except threading.BrokenBarrierError:
+            pass
+        return rows
+
+    monkeypatch.setattr(table, "as_dicts", slow_read)
+    clicks = [threading.Thread(target=table.act, args=(n, "+")) for _ in range(2)]
+    for c in clicks:
+        c.start()
+    for c in clicks:
+        c.join(10)
+    assert len(s.design.motion.segments) == n + 2 and len(table.rows) == n + 2
