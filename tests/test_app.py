@@ -4,6 +4,7 @@ check the scene, curves and panels change as they should."""
 
 from __future__ import annotations
 
+import contextlib
 import io
 import itertools
 import math
@@ -18,6 +19,26 @@ from viser._gui_handles import GuiEvent, UploadedFile
 
 from app import scene
 from camcore.model import Design, design_to_json, load_preset
+
+
+@contextlib.contextmanager
+def restored_tab(app, monkeypatch, stored: dict, writes: dict | None = None):
+    """A new tab whose browser storage holds ``stored`` (key -> text), its restore
+    finished; what the tab writes goes to ``writes``. Yields its Session."""
+    from app import storage
+
+    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
+    sink = {} if writes is None else writes
+    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, k, v: sink.__setitem__(k, v))
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    try:
+        assert wait_for(lambda: set(app.sessions) - before)
+        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+        s._restorer.join(10)
+        yield s
+    finally:
+        t.close()
 
 
 def fire_upload(handle, name: str, content: bytes) -> None:
@@ -1169,21 +1190,12 @@ def test_a_rejected_kept_range_is_proposed_around_the_restored_design(app, monke
         storage.WORKING_KEY: design_to_json(Design.model_validate(data)),
         storage.EXPLORE_KEY: __import__("json").dumps(setup),
     }
-    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
-    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, key, v: None)
-    before = set(app.sessions)
-    t = FakeTab(app.port)
-    try:
-        assert wait_for(lambda: set(app.sessions) - before)
-        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
-        s._restorer.join(10)
+    with restored_tab(app, monkeypatch, stored) as s:
         assert s.design.cam.base_radius_mm == 120.0
         e = s.ui.explore
         assert e.x.value == "Base radius r_b [mm]"  # the default field: no change fired
         assert tuple(e.x_range.value) == (84.0, 156.0)  # 0.7 and 1.3 x 120 mm
         assert tuple(e.y_range.value) == (14.0, 26.0)  # around the kept 20 mm lift
-    finally:
-        t.close()
 
 
 def test_a_cutter_that_gouges_is_said_before_the_download(tab, downloads):
@@ -1367,16 +1379,7 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
         storage.SAVED_KEY: "[" * 50_000 + "]" * 50_000,
     }
     writes: dict[str, str] = {}
-    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
-    monkeypatch.setattr(
-        storage.BrowserStore, "write", lambda self, key, v: writes.__setitem__(key, v)
-    )
-    before = set(app.sessions)
-    t = FakeTab(app.port)
-    try:
-        assert wait_for(lambda: set(app.sessions) - before)
-        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
-        s._restorer.join(10)
+    with restored_tab(app, monkeypatch, stored, writes) as s:
         assert s._persist and s._restorer is not None and not s._restorer.is_alive()
         kept = json.loads(writes[storage.SAVED_KEY])
         assert kept[storage.UNREADABLE_NAME] == stored[storage.WORKING_KEY]
@@ -1385,8 +1388,6 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
         assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
         s.open_saved(storage.UNREADABLE_NAME)  # opened: says why not
         assert "Could not open" in s.ui.files_md.content and "newer" in s.ui.files_md.content
-    finally:
-        t.close()
 
 
 def test_a_clients_nan_camera_or_angle_stops_nothing(tab):
