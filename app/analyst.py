@@ -32,7 +32,7 @@ from camcore.units import to_mpa
 
 from .plots import CurveData, curve_data, stride_index
 
-WORKERS = {"fg": 1, "bg": 1}  # processes per pool (a second foreground one did not help
+WORKERS = {"fg": 1, "bg": 1, "doc": 1}  # processes per pool (a second foreground one did not help
 # the class benchmark on 2 cores, and each worker holds ~130 MB)
 
 
@@ -99,29 +99,38 @@ def _export(kind: str, a: Analysis) -> bytes:
     return EXPORTS[kind].write(a)
 
 
-def _warm(background: bool) -> int:
-    """Worker start: the background worker only gets CPU time no one else wants
+def _warm(role: str) -> int:
+    """Worker start: the background worker ("bg") only gets CPU time no one else wants
     (SCHED_IDLE where Linux has it, else the lowest nice), so a class's refinements
-    never slow down its edits. Then warm the imports and caches."""
-    if background:
+    never slow down its edits; the documents' worker ("doc") runs at nice DOC_NICE,
+    behind the edits but never starved (at SCHED_IDLE a review's PDF had not come in
+    30 s while two other processes kept the cores busy). Then warm the imports."""
+    if role == "bg":
         try:
             os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
         except (AttributeError, OSError):
             os.nice(19)
+    elif role == "doc":
+        os.nice(DOC_NICE)
     fast(Design())
     return os.getpid()
 
 
+DOC_NICE = 10  # ~1/10 of a core's share beside a normal process that wants it all
+
+
 class Analyst:
-    """Two single-process pools (foreground, background) or none (``processes=False``)."""
+    """Single-process pools: foreground and background (started with the server) and
+    the documents' (started at the first report or diagram asked for), or none
+    (``processes=False``)."""
 
     def __init__(self, processes: bool = True):
         self.processes = processes
         self.closed = False  # after close(): compute in the caller (a tab shutting down)
         self._lock = threading.Lock()
-        self._pools: dict[str, ProcessPoolExecutor | None] = {"fg": None, "bg": None}
+        self._pools: dict[str, ProcessPoolExecutor | None] = dict.fromkeys(WORKERS)
         if processes:
-            for name in self._pools:
+            for name in ("fg", "bg"):
                 self._pool(name)  # start now: the first tab should not wait for it
 
     def _pool(self, name: str) -> ProcessPoolExecutor | None:
@@ -131,7 +140,7 @@ class Analyst:
             if pool is None and not self.closed:
                 ctx = multiprocessing.get_context("spawn")  # never fork a threaded server
                 pool = ProcessPoolExecutor(WORKERS[name], mp_context=ctx)
-                pool.submit(_warm, name == "bg")
+                pool.submit(_warm, name)
                 self._pools[name] = pool
             return pool
 
@@ -169,14 +178,14 @@ class Analyst:
 
     def document(self, kind: str, a: Analysis) -> bytes:
         """camcore.export's ``kind`` file of ``a`` (the reports: ~1 s of matplotlib),
-        made in the background worker, not in the server's interpreter."""
-        return self._run("bg", _export, kind, a)
+        made in the documents' worker, not in the server's interpreter."""
+        return self._run("doc", _export, kind, a)
 
     def stations_image(self, a: Analysis) -> np.ndarray:
-        """camcore.document.stations_image of ``a``, drawn in the background worker."""
+        """camcore.document.stations_image of ``a``, drawn in the documents' worker."""
         from camcore.document import stations_image
 
-        return self._run("bg", stations_image, a)
+        return self._run("doc", stations_image, a)
 
     def explore_png(self, rows, x, y, names, front, limits=None) -> bytes:
         """camcore.explore.explore_png, drawn in the background worker."""
@@ -185,7 +194,7 @@ class Analyst:
     def close(self) -> None:
         with self._lock:
             self.closed = True
-            pools, self._pools = list(self._pools.values()), {"fg": None, "bg": None}
+            pools, self._pools = list(self._pools.values()), dict.fromkeys(WORKERS)
         for pool in pools:
             if pool is not None:
                 pool.shutdown(wait=True, cancel_futures=True)

@@ -70,7 +70,7 @@ _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
 # GFM turns "https://...", "www.x" and "a@b.c" in text into links, escapes or not (a
 # review: a design named "https://evil.example" became a link in the Files message): a
 # word joiner (U+2060, invisible) inside each breaks the pattern
-_AUTOLINK = re.compile(r"(?<=:)(?=//)|(?<=\bwww)(?=\.)|(?<=@)", re.IGNORECASE)
+_AUTOLINK = re.compile(r"(?<=:)(?=//)|(?<=www)(?=\.)|(?<=@)", re.IGNORECASE)  # ("_www." too)
 
 
 def esc(text: object) -> str:

@@ -22,6 +22,7 @@ import threading
 from camcore import export
 from camcore.analysis import Analysis
 from camcore.model import (
+    MAX_DESIGN_BYTES,
     Design,
     DesignError,
     design_from_json,
@@ -118,7 +119,8 @@ class Session:
         self._persist = False  # on once the browser's stored design has been read
         self._syncing = False  # True while the session writes into its own widgets
         self._syncer: int | None = None  # the thread that does (_quiet)
-        self._busy = threading.Lock()  # a download or diagram being made (one at a time)
+        self._busy = threading.Lock()  # a download being made (one at a time)
+        self._drawing = threading.Lock()  # the stations diagram being drawn (one at a time)
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -423,6 +425,8 @@ class Session:
                         "panel). Fix it, or load a design, and the files will hold "
                         "what you see."
                     )
+            if kind in DOCUMENTS:  # seconds, more on a busy server: say it is coming
+                say(f"… Making the {esc(kind.upper())} report of *{esc(d.name)}*.")
             made = self._export(kind, a, d, say)
             if made is None:
                 return
@@ -477,9 +481,11 @@ class Session:
         if self.closed.is_set():
             return
         why = storage.working_error(raw) if working is None else None
+        kept = why is not None and raw is not None and len(raw) <= MAX_DESIGN_BYTES
+        if kept and raw is not None:  # (never the saved list here: a failed read is {})
+            self.store.write(storage.UNREADABLE_KEY, raw)
         with self.lock:
-            kept = storage.keep_unreadable(saved, raw) if raw and why else None
-            self._show_saved(saved if kept is None else kept, write=kept is not None)
+            self._show_saved(saved)
             restore = working is not None and self.gen == gen0 and working != self.design
             self._persist = True
             if not restore:
@@ -494,9 +500,10 @@ class Session:
             self._say_quick(note)
         if why is not None:  # what the browser kept is not lost without a word
             where = (
-                f"it is kept in *Files → Kept in this browser* as “{storage.UNREADABLE_NAME}”"
-                if kept is not None
-                else "it could not be kept (too long, or the kept list is full)"
+                f"it is set aside in this browser's storage as it was "
+                f"(`{storage.UNREADABLE_KEY}`), not overwritten"
+                if kept
+                else "it is too long to set aside"
             )
             self._say(
                 f"✖ This browser kept a working design this version cannot open "
@@ -687,7 +694,7 @@ class Session:
         button; drawn from the design on screen, replaced on each click, and taken
         away when the geometry changes (_redraw: a diagram of another follower beside
         the 3D view had misled; a new speed or material leaves it)."""
-        if not self._busy.acquire(blocking=False):
+        if not self._drawing.acquire(blocking=False):
             return  # one at a time (a review's 60 clicks drew 60 diagrams at once)
         try:
             with self.lock:
@@ -703,7 +710,7 @@ class Session:
                     with self.ui.view_folder:
                         self.ui.stations_img = self.client.gui.add_image(image, format="png")
         finally:
-            self._busy.release()
+            self._drawing.release()
 
     def set_wide_panel(self, on: bool) -> None:
         """Widen the control panel for the curves, or give it back its width: through
@@ -813,7 +820,7 @@ class Session:
                 t.join(timeout=2.0)
 
 
-DOCUMENTS = ("html", "pdf")  # exports made in the background worker (~1 s of matplotlib)
+DOCUMENTS = ("html", "pdf")  # exports made in the documents' worker (~1 s of matplotlib)
 NAME_SHOWN = 80  # characters of a client's file name that a message repeats
 
 

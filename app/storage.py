@@ -20,6 +20,9 @@ from camcore.model import MAX_DESIGN_BYTES, Design, DesignError, design_from_jso
 WORKING_KEY = "camdesigner.working"
 SAVED_KEY = "camdesigner.saved"
 EXPLORE_KEY = "camdesigner.explore"  # the Explore tab's setup (not its results)
+# a working design this version could not open (a later version's, a damaged one),
+# set aside as it was rather than overwritten by the default design
+UNREADABLE_KEY = "camdesigner.unreadable"
 MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
@@ -59,9 +62,6 @@ def parse_saved(text: str | None) -> dict[str, str]:
     return out
 
 
-UNREADABLE_NAME = "working design this version cannot open"
-
-
 def working_error(text: str | None) -> str | None:
     """Why a stored working design cannot be opened (DesignError's words), None if it
     can or there is none."""
@@ -72,18 +72,6 @@ def working_error(text: str | None) -> str | None:
     except DesignError as exc:
         return str(exc)
     return None
-
-
-def keep_unreadable(saved: dict[str, str], text: str) -> dict[str, str] | None:
-    """The saved list with an unreadable working design kept in it under
-    UNREADABLE_NAME (a later version's file, a damaged one: the tab would otherwise
-    overwrite it with the default design), or None if it cannot be kept (too long, or
-    the list is full)."""
-    if len(text) > MAX_DESIGN_BYTES:
-        return None
-    if UNREADABLE_NAME not in saved and len(saved) >= MAX_SAVED:
-        return None
-    return {**saved, UNREADABLE_NAME: text}
 
 
 def parse_setup(text: str | None) -> dict | None:

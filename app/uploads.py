@@ -26,6 +26,9 @@ from viser._gui_api import GuiApi
 
 MAX_UPLOAD_BYTES = 1_000_000  # a design file is a few kB (camcore.model.MAX_DESIGN_BYTES)
 MAX_IN_FLIGHT_BYTES = 2 * MAX_UPLOAD_BYTES  # declared bytes of one tab's unfinished uploads
+MAX_IN_FLIGHT = 4  # unfinished uploads of one tab, whatever they declare (a second
+# review's transfers declaring 0 bytes were never counted, and never finished)
+MAX_NAME_CHARS = 1000  # of an upload's file name and type (kept while it is unfinished)
 
 _state: dict = {"max_bytes": MAX_UPLOAD_BYTES, "on_refused": None, "installed": False}
 
@@ -45,13 +48,16 @@ def install(
         if size > cap or size < 0:
             _refuse(client_id, message.filename, size, f"more than the {cap:,}-byte limit")
             return  # never buffered: its parts find no transfer and are ignored
-        pending = sum(
+        if len(message.filename) > MAX_NAME_CHARS or len(message.mime_type) > MAX_NAME_CHARS:
+            _refuse(client_id, message.filename, size, "its name is too long")
+            return
+        mine = [
             s["total_bytes"]
             for s in list(self._current_file_upload_states.values())
             if s.get("client_id") == client_id
-        )
-        if pending + size > MAX_IN_FLIGHT_BYTES:
-            why = f"{pending:,} bytes of earlier uploads from this tab are still unfinished"
+        ]
+        if len(mine) >= MAX_IN_FLIGHT or sum(mine) + size > MAX_IN_FLIGHT_BYTES:
+            why = f"{len(mine)} earlier uploads from this tab ({sum(mine):,} bytes) are unfinished"
             _refuse(client_id, message.filename, size, why)
             return
         start(self, client_id, message)

@@ -1327,10 +1327,33 @@ def test_a_tab_cannot_keep_many_uploads_unfinished(app, tab):
 
     kept = [start(i) for i in range(uploads.MAX_IN_FLIGHT_BYTES // 999_000)]
     assert all(u in gui_api._current_file_upload_states for u in kept)
-    extra = start(99, "x" * 10_000)
+    extra = start(99, "x" * 900)
     assert extra not in gui_api._current_file_upload_states
     said = s.ui.files_md.content
-    assert "still unfinished" in said and len(said) < 600  # the name shortened
+    assert "are unfinished" in said and len(said) < 600  # the name shortened
+    assert start(98, "x" * 10_000) not in gui_api._current_file_upload_states
+    assert "name is too long" in s.ui.files_md.content
+    for uid in kept:  # and transfers that declare nothing count too (a second review)
+        gui_api._current_file_upload_states.pop(uid)
+
+    def empty(i: int) -> str:
+        uid = f"z-{i}"
+        gui_api._handle_file_transfer_start(
+            cid,
+            _messages.FileTransferStartUpload(
+                source_component_uuid=button,
+                transfer_uuid=uid,
+                filename="z.json",
+                mime_type="application/json",
+                part_count=1,
+                size_bytes=0,
+            ),
+        )
+        return uid
+
+    uids = [empty(i) for i in range(uploads.MAX_IN_FLIGHT + 3)]
+    held = [u for u in uids if u in gui_api._current_file_upload_states]
+    assert len(held) == uploads.MAX_IN_FLIGHT
 
 
 def test_one_file_at_a_time_per_tab_and_made_outside_its_lock(tab, downloads, monkeypatch):
@@ -1366,8 +1389,9 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
     """A review: a deeply nested saved list killed the restore thread (RecursionError),
     after which no edit was ever kept; and a working design this version cannot open
     (one from a later version) was overwritten by the default design without a word.
-    Now the bad list is ignored, the tab keeps saving, and the unreadable design is
-    kept in the saved list, said in Files."""
+    Now the bad list is ignored and never written back (a second review: a list that
+    did not read must not be replaced), the tab keeps saving, and the unreadable design
+    is set aside as it was, said in Files."""
     import json
 
     from app import storage
@@ -1381,12 +1405,24 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
     writes: dict[str, str] = {}
     with restored_tab(app, monkeypatch, stored, writes) as s:
         assert s._persist and s._restorer is not None and not s._restorer.is_alive()
-        kept = json.loads(writes[storage.SAVED_KEY])
-        assert kept[storage.UNREADABLE_NAME] == stored[storage.WORKING_KEY]
-        assert "cannot open" in s.ui.files_md.content and "schema" in s.ui.files_md.content
+        assert writes[storage.UNREADABLE_KEY] == stored[storage.WORKING_KEY]
+        assert storage.SAVED_KEY not in writes  # the list it could not read stays
+        assert "cannot open" in s.ui.files_md.content and "newer" in s.ui.files_md.content
         s.ui.controls["motion.lift_mm"].value = 17.0  # and the tab keeps its work
         assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
-        s.open_saved(storage.UNREADABLE_NAME)  # opened: says why not
+
+
+def test_a_kept_entry_this_version_cannot_open_says_why(app, monkeypatch):
+    """Opening a kept design of a later version had said 'Choose a saved design first'."""
+    import json
+
+    from app import storage
+
+    newer = json.loads(design_to_json(load_preset("paper_example")))
+    newer["schema_version"] = 3
+    stored = {storage.SAVED_KEY: json.dumps({"from the new version": json.dumps(newer)})}
+    with restored_tab(app, monkeypatch, stored) as s:
+        s.open_saved("from the new version")
         assert "Could not open" in s.ui.files_md.content and "newer" in s.ui.files_md.content
 
 
