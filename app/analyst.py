@@ -17,7 +17,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import threading
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import CancelledError, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import Any
@@ -111,7 +111,10 @@ def _warm(role: str) -> int:
         except (AttributeError, OSError):
             os.nice(19)
     elif role == "doc":
-        os.nice(DOC_NICE)
+        try:
+            os.nice(DOC_NICE)
+        except (AttributeError, OSError):  # (no nice: run at the normal priority)
+            pass
     fast(Design())
     return os.getpid()
 
@@ -157,7 +160,7 @@ class Analyst:
                 with self._lock:
                     if self._pools[name] is pool:
                         self._pools[name] = None
-            except RuntimeError:  # shut down meanwhile (the server stops)
+            except (RuntimeError, CancelledError):  # shut down meanwhile (the server stops)
                 break
         return fn(*args)  # twice broken, or closed: compute here rather than fail the tab
 

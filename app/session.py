@@ -121,6 +121,7 @@ class Session:
         self._syncer: int | None = None  # the thread that does (_quiet)
         self._busy = threading.Lock()  # a download being made (one at a time)
         self._drawing = threading.Lock()  # the stations diagram being drawn (one at a time)
+        self._unread: dict = {}  # saved-list entries this version could not read (kept)
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -476,10 +477,18 @@ class Session:
         gen0 = self.gen
         raw = self.store.read(storage.WORKING_KEY)
         working = storage.parse_working(raw)
-        saved = storage.parse_saved(self.store.read(storage.SAVED_KEY))
+        saved_text = self.store.read(storage.SAVED_KEY)
+        saved = storage.parse_saved(saved_text)
+        self._unread = storage.unread_entries(saved_text, saved)
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
         if self.closed.is_set():
             return
+        if self.store.silent:  # nothing is written over what the tab could not read
+            return self._say(
+                "✖ This browser's storage did not answer: this tab's work is not kept in "
+                "the browser, and designs cannot be saved in it. Reload the page to try "
+                "again (download a design to keep it meanwhile)."
+            )
         why = storage.working_error(raw) if working is None else None
         kept = why is not None and raw is not None and len(raw) <= MAX_DESIGN_BYTES
         if kept and raw is not None:  # (never the saved list here: a failed read is {})
@@ -525,8 +534,8 @@ class Session:
 
     def _show_saved(self, saved: dict[str, str], write: bool = False) -> None:
         self.saved = saved
-        if write:
-            self.store.write(storage.SAVED_KEY, json.dumps(saved))
+        if write:  # with the entries this version could not read, as they were
+            self.store.write(storage.SAVED_KEY, json.dumps({**self._unread, **saved}))
         names = tuple(saved) or ("–",)
         self.ui.saved_dd.options = names
         if self.ui.saved_dd.value not in names:
@@ -534,6 +543,11 @@ class Session:
 
     def save_named(self, name: str) -> None:
         with self.lock:
+            if not self._persist:  # the browser's list was never read: do not replace it
+                return self._say(
+                    "✖ Not saved: this browser's storage did not answer when the tab "
+                    "opened. Reload the page, or download the design."
+                )
             try:
                 saved = storage.with_saved(self.saved, str(name), self.design)
             except ValueError as exc:
@@ -699,7 +713,11 @@ class Session:
         try:
             with self.lock:
                 a, key = self.analysis, geometry_key(self.design)
-            image = self.analyst.stations_image(a)  # ~0.5 s of matplotlib, in the worker
+            try:
+                image = self.analyst.stations_image(a)  # ~0.5 s of matplotlib, in a worker
+            except Exception:  # a defect of ours, or the server stopping: logged, not raised
+                logging.getLogger(__name__).exception("stations diagram failed")
+                return
             with self.lock:
                 if geometry_key(self.design) != key:  # the geometry changed meanwhile
                     return

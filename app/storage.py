@@ -39,6 +39,20 @@ def parse_working(text: str | None) -> Design | None:
         return None
 
 
+def unread_entries(text: str | None, saved: dict[str, str]) -> dict:
+    """The entries of a stored saved list that parse_saved left out (a later version's,
+    a name too long): kept as they are when the list is written back, so saving a
+    design never drops what this version cannot show. {} unless ``text`` is a JSON
+    object."""
+    if not text or len(text) > MAX_SAVED * MAX_DESIGN_BYTES:
+        return {}
+    try:
+        raw = json.loads(text)
+    except (ValueError, RecursionError):
+        return {}
+    return {k: v for k, v in raw.items() if k not in saved} if isinstance(raw, dict) else {}
+
+
 def parse_saved(text: str | None) -> dict[str, str]:
     """{name: design JSON} from storage, keeping only well-formed entries, at most
     MAX_SAVED of them (a tampered value never grows the server's memory)."""
@@ -103,14 +117,18 @@ class BrowserStore:
 
     def __init__(self, client):
         self._storage = client.local_storage
+        self.silent = False  # a read got no answer: what is stored is unknown
 
     def read(self, key: str) -> str | None:
-        """The stored string, or None if absent, unreadable or the browser is silent."""
+        """The stored string, or None if absent, unreadable or the browser is silent
+        (then ``silent`` is set: a tab that writes after such a read could replace what
+        the browser holds without having seen it)."""
         try:
             with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
                 warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
                 value = self._storage.get_item(key, timeout=READ_TIMEOUT_S)
         except (RuntimeError, TimeoutError):
+            self.silent = True
             return None
         return value if isinstance(value, str) else None
 

@@ -48,8 +48,11 @@ def install(
         if size > cap or size < 0:
             _refuse(client_id, message.filename, size, f"more than the {cap:,}-byte limit")
             return  # never buffered: its parts find no transfer and are ignored
-        if len(message.filename) > MAX_NAME_CHARS or len(message.mime_type) > MAX_NAME_CHARS:
-            _refuse(client_id, message.filename, size, "its name is too long")
+        name, mime = message.filename, message.mime_type
+        if not (isinstance(name, str) and isinstance(mime, str)):
+            return  # not what a browser sends: dropped
+        if len(name) > MAX_NAME_CHARS or len(mime) > MAX_NAME_CHARS:
+            _refuse(client_id, name, size, "its name is too long")
             return
         mine = [
             s["total_bytes"]

@@ -22,12 +22,14 @@ from camcore.model import Design, design_to_json, load_preset
 
 
 @contextlib.contextmanager
-def restored_tab(app, monkeypatch, stored: dict, writes: dict | None = None):
+def restored_tab(app, monkeypatch, stored: dict, writes: dict | None = None, read=None):
     """A new tab whose browser storage holds ``stored`` (key -> text), its restore
-    finished; what the tab writes goes to ``writes``. Yields its Session."""
+    finished; what the tab writes goes to ``writes``. Yields its Session. ``read``:
+    the store's read instead (self, key) -> text."""
     from app import storage
 
-    monkeypatch.setattr(storage.BrowserStore, "read", lambda self, key: stored.get(key))
+    default = lambda self, key: stored.get(key)  # noqa: E731
+    monkeypatch.setattr(storage.BrowserStore, "read", read or default)
     sink = {} if writes is None else writes
     monkeypatch.setattr(storage.BrowserStore, "write", lambda self, k, v: sink.__setitem__(k, v))
     before = set(app.sessions)
@@ -1469,3 +1471,37 @@ def test_two_quick_clicks_on_add_add_two_segments(tab, monkeypatch):
     for c in clicks:
         c.join(10)
     assert len(s.design.motion.segments) == n + 2 and len(table.rows) == n + 2
+
+
+def test_a_silent_browser_storage_is_never_written_over(app, monkeypatch):
+    """A review: a read that timed out looked like an empty storage, so the tab wrote
+    the default design over the kept one at once, and the first Save replaced the
+    saved list with one entry. After a silent read nothing is written, Save says why."""
+
+    def silent(self, key):
+        self.silent = True
+        return None
+
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {}, writes, read=silent) as s:
+        assert "did not answer" in s.ui.files_md.content
+        s.ui.controls["motion.lift_mm"].value = 17.0
+        s.save_named("new one")
+        assert writes == {} and "Not saved" in s.ui.files_md.content
+
+
+def test_saving_keeps_the_entries_this_version_cannot_read(app, monkeypatch):
+    """A saved list with an entry this version leaves out (a later version's, a name
+    too long) keeps it when a design is saved (it had been dropped)."""
+    import json
+
+    from app import storage
+
+    other = {"x" * 100: "a design under a long name", "later": {"format": 9}}
+    stored = {storage.SAVED_KEY: json.dumps(other)}
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, stored, writes) as s:
+        s.save_named("mine")
+        kept = json.loads(writes[storage.SAVED_KEY])
+        assert set(kept) == {*other, "mine"} and kept["later"] == {"format": 9}
+        assert tuple(s.ui.saved_dd.options) == ("mine",)
