@@ -1368,7 +1368,10 @@ def test_one_file_at_a_time_per_tab_and_made_outside_its_lock(tab, downloads, mo
     s = tab
     started, release = threading.Event(), threading.Event()
 
+    said: list[str] = []
+
     def slow_document(kind, a):
+        said.append(s.ui.files_md.content)  # what the tab shows while it is made
         started.set()
         assert release.wait(10)
         return b"%PDF-slow"
@@ -1381,10 +1384,13 @@ def test_one_file_at_a_time_per_tab_and_made_outside_its_lock(tab, downloads, mo
     assert "one at a time" in s.ui.files_md.content
     s.ui.controls["motion.lift_mm"].value = 16.0  # the tab is not locked meanwhile
     assert s.design.motion.lift_mm == 16.0
+    assert s._drawing.acquire(blocking=False)  # nor is the diagram (its own turn)
+    s._drawing.release()
     release.set()
     first.join(10)
     assert downloads[-1][1] == b"%PDF-slow" and downloads[-1][0].endswith(".pdf")
     assert len([d for d in downloads if d[0].endswith(".pdf")]) == 1
+    assert "Making the PDF report" in said[0]  # said at once: seconds on a busy server
 
 
 def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
