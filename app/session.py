@@ -27,8 +27,8 @@ from camcore.model import (
     DesignError,
     design_from_json,
     design_to_json,
+    name_follows_kind,
     preset_names,
-    renamed_for_kind,
 )
 from camcore.model import load_preset as load_preset_design
 
@@ -196,15 +196,11 @@ class Session:
         """A new follower kind renames the follower the design's name mentions ("...
         (double concave faces)" -> "... (single roller)", camcore.model.renamed_for_kind),
         unless the name was edited too; the name box follows. Lock held."""
-        old = self.design
-        if design.follower.kind == old.follower.kind or design.name != old.name:
-            return design
-        name = renamed_for_kind(old.name, old.follower.kind, design.follower.kind)
-        if name == design.name:
-            return design
-        with self._quiet():  # (the box's own change must not start another edit)
-            self.ui.controls["name"].value = name
-        return design.model_copy(update={"name": name})
+        renamed = name_follows_kind(design, self.design.follower.kind, self.design.name)
+        if renamed.name != design.name:
+            with self._quiet():  # (the box's own change must not start another edit)
+                self.ui.controls["name"].value = renamed.name
+        return renamed
 
     def on_segments(self, segs: list[dict]) -> None:
         """The program table changed: the program is its segments, every other control

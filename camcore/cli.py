@@ -29,8 +29,8 @@ from .model import (
     FollowerKind,
     load_design,
     load_preset,
+    name_follows_kind,
     preset_names,
-    renamed_for_kind,
     set_field,
 )
 
@@ -73,11 +73,9 @@ def _design(args) -> Design:
         data = json.loads(design.model_dump_json())
         for assignment in sets:
             _apply_set(data, assignment)
-        before, design = design, design_from_json(json.dumps(data))  # strict: "--set x=true"
-        if design.follower.kind != before.follower.kind and design.name == before.name:
-            # as --follower and a sweep's grid do: the name follows the follower
-            name = renamed_for_kind(design.name, before.follower.kind, design.follower.kind)
-            design = design.model_copy(update={"name": name})
+        before = design
+        design = design_from_json(json.dumps(data))  # strict: "--set x=true" is refused
+        design = name_follows_kind(design, before.follower.kind, before.name)
     return design
 
 

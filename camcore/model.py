@@ -770,8 +770,7 @@ class Design(_Part):
         """
         data = self.model_dump()
         data["follower"]["kind"] = FollowerKind(kind)
-        data["name"] = renamed_for_kind(self.name, self.follower.kind, FollowerKind(kind))
-        return Design.model_validate(data)
+        return name_follows_kind(Design.model_validate(data), self.follower.kind, self.name)
 
 
 # how a design's name says its follower: what with_kind writes in place of the old one
@@ -812,6 +811,17 @@ def renamed_for_kind(name: str, old: FollowerKind, new: FollowerKind) -> str:
 
     out = _kind_mention(old).sub(keep_case, name, count=1)
     return out if len(out) <= NAME_MAX else name
+
+
+def name_follows_kind(design: Design, old_kind: FollowerKind | str, old_name: str) -> Design:
+    """``design``, made from a design of ``old_kind`` named ``old_name``, with its name's
+    follower renamed (renamed_for_kind) if its kind changed and its name did not: the
+    one rule of with_kind, the CLI's --set, a sweep's grid and the app."""
+    old = FollowerKind(old_kind)
+    if design.follower.kind == old or design.name != old_name:
+        return design
+    name = renamed_for_kind(design.name, old, design.follower.kind)
+    return design if name == design.name else design.model_copy(update={"name": name})
 
 
 class DesignError(ValueError):

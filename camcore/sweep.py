@@ -43,7 +43,7 @@ from .model import (
     design_from_json,
     format_validation_error,
     load_preset,
-    renamed_for_kind,
+    name_follows_kind,
     set_field,
 )
 
@@ -251,9 +251,8 @@ def design_at(base: dict, point: dict) -> Design:
         set_field(data, path, value, "grid.")
     design = design_from_json(json.dumps(data))
     old = base.get("follower", {}).get("kind")
-    if old in FollowerKind.__members__ and design.follower.kind != old:
-        name = renamed_for_kind(design.name, FollowerKind(old), design.follower.kind)
-        design = design.model_copy(update={"name": name})
+    if old in FollowerKind.__members__:
+        design = name_follows_kind(design, old, base.get("name", design.name))
     return design
 
 
