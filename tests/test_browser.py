@@ -37,7 +37,7 @@ def drawn_fraction(png: bytes) -> float:
 
 # JS: pixels of the S curve's colour (COLORS[0], #1f77b4) on the first uPlot's canvas
 S_CURVE_PIXELS = """() => { const c = document.querySelector('.uplot canvas');
-    if (!c) return 0; let n = 0;
+    if (!c || !c.width || !c.height) return 0; let n = 0;  // (not laid out yet)
     const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
     for (let i = 0; i < d.length; i += 4)
       if (Math.abs(d[i] - 31) + Math.abs(d[i + 1] - 119) + Math.abs(d[i + 2] - 180) < 60
