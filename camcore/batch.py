@@ -166,7 +166,8 @@ def local(bt: Batch, theta: np.ndarray, which: np.ndarray) -> SimpleNamespace:
                 k[i] = 1.0 / (yc + A)
             lever[i] = -V - bt.stem_x[which]
             continue
-        # Eqs. 3-10, 13-18 (profile.face_contact), the pitch curvature (Eq. 21)
+        # Eqs. 3-10, 13-18 (profile.face_contact); the pitch curve's curvature, from
+        # which rho (Eq. 21) follows by the parallel-curve relation (profile.pitch_curvature)
         x_c = bt.x_c[which, i]
         u = x_c + V
         m = np.hypot(u, yc)
@@ -217,7 +218,8 @@ def _on_curve(loc, segs) -> np.ndarray:
 
 def _quantities(bt: Batch) -> dict:
     """The quantities of extremes.QUANTITIES the verdict and figures of this kind need."""
-    names = ["pressure_angle_max", "FN_min", "torque_max", "torque_min"]
+    names = ["pressure_angle_max", "FN_min", "FN_max", "F1_max", "F2_max"]
+    names += ["torque_max", "torque_min"]
     if bt.r[0] > 0 and not bt.flat:
         names.append("kappa_pitch_max")
     elif bt.r[0] < 0 or bt.flat:
@@ -225,33 +227,6 @@ def _quantities(bt: Batch) -> dict:
     if bt.r[0] != 0.0:
         names.append("stress_max")
     return {n: extremes.QUANTITIES[n] for n in names}
-
-
-def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """extremes._candidates for many rows at once: (row, grid index) of the CANDIDATES
-    largest local maxima of each row of ``values`` (R, N) among the samples in
-    ``mask``, the larger first and, between equal ones, the earlier (a stable sort,
-    as the single analysis picks them). A plateau (a dwell) is a run of maxima: the
-    C-th largest value is found by partition, then the earliest of its ties fill up."""
-    C = extremes.CANDIDATES
-    v = np.where(mask, values, -np.inf)
-    edge = np.full((v.shape[0], 1), -np.inf)
-    left = np.concatenate([edge, v[:, :-1]], axis=1)
-    right = np.concatenate([v[:, 1:], edge], axis=1)
-    peak = mask & (v >= left) & (v >= right) & np.isfinite(v)
-    pv = np.where(peak, v, -np.inf)
-    many = np.count_nonzero(peak) > 4 * C * v.shape[0]
-    if many and pv.shape[1] > C:  # plateaus: keep only the C largest of each row first
-        kth = np.partition(pv, pv.shape[1] - C, axis=1)[:, -C][:, None]  # C-th largest
-        above = peak & (pv > kth)
-        tie = peak & (pv == kth)
-        room = C - above.sum(axis=1, keepdims=True)
-        peak = above | (tie & (np.cumsum(tie, axis=1) <= room))
-    row, k = np.nonzero(peak)
-    order = np.lexsort((k, -pv[row, k], row))  # by row, then value down, then index
-    row, k = row[order], k[order]
-    keep = np.arange(row.size) - np.searchsorted(row, row, side="left") < C
-    return row[keep], k[keep]
 
 
 def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
@@ -264,22 +239,20 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     qs = _quantities(bt)
     rows = []  # per quantity: (face, design, grid index) of its candidates
     for get, sense in qs.values():
-        row, k = top_peaks(sense * get(loc).reshape(F * B, N), mask.reshape(F * B, N))
+        row, k = extremes.top_peaks(sense * get(loc).reshape(F * B, N), mask.reshape(F * B, N))
         rows.append((row // B, row % B, k))
     q = np.concatenate([np.full(r[0].size, i) for i, r in enumerate(rows)])
     face, des, k = (np.concatenate([r[i] for r in rows]) for i in range(3))
     out = {n: np.full((B, F * extremes.CANDIDATES), np.nan) for n in qs}
     if q.size == 0:
         return out
-    mflat = mask.reshape(F, B * N)
     kk = des * N + k
-    has_lo = (k > 0) & mflat[face, np.maximum(kk - 1, 0)]
-    has_hi = (k < N - 1) & mflat[face, np.minimum(kk + 1, B * N - 1)]
-    flat_th = th.ravel()
-    lo = np.where(has_lo, flat_th[np.maximum(kk - 1, 0)], flat_th[kk])
-    hi = np.where(has_hi, flat_th[np.minimum(kk + 1, B * N - 1)], flat_th[kk])
+    last = bt.real.sum(axis=1) - 1  # each design's last real grid index (the rest pads)
+    lo = th[des, np.maximum(k - 1, 0)]  # extremes.brackets, on each design's own grid
+    hi = th[des, np.minimum(k + 1, last[des])]
     getters = list(qs.values())
     sense = np.array([s for _, s in getters])[q]
+    codes = np.array([g.code for g in bt.segs], dtype=np.int8)
 
     def fz(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
         keyed = np.concatenate([des[:, None], x.reshape(q.size, -1)], axis=1)
@@ -288,7 +261,9 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
         at = local(bt, rows[:, 1:].ravel(), np.repeat(rows[:, 0].astype(int), per))
         vals = np.stack([get(at) for get, _ in getters])
         vals = vals.reshape(vals.shape[0], vals.shape[1], rows.shape[0], per)
-        return (sense[:, None] * vals[q, face, inv]).ravel()
+        on_at = extremes.on_curve(at, codes).reshape(F, rows.shape[0], per)
+        out = np.where(on_at[face, inv], sense[:, None] * vals[q, face, inv], -np.inf)
+        return out.ravel()
 
     with np.errstate(all="ignore"):
         grid = sense * np.stack([get(loc) for get, _ in getters])[q, face, kk]
@@ -379,7 +354,7 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
     needs = [machine._rate_need(d0), machine._preload_need(d0), machine._jump_need(d0)]
     grid = np.stack([fn(prog) for fn in needs]).reshape(len(needs) * B, N)
     with np.errstate(all="ignore"):
-        row, k = top_peaks(grid, np.isfinite(grid) & np.tile(bt.real, (len(needs), 1)))
+        row, k = extremes.top_peaks(grid, np.isfinite(grid) & np.tile(bt.real, (len(needs), 1)))
         q, des = row // B, row % B
         last = bt.real.sum(axis=1) - 1  # each design's last real grid index
         lo = bt.theta[des, np.maximum(k - 1, 0)]
@@ -521,10 +496,21 @@ def _geometry_figures(bt: Batch) -> list[dict]:
     return out
 
 
-def _grid_figures(bt: Batch, loc) -> list[dict]:
+def _peak(grid: list[float | None], cands: np.ndarray) -> list[float | None]:
+    """extremes.peak per design, for a maximum: the grid's value raised to the refined
+    candidates' worst (``cands`` (B, C) from _refine)."""
+    w = _worst(cands, 1.0)
+    return [
+        g if g is None or not np.isfinite(v) else float(g + max(0.0, v - g))
+        for g, v in zip(grid, w, strict=True)
+    ]
+
+
+def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
     """Per design: the report's maxima and ranges over its grid (pressure angles,
     curvature radii, forces, stresses, the Hertz half-width, the flat face's width),
-    the same masks as report.summary."""
+    the same masks as report.summary; the cycle's force and stress maxima between the
+    samples too (``worst``: _refine's), as report.summary's."""
     B, N = bt.theta.shape
     F = bt.n_faces
     d0 = bt.designs[0]
@@ -554,12 +540,12 @@ def _grid_figures(bt: Batch, loc) -> list[dict]:
         _range(rho * 1e3, fall),
         _min(rho * 1e3, inc & (rho > 0) & np.isfinite(rho)),  # report._radii_mm
         _min(-rho * 1e3, inc & (rho < 0) & np.isfinite(rho)),
-        _max(FN),
+        _peak(_max(FN), worst["FN_max"]),
         _max(FN, high),
         _max(FN, two),
-        _max(loc.guide.F1.reshape(B, N)),
-        _max(loc.guide.F2.reshape(B, N)),
-        _scaled(_max(stress), 1e-6),
+        _peak(_max(loc.guide.F1.reshape(B, N)), worst["F1_max"]),
+        _peak(_max(loc.guide.F2.reshape(B, N)), worst["F2_max"]),
+        _scaled(_peak(_max(stress), worst.get("stress_max", np.full((B, 1), np.nan))), 1e-6),
         _scaled(_max(np.where(high[None], stress, np.nan)), 1e-6),
         _scaled(_max(b_half), 1e3),
         _max(Ft, high),
@@ -641,7 +627,7 @@ def summaries(designs: list[Design]) -> list[dict]:
         bt.designs,
         verdicts,
         _geometry_figures(bt),
-        _grid_figures(bt, loc),
+        _grid_figures(bt, loc, worst),
         _springs(bt, loc.prog),
         shaft,
         strict=True,

@@ -406,7 +406,7 @@ def _forces(a) -> list[Violation]:
         out.append(
             Violation(
                 "contact_lost",
-                "Eq. 28",
+                "Eqs. 24, 26",  # the dwell's arc, beta - 2 psi, is shorter than nothing
                 f"no face rests on the dwell arc at {_where(ranges)}",
                 ranges,
                 float(lost.sum()),
@@ -560,7 +560,7 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
         out.append(
             Violation(
                 "geometric_check",
-                "Eqs. 1-20",
+                "Eqs. 1-20 (independent check)",
                 f"rotating the finished cam gives a follower lift that differs from S(theta) "
                 f"by up to {to_mm(lift_error):.4g} mm (allowed: the chord error over "
                 f"cos(phi), {to_mm(lift_tolerance(a)):.3g} mm)",

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .motion import MOTIONS
+
 ROUNDS = 3  # zoom rounds: each samples POINTS per bracket in one evaluation
 POINTS = 33  # a 16-fold zoom per round: 4096-fold in all (3 evaluations, not 4)
 CANDIDATES = 4  # local extremes refined per quantity and face (the worst first)
@@ -30,6 +32,9 @@ QUANTITIES = {
     "kappa_pitch_max": (lambda loc: loc.kappa_pitch, 1.0),  # [1/m]
     "kappa_pitch_min": (lambda loc: loc.kappa_pitch, -1.0),
     "FN_min": (lambda loc: loc.FN, -1.0),  # [N]
+    "FN_max": (lambda loc: loc.FN, 1.0),
+    "F1_max": (lambda loc: np.broadcast_to(loc.guide.F1, loc.FN.shape), 1.0),  # [N], guide
+    "F2_max": (lambda loc: np.broadcast_to(loc.guide.F2, loc.FN.shape), 1.0),
     "stress_max": (lambda loc: loc.stress, 1.0),  # [Pa]
     "torque_max": (lambda loc: loc.torque, 1.0),  # [N m], driving
     "torque_min": (lambda loc: loc.torque, -1.0),  # braking
@@ -51,27 +56,69 @@ class Worst:
         return tuple((lo, hi) for v, lo, hi in self.others if sense * (v - limit) > 0)
 
 
-def _candidates(values: np.ndarray, mask: np.ndarray) -> list[tuple[int, int]]:
-    """(face, grid index) of the CANDIDATES largest local maxima of ``values`` per face,
-    among the samples in ``mask`` (the face driving a rise or fall)."""
-    out = []
-    for i in range(values.shape[0]):
-        v = np.where(mask[i], values[i], -np.inf)
-        left = np.concatenate([[-np.inf], v[:-1]])
-        right = np.concatenate([v[1:], [-np.inf]])
-        peak = np.flatnonzero(mask[i] & (v >= left) & (v >= right) & np.isfinite(v))
-        peak = peak[np.argsort(-v[peak], kind="stable")[:CANDIDATES]]
-        out += [(i, int(k)) for k in peak]
-    return out
+def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(row, grid index) of the CANDIDATES largest local maxima of each row of
+    ``values`` (R, N) among the samples in ``mask``, row by row, the larger first and,
+    between equal ones, the earlier. A plateau (a dwell) is a run of maxima: the
+    C-th largest value is found by partition, then the earliest of its ties fill up."""
+    C = CANDIDATES
+    # not below either neighbour in the mask (none beyond the ends); boolean temporaries
+    # only (a float one the size of a batch is a fresh mmap, page faults and all)
+    peak = mask & np.isfinite(values)
+    peak[:, 1:] &= (values[:, 1:] >= values[:, :-1]) | ~mask[:, :-1]
+    peak[:, :-1] &= (values[:, :-1] >= values[:, 1:]) | ~mask[:, 1:]
+    many = np.count_nonzero(peak) > 4 * C * values.shape[0]
+    if many and values.shape[1] > C:  # plateaus: keep only the C largest of each row first
+        pv = np.where(peak, values, -np.inf)
+        kth = np.partition(pv, pv.shape[1] - C, axis=1)[:, -C][:, None]  # C-th largest
+        above = peak & (pv > kth)
+        tie = peak & (pv == kth)
+        room = C - above.sum(axis=1, keepdims=True)
+        peak = above | (tie & (np.cumsum(tie, axis=1) <= room))
+    row, k = np.nonzero(peak)
+    order = np.lexsort((k, -values[row, k], row))  # by row, then value down, then index
+    row, k = row[order], k[order]
+    keep = np.arange(row.size) - np.searchsorted(row, row, side="left") < C
+    return row[keep], k[keep]
 
 
 def distinct_rows(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``x`` (brackets, POINTS) and, per row of x, its row among
     them: brackets of several quantities often sample the very same angles (a stress
     peak where F_N peaks), and the closed forms need evaluating there once. (The batch
-    uses it; for one design's ~20 brackets the sort costs what it saves.)"""
+    uses it; for one design's ~30 brackets the sort costs more than it saves.)"""
     rows, inv = np.unique(x, axis=0, return_inverse=True)
     return rows, inv.reshape(-1)
+
+
+def brackets(theta: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The bracket [rad] of each candidate sample k of the grid ``theta``: its two
+    neighbours, also where a neighbour is on another segment or contact window (the
+    search then counts only the angles where the face still drives a curve: see
+    ``on_curve``). Segment boundaries are grid samples and a boundary belongs to what
+    begins there, so a rise's last interval is the rise's up to its end: a supremum
+    can be there only (F_N at the end of a rise, where guide friction acts until the
+    follower stops: 0.25 % above the last sample's on the paper's example)."""
+    n = theta.size
+    return theta[np.maximum(k - 1, 0)], theta[np.minimum(k + 1, n - 1)]
+
+
+def on_curve(loc, codes: np.ndarray) -> np.ndarray:
+    """(F, M) where each face of ``loc`` (an analysis.Local) touches a rise or fall;
+    ``codes``: the segment code of each profile piece (motion.Segment.code)."""
+    return loc.in_contact & np.isin(codes[loc.part], MOTIONS)
+
+
+def peak(a, name: str, grid: float | None) -> float | None:
+    """A figure's grid extreme ``grid`` of quantity ``name`` (QUANTITIES, in its SI
+    unit) made the worst of it and the refined value between the samples
+    (``a.worst``), so that a figure the report prints is the one the checks judge.
+    None stays None (no sample to judge)."""
+    w = a.worst.get(name)
+    if grid is None or w is None or not np.isfinite(w.value):
+        return grid
+    sense = QUANTITIES[name][1]
+    return float(grid + max(0.0, sense * (w.value - grid)) * sense)
 
 
 def zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -101,32 +148,31 @@ def worst_values(a) -> dict[str, Worst | None]:
     """Worst value of each quantity in QUANTITIES over the rise and fall curves of
     ``a`` (a camcore.analysis.Analysis), between the grid samples too; None where no
     face drives a rise or fall."""
-    mask, th, n = a.on_curve, a.theta, a.theta.size
-    rows = []  # (quantity number, face, grid index)
+    mask, th = a.on_curve, a.theta
+    getters = list(QUANTITIES.values())
     with np.errstate(all="ignore"):
-        for qi, (get, sense) in enumerate(QUANTITIES.values()):
-            rows += [(qi, i, k) for i, k in _candidates(sense * get(a), mask)]
-        if not rows:
+        found = []  # per quantity: (face, grid index, sense * value) of its candidates
+        for get, s in getters:
+            values = s * get(a)
+            face, k = top_peaks(values, mask)
+            found.append((face, k, values[face, k]))
+        q = np.concatenate([np.full(f.size, i) for i, (f, _, _) in enumerate(found)])
+        if q.size == 0:
             return dict.fromkeys(QUANTITIES)
-        q, face, k = (np.array(c, dtype=int) for c in zip(*rows, strict=True))
-        # the bracket: the grid neighbours where the same face still drives the curve
-        has_lo = (k > 0) & mask[face, np.maximum(k - 1, 0)]
-        has_hi = (k < n - 1) & mask[face, np.minimum(k + 1, n - 1)]
-        lo = np.where(has_lo, th[np.maximum(k - 1, 0)], th[k])
-        hi = np.where(has_hi, th[np.minimum(k + 1, n - 1)], th[k])
-        getters = list(QUANTITIES.values())
+        face, k, grid = (np.concatenate([c[i] for c in found]) for i in range(3))
+        lo, hi = brackets(th, k)
         sense = np.array([s for _, s in getters])[q]
+
+        codes = np.array([g.code for g in a.segments], dtype=np.int8)
 
         def f(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
             loc = a.local(x)
             per = x.size // q.size
             vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, len(x))
-            return (
-                np.repeat(sense, per)
-                * vals[np.repeat(q, per), np.repeat(face, per), np.arange(x.size)]
-            )
+            fc, col = np.repeat(face, per), np.arange(x.size)
+            out = np.repeat(sense, per) * vals[np.repeat(q, per), fc, col]
+            return np.where(on_curve(loc, codes)[fc, col], out, -np.inf)
 
-        grid = sense * np.stack([get(a) for get, _ in getters])[q, face, k]
         best, at = zoom(f, lo, hi)
         better = np.nan_to_num(best, nan=-np.inf) > grid
         best, at = np.where(better, best, grid), np.where(better, at, th[k])
@@ -157,14 +203,10 @@ def refine_maxes(f, theta: np.ndarray, values: list[np.ndarray]) -> list[tuple[f
     finite."""
     out: list[tuple[float, float]] = [(-np.inf, float("nan"))] * len(values)
     with np.errstate(all="ignore"):
-        q, k = [], []
-        for j, v in enumerate(values):
-            cand = [kk for _, kk in _candidates(v[None, :], np.isfinite(v)[None, :])]
-            q += [j] * len(cand)
-            k += cand
-        if not k:
+        grid_values = np.stack(values)
+        qa, ka = top_peaks(grid_values, np.isfinite(grid_values))
+        if not ka.size:
             return out
-        qa, ka = np.array(q), np.array(k)
         lo = theta[np.maximum(ka - 1, 0)]
         hi = theta[np.minimum(ka + 1, theta.size - 1)]
 

@@ -111,8 +111,9 @@ def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d, slide=0.0, moment
 
 def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> GuideSolution:
     """Solve in the modes of Fig. 6 and keep the first with F1, F2 >= 0: each mode is
-    solved only at the angles no earlier mode balanced (mode (a) holds almost
-    everywhere, so this is about one solve, not four)."""
+    solved only at the angles no earlier mode balanced (one or two modes hold almost
+    everywhere: on the paper example's rise it is (b) at every angle, the printed
+    Eqs. 33-35 giving F1, F2 < 0; so this is about two solves, not four)."""
     dyn = design.dynamics
     d = dyn.guide_width_mm * MM
     l1 = dyn.overhang_mm * MM - (S if dyn.overhang_shrinks else 0.0)

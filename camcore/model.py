@@ -35,7 +35,7 @@ MAX_DESIGN_BYTES = 1_000_000  # a design is a few hundred bytes; refuse absurd f
 # arithmetic underflows (a radius of 1e-320 mm is 0 m) and results turn into inf/NaN.
 MIN_LENGTH_MM = 1e-3
 MIN_MODULUS_GPa = 1e-3
-MIN_MOTION_DEG = 0.01  # a rise or fall over less than this: V, A, J overflow (Eq. 21)
+MIN_MOTION_DEG = 0.01  # a rise or fall over less than this: V, A, J (~ h / beta^1,2,3) overflow
 
 
 NAME_MAX: Final = 200  # characters of a design's name

@@ -12,6 +12,7 @@ import numpy as np
 from . import checks, machine, profile, train, wear
 from .analysis import Analysis, analyze, compare, contacts
 from .contact import hertz_validity
+from .extremes import peak
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
 from .motion import FALL, HIGH, RISE, SEGMENT_NAMES
 from .units import to_um_per_mcycle
@@ -80,9 +81,9 @@ def _classic_arcs(a: Analysis) -> dict:
 
 
 def _dwells(a: Analysis) -> list[dict]:
-    """Every dwell of the program with its own arc (Eq. 20 radius, Eqs. 23-26 psi, and
-    the arc it subtends on the cam) and its Eq. 28 margin where it applies; dwells in
-    a row at one displacement (also across theta = 0) are one dwell."""
+    """Every dwell of the program with its own arc (Eq. 20 radius, Eqs. 23/25 psi,
+    Eqs. 24/26 the arc it subtends on the cam) and its Eq. 28 margin where it applies;
+    dwells in a row at one displacement (also across theta = 0) are one dwell."""
     from .profile import arc_span, dwell_psi, dwell_runs
 
     out = []
@@ -247,14 +248,19 @@ def summary(a: Analysis) -> dict:
         },
         "curvature_radius_mm": {"rise": _range_mm(a, RISE), "fall": _range_mm(a, FALL)},
         "radius_of_curvature_mm": _radii_mm(a),
+        # the cycle's maxima between the samples too (extremes.peak), as the checks
+        # judge them; a dwell's values are constant on each of its contact windows
         "contact_force_max_N": {
-            "cycle": _max(a.guide.FN),
+            "cycle": peak(a, "FN_max", _max(a.guide.FN)),
             "high_dwell": _max(a.guide.FN, high),
             "high_dwell_two_contact": _max(a.guide.FN, two),
         },
-        "guide_force_max_N": {"F1": _max(a.guide.F1), "F2": _max(a.guide.F2)},
+        "guide_force_max_N": {
+            "F1": peak(a, "F1_max", _max(a.guide.F1)),
+            "F2": peak(a, "F2_max", _max(a.guide.F2)),
+        },
         "contact_stress_max_MPa": {
-            "cycle": _scaled(_max(a.stress), 1e-6),
+            "cycle": _scaled(peak(a, "stress_max", _max(a.stress)), 1e-6),
             "high_dwell": _scaled(_max(a.stress[:, high]), 1e-6) if high.any() else None,
         },
         **_hertz(a),

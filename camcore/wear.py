@@ -33,6 +33,7 @@ import math
 
 import numpy as np
 
+from .extremes import peak
 from .forces import tangential_slip
 from .model import allowable_contact_stress_MPa, omega_rad_s
 from .sampling import contact_travel
@@ -75,7 +76,7 @@ def pitting_life_cycles(a) -> float:
     inf where the stress stays within the allowable (the endurance region: the life
     curve is not extrapolated beyond N_ref) and for a knife edge (no Hertz stress)."""
     s = a.stress[np.isfinite(a.stress)]
-    s_max = float(s.max()) if s.size else 0.0
+    s_max = peak(a, "stress_max", float(s.max()) if s.size else 0.0) or 0.0  # (samples and between)
     allow = allowable_contact_stress_MPa(a.design) * MPA
     if s_max <= allow:
         return math.inf

@@ -26,6 +26,8 @@ from viser_client import GuiElement, ViserClient
 ROOT = Path(__file__).resolve().parents[1]
 LIFT = "Lift h [mm]"
 PLOT_S = "Displacement S"
+EXPLORE_RUN = "Run the sweep"  # app.explore's button
+EXPLORE_DONE = re.compile(r"^\*\*(\d+) designs\*\*")  # its message when a sweep ends
 READY_RE = re.compile(r"running at http://[^:\s]+:(\d+)")
 CLK_TCK = os.sysconf("SC_CLK_TCK")
 
@@ -277,6 +279,38 @@ class Tab:
         self.stats.final_slider = self.c.gui[self.lift.uuid].value
 
 
+class Explorer:
+    """A student exploring: runs the Explore tab's sweep (its default setup: two fields
+    x 8 steps x the four followers) again and again, each after the last has ended."""
+
+    def __init__(self, client: ViserClient):
+        self.c = client
+        self.sweeps_s: list[float] = []  # click -> the sweep's closing message [s]
+        self.designs: list[int] = []  # designs each sweep analysed
+        self._ended: list[int] = []  # design counts of the closing messages seen
+        client.add_listener(self._on_message)
+
+    def _on_message(self, msg: vm.Message, t: float) -> None:
+        if isinstance(msg, vm.GuiUpdateMessage) and msg.uuid in self.c.gui:
+            done = EXPLORE_DONE.match(self.c.gui[msg.uuid].text)
+            if done and ("content" in msg.updates or "_markdown" in msg.updates):
+                self._ended.append(int(done.group(1)))
+
+    async def explore(self, duration: float, timeout: float = 120.0) -> None:
+        """Run sweeps for ``duration`` s (the last one started is waited for)."""
+        t_end = time.monotonic() + duration
+        run = await self.c.wait_gui(EXPLORE_RUN, timeout)  # (a tab is built in stages)
+        while time.monotonic() < t_end:
+            seen = len(self._ended)
+            # the button is enabled again just after the closing message
+            await self.c.wait_for(lambda: not run.props.get("disabled"), timeout, what="Run")
+            t = time.perf_counter()
+            await self.c.click(run)
+            await self.c.wait_for(lambda n=seen: len(self._ended) > n, timeout, what="a sweep")
+            self.sweeps_s.append(time.perf_counter() - t)
+            self.designs.append(self._ended[-1])
+
+
 def own_values(i: int, n: int = 12) -> list[float]:
     """Lifts [mm] only tab ``i`` uses: 20 + 3 i ... + 2.75, never the default 15. Up to
     30 tabs every value is a valid design of the paper example (its lift must stay
@@ -293,6 +327,8 @@ class LoadResult:
     probe_s: list[float]  # time for a new tab to be fully drawn, during and after the load
     wall_s: float
     errors: list[str]
+    sweeps_s: list[float] = field(default_factory=list)  # explorers' sweeps, click -> end
+    sweep_designs: list[int] = field(default_factory=list)  # designs of each of them
 
     @property
     def latencies_ms(self) -> list[float]:
@@ -325,6 +361,8 @@ class LoadResult:
             "kb_per_edit": sum(t.bytes_in for t in self.tabs) / max(1, self.sent) / 1e3,
             "probe_s": [round(p, 3) for p in self.probe_s],
             "foreign": sum(len(t.foreign) for t in self.tabs),
+            "sweeps_s": [round(x, 2) for x in self.sweeps_s],
+            "sweep_designs": self.sweep_designs,
             "errors": self.errors,
         }
 
@@ -354,16 +392,22 @@ async def run_load(
     seed: int = 0,
     probe: bool = True,
     lockstep: bool = False,
+    explorers: int = 0,
 ) -> LoadResult:
     """``n_clients`` tabs drag their own lift values at ``rate_hz`` for ``duration`` s.
 
     Each tab starts at its own random phase of the period, as a class's students do
     (``lockstep``: all at the same instant, so every second brings a burst of
-    ``n_clients`` edits at once: the worst case)."""
+    ``n_clients`` edits at once: the worst case). ``explorers`` more tabs run Explore
+    sweeps meanwhile (Explorer); their sweep times are in the result."""
     t0 = time.perf_counter()
     rng = random.Random(seed)
     clients = await asyncio.gather(*(open_tab(url, f"tab{i}") for i in range(n_clients)))
     tabs = [Tab(c, own_values(i)) for i, c in enumerate(clients)]
+    sweepers = [
+        Explorer(c)
+        for c in await asyncio.gather(*(open_tab(url, f"explorer{i}") for i in range(explorers)))
+    ]
     errors: list[str] = []
     probes: list[float] = []
 
@@ -387,6 +431,7 @@ async def run_load(
         ]
         if probe:
             jobs.append(probe_mid())
+        jobs += [e.explore(duration) for e in sweepers]
         await asyncio.gather(*jobs)
         await asyncio.gather(*(t.settle() for t in tabs))
         await asyncio.sleep(REFINE_WAIT_S)  # the last edit's refinement is sent too
@@ -394,12 +439,14 @@ async def run_load(
             t.stats.bytes_in = c.bytes_in - b0
         if probe:
             await probe_once()
-        for c in clients:
+        for c in [*clients, *(e.c for e in sweepers)]:
             errors += [f"{c.name}: {e!r}" for e in c.errors]
             if c.closed_reason:
                 errors.append(f"{c.name}: {c.closed_reason}")
     finally:
-        await asyncio.gather(*(c.close() for c in clients), return_exceptions=True)
+        await asyncio.gather(
+            *(c.close() for c in [*clients, *(e.c for e in sweepers)]), return_exceptions=True
+        )
     return LoadResult(
         n_clients,
         duration,
@@ -408,6 +455,8 @@ async def run_load(
         probes,
         time.perf_counter() - t0,
         errors,
+        [s for e in sweepers for s in e.sweeps_s],
+        [n for e in sweepers for n in e.designs],
     )
 
 

@@ -199,6 +199,42 @@ def test_section6_claims():
     assert min(dwell, key=dwell.get) is FollowerKind.double_concave
 
 
+# The paper example's cycle maxima from an implementation of Eqs. 29-42 written for a
+# review (its own numpy, not camcore's; 2026-11-26): reached at the end of the rise
+# (100 deg), where guide friction acts until the follower stops (mode (b): the printed
+# mode (a) gives F1, F2 < 0 on this rise). F_N [N], F1, F2 [N], stress [MPa].
+INDEPENDENT_PEAKS = {
+    FollowerKind.double_concave: (140.1901, 61.4058, 44.5902, 52.4146),
+    FollowerKind.double_roller: (142.3358, 32.6789, 18.8488, 216.6377),
+}
+
+
+@pytest.mark.parametrize("kind", list(INDEPENDENT_PEAKS))
+def test_cycle_maxima_are_the_real_cams(kind):
+    """The report's cycle maxima of F_N, the guide forces and the stress are the real
+    cam's (between the samples, up to the end of the rise), not the grid's, and the
+    stress figure is the one the check judges: an allowable between the grid's maximum
+    and it is broken, and the report shows a stress above it."""
+    from camcore.report import summary
+
+    a = analyze(PAPER.with_kind(kind), verify=False)
+    s = summary(a)
+    got = (
+        s["contact_force_max_N"]["cycle"],
+        s["guide_force_max_N"]["F1"],
+        s["guide_force_max_N"]["F2"],
+        s["contact_stress_max_MPa"]["cycle"],
+    )
+    assert got == pytest.approx(INDEPENDENT_PEAKS[kind], rel=2e-5)
+    grid_fn, grid_stress = float(a.guide.FN.max()), float(a.stress.max()) / 1e6
+    assert got[0] > grid_fn * 1.002  # the last sample of the rise is 0.25 % lower
+    sf = PAPER.limits.contact_stress_safety_factor
+    between = 0.5 * (grid_stress + got[3]) * sf
+    b = analyze(_with(PAPER.with_kind(kind), allowable_contact_stress_MPa=between), verify=False)
+    assert "contact_stress" in {v.code for v in b.violations}
+    assert summary(b)["contact_stress_max_MPa"]["cycle"] * sf > between
+
+
 def test_hertz_against_handbook_roller_on_flat_and_concave():
     """Carvill, Mechanical Engineer's Data Handbook (1993) p. 52, same material:
     contact width w_c = sqrt(32 F (1 - nu^2) / (pi L E (1/r1 +- 1/r2))), sigma = 4F/(pi w_c L)."""

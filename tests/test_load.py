@@ -74,6 +74,18 @@ def test_tabs_see_only_their_own_design(server):
     assert server.alive()
 
 
+def test_exploring_tabs_beside_editing_ones(server):
+    """Issue 12's split of work: two tabs run Explore sweeps back to back (the
+    background worker) while three drag their lifts at 5 changes/s: the editors still
+    see only their own designs and end on their last values, and every sweep ends with
+    its whole grid (the default setup: 8 x 8 points x the four followers)."""
+    result = run(run_load(server.url, n_clients=3, duration=4.0, rate_hz=5.0, explorers=2))
+    check_load(result)
+    assert len(result.sweeps_s) >= 2, result.summary()
+    assert set(result.sweep_designs) == {8 * 8 * 4}, result.sweep_designs
+    assert server.alive()
+
+
 async def _assert_serving(url: str, lift: float) -> None:
     """A fresh tab opens, and its lift change comes back redrawn."""
     c = await open_tab(url, "fresh", timeout=30.0)
