@@ -13,7 +13,14 @@ from dataclasses import dataclass, field
 
 from pydantic import ValidationError
 
-from camcore.model import Design, FollowerKind, MotionLaw, format_validation_error
+from camcore.model import (
+    ALLOWABLE_CONTACT_STRESS_MPa,
+    Design,
+    FollowerKind,
+    MaterialGrade,
+    MotionLaw,
+    format_validation_error,
+)
 
 
 @dataclass(frozen=True)
@@ -39,6 +46,11 @@ KINDS = tuple(k.value for k in FollowerKind)
 _LAW_WORDS = {"poly_345": "3-4-5 polynomial", "poly_4567": "4-5-6-7 polynomial"}
 LAW_LABELS = tuple(_LAW_WORDS.get(v, v.replace("_", " ")) for v in LAWS)
 KIND_LABELS = tuple(FollowerKind(k).label for k in KINDS)
+GRADES = tuple(g.value for g in MaterialGrade)
+GRADE_LABELS = tuple(
+    f"{g.replace('_', ' ')} ({ALLOWABLE_CONTACT_STRESS_MPa[MaterialGrade(g)]:g} MPa)"
+    for g in GRADES
+)
 
 # folder title, expanded?, specs
 FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
@@ -168,9 +180,30 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 step=0.01,
                 hint="sliding friction at the cam–face contact; 0 as in the paper; rollers roll",
             ),
-            Spec("dynamics.guide_width_mm", "Guide width d [mm]", "number", step=0.5),
-            Spec("dynamics.guide_length_mm", "Guide length l2 [mm]", "number", step=1),
-            Spec("dynamics.overhang_mm", "Overhang l1 [mm]", "number", step=1),
+            Spec(
+                "dynamics.guide_width_mm",
+                "Guide width d [mm]",
+                "number",
+                step=0.5,
+                hint="the stem's width (diameter) in its guide: the arm of the guide friction "
+                "(the paper's Fig. 5; its example 8 mm)",
+            ),
+            Spec(
+                "dynamics.guide_length_mm",
+                "Guide length l2 [mm]",
+                "number",
+                step=1,
+                hint="the length of the guide bearing the stem: the two guide reactions F1, "
+                "F2 act at its ends (Fig. 5; 80 mm in the paper)",
+            ),
+            Spec(
+                "dynamics.overhang_mm",
+                "Overhang l1 [mm]",
+                "number",
+                step=1,
+                hint="from the guide's cam-side end to the face's vertex (a roller's lowest "
+                "point) at the lowest position: longer tilts the stem more (Fig. 5; 30 mm)",
+            ),
             Spec("dynamics.gravity_m_s2", "Gravity g [m/s²]", "number", step=0.01),
             Spec("dynamics.overhang_shrinks", "Overhang shrinks with lift", "checkbox"),
             Spec(
@@ -225,6 +258,29 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         "Material & limits",
         False,
         (
+            Spec(
+                "material.grade",
+                "Cam surface",
+                "dropdown",
+                options=GRADES,
+                labels=GRADE_LABELS,
+                hint="sets the default allowable contact stress (in brackets)",
+            ),
+            Spec(
+                "limits.allowable_contact_stress_MPa",
+                "Allowable stress [MPa]",
+                "number",
+                step=10,
+                hint="your material's figure; 0 = the cam surface's default",
+                zero_is_none=True,
+            ),
+            Spec(
+                "limits.contact_stress_safety_factor",
+                "Stress safety factor",
+                "number",
+                step=0.05,
+                hint="the largest Hertz stress times this must stay within the allowable",
+            ),
             Spec("material.cam_E_GPa", "Cam E1 [GPa]", "number", step=1),
             Spec("material.cam_nu", "Cam ν1", "number", step=0.01),
             Spec("material.follower_E_GPa", "Follower E2 [GPa]", "number", step=1),

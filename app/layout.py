@@ -87,6 +87,7 @@ class Layout:
     view_btns: Any
     camera_btn: Any
     stations_fig_btn: Any
+    stations_fig_md: Any  # says the diagram is coming, then where it is
     # Files tab
     preset_dd: Any
     preset_btn: Any
@@ -183,6 +184,7 @@ def _view_tab(gui, h: dict) -> None:
     h["view_btns"] = gui.add_button_group("Camera", CAMERA_VIEWS)
     h["camera_btn"] = gui.add_button("Reset camera")
     h["stations_fig_btn"] = gui.add_button("Stations diagram (the paper's Fig. 4)")
+    h["stations_fig_md"] = gui.add_markdown("")
 
 
 def _files_tab(gui, h: dict) -> None:

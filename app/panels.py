@@ -223,6 +223,11 @@ def _typeset_units(text: str) -> str:
     return text
 
 
+def _stress_limit_MPa(s: dict) -> float:
+    """The largest contact stress the design may reach [MPa] (the check's limit)."""
+    return s["contact_stress_allowable_MPa"] / s["contact_stress_safety_factor"]
+
+
 def summary_markdown(s: dict) -> str:
     """Key numbers of camcore.report.summary as a compact table."""
 
@@ -258,6 +263,11 @@ def summary_markdown(s: dict) -> str:
         ),
         ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / {f(s['guide_force_max_N']['F2'])} N"),
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
+        (
+            "Stress limit: allowable / safety factor",
+            f"{f(s['contact_stress_allowable_MPa'], 0)} MPa / "
+            f"{f(s['contact_stress_safety_factor'])} = {f(_stress_limit_MPa(s), 1)} MPa",
+        ),
         *((k, _typeset_units(v)) for k, v in machine_rows(s)),
         (
             "Contact half-width max",

@@ -18,7 +18,7 @@ import numpy as np
 
 from camcore import machine, motion, train, wear
 from camcore.checks import rho_reference_mm, violation_mask
-from camcore.model import omega_rad_s
+from camcore.model import contact_stress_limit_MPa, omega_rad_s
 from camcore.units import to_mm, to_mpa, to_um_per_mcycle
 
 MAX_POINTS = 720
@@ -392,8 +392,16 @@ def curve_specs(a) -> list[dict]:
                     "stroke": COLORS[4],
                     "fn": lambda a: to_mpa(a.stress.max(axis=0)),
                 },
+                {
+                    "label": _stress_limit_label(a),
+                    "scale": "MPa",
+                    "stroke": "#d62728",
+                    "dash": [6, 4],
+                    "width": 1,
+                    "fn": lambda a: np.full(a.theta.size, contact_stress_limit_MPa(a.design)),
+                },
             ],
-            codes={"jump"},
+            codes={"contact_stress", "jump"},
         ),
         _spec(
             "Spring force and the force that keeps contact (jump where it wins)",
@@ -476,6 +484,10 @@ def _spec(title: str, axes: list, series: list[dict], codes: set[str] | None) ->
     return {"title": title, "axes": axes, "series": series, "codes": codes}
 
 
+def _stress_limit_label(a) -> str:
+    return f"limit {contact_stress_limit_MPa(a.design):.4g} MPa"
+
+
 def relabel_limits(curves: list[Curve], a) -> None:
     """Legend labels that carry the current limit values."""
     ref_label, ref = rho_reference_mm(a.design)
@@ -483,6 +495,7 @@ def relabel_limits(curves: list[Curve], a) -> None:
     labels = {
         "Pressure angle": (2, f"+limit {lim:g}°"),
         "Radius of curvature": (2, f"{ref_label} = {ref:g} mm (limit)"),
+        "Contact (Hertz) stress": (2, _stress_limit_label(a)),
     }
     for title, (si, text) in labels.items():
         h = next(c for c in curves if c.title.startswith(title)).handle

@@ -294,6 +294,7 @@ class Session:
             if ui.stations_img is not None and geometry_key(design) != self._diagram_of:
                 ui.stations_img.remove()  # of another geometry: the button draws it again
                 ui.stations_img = None
+                ui.stations_fig_md.content = ""
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
             if ui.quick_md.content:  # it spoke of the design before this one
                 ui.quick_md.content = ""
@@ -429,10 +430,12 @@ class Session:
                 return
             name, data = made
             note = export.warning(a)
+            mount = export.mounting_note(a) if kind in export.PART_KINDS else None
             say(
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
                 f"{d.follower.kind.label}."
                 + ("" if note is None else f"<br>⚠ **Before you make it:** {esc(note)}.")
+                + ("" if mount is None else f"<br>ℹ {esc(mount)} (Design → Cam).")
             )
             self.client.send_file_download(name, data, save_immediately=True)
         finally:
@@ -704,20 +707,29 @@ class Session:
         button; drawn from the design on screen, replaced on each click, and taken
         away when the geometry changes (_redraw: a diagram of another follower beside
         the 3D view had misled; a new speed or material leaves it)."""
+        say = self.ui.stations_fig_md
         if not self._drawing.acquire(blocking=False):
             return  # one at a time (a review's 60 clicks drew 60 diagrams at once)
         try:
             with self.lock:
                 a, key = self.analysis, geometry_key(self.design)
+            # a user saw nothing happen for 18 s (the picture came in below the fold)
+            say.content = "… Drawing the stations diagram: it appears below this line."
             try:
                 image = self.analyst.stations_image(a)  # ~0.5 s of matplotlib, in a worker
             except Exception:  # a defect of ours, or the server stopping: logged, not raised
                 logging.getLogger(__name__).exception("stations diagram failed")
+                say.content = "✖ The diagram could not be drawn (in the server's log)."
                 return
             with self.lock:
                 if geometry_key(self.design) != key:  # the geometry changed meanwhile
+                    say.content = "The design changed while drawing: click again."
                     return
                 self._diagram_of = key
+                say.content = (
+                    f"The stations of *{esc(self.design.name)}* are below "
+                    "(the image's ⤢ shows it full size)."
+                )
                 if self.ui.stations_img is not None:
                     self.ui.stations_img.image = image
                 else:

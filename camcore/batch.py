@@ -379,7 +379,7 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
             "preload_min_mm": _finite(s_min[b], 1e3),
             "spring_proposal": {
                 "safety_factor": n,
-                "spring_rate_N_per_m": _finite(n * k_min[b]),
+                "spring_rate_N_per_m": _finite(machine.proposed_rate(n, float(k_min[b]))),
                 "preload_mm": d0.dynamics.preload_mm,
             },
             "jump_speed_rpm": _finite(machine._rpm(float(inv_w2[b]))),

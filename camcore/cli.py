@@ -173,6 +173,10 @@ def _export(args) -> int:
     outputs = _outputs(args)
     a = analyze(design)
     _write(a, outputs)
+    from .export import PART_KINDS, mounting_note
+
+    if outputs.keys() & set(PART_KINDS) and (mount := mounting_note(a)) is not None:
+        print(f"note: {mount}", file=sys.stderr)
     return _verdict(a)
 
 

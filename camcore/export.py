@@ -227,6 +227,21 @@ def warning(a) -> str | None:
     return text
 
 
+PART_KINDS = ("stl", "dxf", "csv", "toolpath")  # the exports that are the part itself
+
+
+def mounting_note(a) -> str | None:
+    """What a maker of ``a``'s part should know about mounting it: without a bore the
+    part is a solid disc that no shaft goes through (the default, as in the paper);
+    None when it has one."""
+    if a.design.cam.bore_diameter_mm > 0:
+        return None
+    return (
+        "no shaft bore (cam.bore_diameter_mm = 0): the part is a solid disc; set a bore "
+        "(and a keyway) to mount it on a shaft"
+    )
+
+
 def datum_note(a) -> str:
     """The DXF's note on the theta = 0 ray: what the follower does when the cam stands
     there (the program's first segment, and where the first rise starts if it is not
@@ -241,7 +256,7 @@ def datum_note(a) -> str:
             f", the rise starts at THETA={to_deg(rise.start):g} deg" if rise else ""
         )
     axis = "" if a.geo.stem_x == 0 else f"; follower axis at X={to_mm(a.geo.stem_x):g} mm"
-    return f"THETA=0: follower on this ray {what}{axis}; cam turns CW"
+    return f"THETA=0: follower on this ray {what}{axis}; cam turns CW seen from +Z"
 
 
 def dxf_bytes(a) -> bytes:

@@ -183,7 +183,7 @@ class Spring:
     jump_speed_rpm: float  # inf: never jumps
     jump_at: float  # [rad]
     safety_factor: float
-    proposed_rate: float  # [N/m], n k_min at the design's preload (inf if none)
+    proposed_rate: float  # [N/m], n k_min at the design's preload, rounded up (proposed_rate)
 
 
 def margins(design: Design, rate_min: float, jump_rpm: float) -> dict[str, float | None]:
@@ -207,4 +207,21 @@ def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None
     needs = [_rate_need(design), _preload_need(design), _jump_need(design)]
     (k_min, k_at), (s_min, _), (inv_w2, at) = _sups(design, theta, needs, prog)
     n = design.dynamics.spring_safety_factor
-    return Spring(k_min, k_at, s_min, _rpm(inv_w2), at, n, n * k_min)
+    return Spring(k_min, k_at, s_min, _rpm(inv_w2), at, n, proposed_rate(n, k_min))
+
+
+PROPOSAL_DIGITS = 4
+
+
+def proposed_rate(n: float, k_min: float) -> float:
+    """The spring rate to propose [N/m]: n k_min rounded up to PROPOSAL_DIGITS
+    significant figures, so that the figure a user copies meets the safety factor (the
+    exact 2089.334 shown as 2089.3 had read 'k = 1.49 k_min: close to jump' once typed
+    in). inf stays inf, 0 stays 0."""
+    x = n * k_min
+    if not math.isfinite(x) or x <= 0.0:
+        return x
+    unit = 10.0 ** (math.floor(math.log10(x)) - PROPOSAL_DIGITS + 1)
+    up = math.ceil(x / unit) * unit
+    clean = float(f"{up:.{PROPOSAL_DIGITS}g}")  # without the binary noise of ``unit``
+    return clean if clean >= x else up

@@ -972,6 +972,12 @@ def allowable_contact_stress_MPa(design: Design) -> float:
     return given if given is not None else ALLOWABLE_CONTACT_STRESS_MPa[design.material.grade]
 
 
+def contact_stress_limit_MPa(design: Design) -> float:
+    """The largest contact stress the design may reach [MPa]: the allowable over the
+    safety factor (the limit of checks' ``contact_stress``)."""
+    return allowable_contact_stress_MPa(design) / design.limits.contact_stress_safety_factor
+
+
 def omega_rad_s(design: Design) -> float:
     """Cam angular speed omega_2 [rad/s] (the magnitude; the cam turns clockwise)."""
     return design.cam.speed_rpm * RPM

@@ -141,6 +141,36 @@ def test_follower_kind_changes_the_body(tab):
     assert "In contact: <b>face</b>" in s.ui.where_md.content
 
 
+def test_material_and_allowable_stress_are_set_in_the_app(tab):
+    """A designer's material: the cam surface sets the allowable (its default in the
+    word), a figure of one's own replaces it (0: the surface's again), the safety
+    factor divides it; the key numbers show the limit and the stress plot draws it."""
+    s = tab
+    s.ui.controls["follower.kind"].value = "single_roller"  # ~212 MPa
+    stress_plot = next(c for c in s.ui.curves if c.title.startswith("Contact (Hertz)"))
+
+    def limit_drawn() -> float:
+        return float(np.nanmax(stress_plot.handle.data[2]))
+
+    assert "1000 MPa / 1.25 = 800.0 MPa" in s.ui.summary_md.content
+    assert limit_drawn() == pytest.approx(800.0)
+    s.ui.controls["material.grade"].value = "bronze (350 MPa)"
+    assert s.design.material.grade.value == "bronze"
+    assert "350 MPa / 1.25 = 280.0 MPa" in s.ui.summary_md.content
+    assert limit_drawn() == pytest.approx(280.0)
+    assert "contact_stress" not in {v.code for v in s.analysis.violations}
+    s.ui.controls["limits.allowable_contact_stress_MPa"].value = 200.0  # 212 x 1.25 > 200
+    assert s.design.limits.allowable_contact_stress_MPa == 200.0
+    assert "contact_stress" in {v.code for v in s.analysis.violations}
+    assert "Hertz stress" in s.ui.status.content and "allowable 200 MPa" in s.ui.status.content
+    assert "limit 160 MPa" in stress_plot.handle.series[2]["label"]
+    s.ui.controls["limits.contact_stress_safety_factor"].value = 1.0
+    s.ui.controls["limits.allowable_contact_stress_MPa"].value = 0.0  # the surface's again
+    assert s.design.limits.allowable_contact_stress_MPa is None
+    assert "350 MPa / 1.00 = 350.0 MPa" in s.ui.summary_md.content
+    assert s.analysis.valid
+
+
 def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     s = tab
     good = s.design
@@ -253,7 +283,9 @@ def test_preset_and_downloads(tab, downloads):
     assert abs(mesh.volume - expect) / expect < 1e-6
     s.ui.quick_stl_btn.value = True  # the same part from the button above the tabs
     assert downloads[-1] == (name, data)
+    assert "no shaft bore" in s.ui.quick_md.content  # a solid disc: said where one looks
     s.ui.download_btns["json"].value = True
+    assert "no shaft bore" not in s.ui.files_md.content  # (a design file is no part)
     assert downloads[-1][1].decode().startswith("{")
     for kind, ext in (
         ("dxf", ".dxf"),
@@ -546,6 +578,7 @@ def test_a_keyway_is_edited_and_removed_in_the_tab(tab, downloads):
     c["cam.keyway_depth_mm"].value = 3.3
     assert s.error is None and s.design.cam.keyway_width_mm == 8.0
     s.ui.download_btns["stl"].value = True
+    assert "Sent" in s.ui.files_md.content and "no shaft bore" not in s.ui.files_md.content
     mesh = trimesh.load(io.BytesIO(downloads[-1][1]), file_type="stl")
     inner = mesh.vertices[np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1]) < 20]
     assert inner[:, 1].max() == pytest.approx(15.0 + 3.3)  # the slot on the +Y ray
@@ -761,9 +794,11 @@ def test_stations_diagram_in_the_view_tab(tab):
     """The paper's Fig. 4 for the design on screen: one panel per station, drawn on
     request and replaced on the next request."""
     s = tab
+    assert s.ui.stations_fig_md.content == ""
     s.ui.stations_fig_btn.value = True  # click
     img = s.ui.stations_img
     assert img is not None and img.image.ndim == 3 and img.image.shape[1] == 700
+    assert "are below" in s.ui.stations_fig_md.content  # where to look (it can be off screen)
     assert img.image.std() > 10  # something is drawn
     s.ui.stations_fig_btn.value = True
     assert s.ui.stations_img is img  # the same element, a new picture
@@ -771,6 +806,7 @@ def test_stations_diagram_in_the_view_tab(tab):
     assert s.design.cam.speed_rpm == 600.0 and s.ui.stations_img is img
     s.ui.controls["follower.kind"].value = "single roller"  # the diagram would be stale
     assert s.design.follower.kind.value == "single_roller" and s.ui.stations_img is None
+    assert s.ui.stations_fig_md.content == ""
     s.ui.stations_fig_btn.value = True  # drawn again for the design on screen
     assert s.ui.stations_img is not None and s.ui.stations_img is not img
 

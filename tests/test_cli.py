@@ -120,7 +120,9 @@ def test_export_files(tmp_path, capsys):
         )
         == 0
     )
-    assert capsys.readouterr().err.count("wrote") == 4
+    err = capsys.readouterr().err
+    assert err.count("wrote") == 4
+    assert "note: no shaft bore" in err  # the paper's cam has none: a solid disc
     s = run_json(capsys, "report", "--preset", "paper_example", "--json")
     mesh = trimesh.load(out["stl"], file_type="stl")
     assert mesh.is_watertight and mesh.is_winding_consistent

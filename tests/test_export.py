@@ -186,7 +186,7 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
     P = a.profile.points * 1e3  # the extents hold the cam (viewers zoom to them)
     assert np.all(lo <= P.min(axis=0) + 1e-6) and np.all(hi >= P.max(axis=0) - 1e-6)
     assert np.all(hi - lo < 2 * np.ptp(P, axis=0))
-    assert text == f"THETA=0: follower on this ray {says}; cam turns CW"
+    assert text == f"THETA=0: follower on this ray {says}; cam turns CW seen from +Z"
     grows = a.theta[np.argmax(a.prog.V > 1e-9)]  # where the rise starts
     if "dwell" in says:
         assert a.prog.S[0] == 0.0 and math.degrees(grows) == pytest.approx(60.0, abs=0.2)

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from camcore import machine
+from camcore import machine, report
 from camcore.analysis import analyze
 from camcore.model import Design, load_preset
 from camcore.units import GRAM, MM, RPM
@@ -41,9 +41,24 @@ def test_spring_rate_min_is_the_edge_of_jump(kind):
     assert 0 < k_min < d.dynamics.spring_rate_N_per_m  # the paper's spring is enough
     assert not jumps(tweak(d, dynamics__spring_rate_N_per_m=k_min * 1.002))
     assert jumps(tweak(d, dynamics__spring_rate_N_per_m=k_min * 0.98))
-    # the proposal keeps the design's preload and scales the rate by the safety factor
+    # the proposal keeps the design's preload and scales the rate by the safety factor,
+    # rounded up to 4 significant figures: the figure shown, typed in, meets the factor
     s = machine.spring(d, a.theta)
-    assert s.proposed_rate == pytest.approx(d.dynamics.spring_safety_factor * k_min)
+    n = d.dynamics.spring_safety_factor
+    assert n * k_min <= s.proposed_rate <= n * k_min * (1 + 1e-3)
+    assert len(f"{s.proposed_rate:g}".replace(".", "").strip("0")) <= 4
+    typed = report.summary(analyze(tweak(d, dynamics__spring_rate_N_per_m=s.proposed_rate)))
+    assert typed["jump_margin"]["spring_rate"] >= n
+    assert "close to jump" not in str(report.machine_rows(typed))
+
+
+def test_the_proposed_spring_is_rounded_up_to_four_figures():
+    """machine.proposed_rate against hand-rounded values (the review's 2089.334 N/m)."""
+    assert machine.proposed_rate(1.5, 2089.334 / 1.5) == 2090.0
+    assert machine.proposed_rate(1.0, 0.0185175) == 0.01852
+    assert machine.proposed_rate(2.0, 500.0) == 1000.0  # already 4 figures: unchanged
+    assert machine.proposed_rate(1.5, 0.0) == 0.0
+    assert machine.proposed_rate(1.5, math.inf) == math.inf
 
 
 def test_preload_min_is_the_edge_of_jump():
