@@ -11,7 +11,7 @@ from camcore.model import PAPER_FOLLOWERS
 from camcore.report import PAPER_TABLE1_N
 
 from .panels import esc
-from .plots import COLORS, wire
+from .plots import COLORS, Curve
 
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
@@ -63,36 +63,35 @@ def table_markdown(results: dict) -> str:
 
 
 class CompareView:
+    """The table and two plots (Figs. 11 and 13) of the four followers, each plot with
+    the stations of the design on screen dashed and its cam angle marked, as the
+    Curves tab's: a teacher steps through the stations and watches the four curves."""
+
     def __init__(self, gui):
         self.gui = gui
         self.md = gui.add_markdown("*Computing the four followers…*")
-        ser = ({"label": "θ [°]"},) + tuple(
-            {"label": k.label, "stroke": COLORS[i], "width": 1.5, "scale": "y"}
-            for i, k in enumerate(KINDS)
-        )
-        common = dict(
-            scales={"x": {"time": False, "range": (0.0, 360.0)}, "y": {"auto": True}},
+        ser = [{"label": k.label, "stroke": COLORS[i], "scale": "y"} for i, k in enumerate(KINDS)]
+        self.fn = Curve(
+            gui,
+            "Contact force F_N of the four followers (Fig. 11)",
+            [("y", "F_N [N]")],
+            ser,
             height=210,
-            legend={"show": True, "live": False},
+            shading=False,
         )
-        zeros = tuple(np.zeros(2) for _ in ser)
-        self.fn = gui.add_uplot(
-            zeros,
+        self.stress = Curve(
+            gui,
+            "Contact stress σ_H of the four followers (Fig. 13)",
+            [("y", "σ_H [MPa]")],
             ser,
-            title="Contact force F_N of the four followers (Fig. 11)",
-            axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "F_N [N]", "size": 52}),
-            **common,
-        )
-        self.stress = gui.add_uplot(
-            zeros,
-            ser,
-            title="Contact stress σ_H of the four followers (Fig. 13)",
-            axes=({"label": "cam angle θ [°]"}, {"scale": "y", "label": "σ_H [MPa]", "size": 52}),
-            **common,
+            height=210,
+            shading=False,
         )
         self.results: dict = {}
 
-    def update(self, results: dict) -> None:
+    def update(self, results: dict, at: float, stations: np.ndarray) -> None:
+        """Show ``results`` (app.analyst.Refined.compare) with the marker at cam angle
+        ``at`` [deg] and the ``stations`` [deg] of the design on screen."""
         self.results = results
         self.md.content = table_markdown(results)
         ok = [r for r in results.values() if not isinstance(r, str)]
@@ -100,9 +99,12 @@ class CompareView:
             return
         x = ok[0]["theta_deg"]  # camcore's compare puts every follower on one grid
         nan = np.full(x.shape, np.nan)
-        fn, st = [x], [x]
-        for r in results.values():
-            fn.append(nan if isinstance(r, str) else r["FN_N"])
-            st.append(nan if isinstance(r, str) else r["stress_MPa"])
-        self.fn.data = wire(fn)
-        self.stress.data = wire(st)
+        fn = [nan if isinstance(r, str) else r["FN_N"] for r in results.values()]
+        st = [nan if isinstance(r, str) else r["stress_MPa"] for r in results.values()]
+        self.fn.show(x, tuple(fn), nan, at, stations)
+        self.stress.show(x, tuple(st), nan, at, stations)
+
+    def marker(self, theta_deg: float) -> None:
+        """The cam angle on both plots."""
+        self.fn.marker(theta_deg)
+        self.stress.marker(theta_deg)

@@ -53,8 +53,12 @@ class Curve:
         axes: list[tuple[str, str]],
         series: list[dict],
         height: int = 190,
+        shading: bool = True,
     ):
+        """``shading``: a series that shades where a limit is broken (False: none,
+        ``show``'s shade is then ignored)."""
         self.gui, self.title = gui, title
+        self.shading = shading
         ser: list[dict[str, Any]] = [{"label": "θ [°]"}]
         for s in series:
             cfg: dict[str, Any] = {
@@ -68,16 +72,17 @@ class Curve:
             ser.append(cfg)
         # shading and marker live on their own fixed [0, 1] scales (no axis): they never
         # disturb the auto-range of the curves
-        ser.append(
-            {
-                "label": "limit broken",
-                "scale": "shade",
-                "stroke": NONE,
-                "fill": RED_FILL,
-                "width": 0,
-                "points": {"show": False},
-            }
-        )
+        if shading:
+            ser.append(
+                {
+                    "label": "limit broken",
+                    "scale": "shade",
+                    "stroke": NONE,
+                    "fill": RED_FILL,
+                    "width": 0,
+                    "points": {"show": False},
+                }
+            )
         ser.append(  # the stations (the paper's Fig. 4): where the contacts change
             {
                 "label": "stations",
@@ -186,7 +191,7 @@ class Curve:
         xi = np.repeat(at, 3)
         order = np.argsort(np.concatenate([x, xi]), kind="stable")  # a spike's 3 stay together
         out = [np.concatenate([x, xi])[order]]
-        for y in [*self.ys, self.shade]:
+        for y in [*self.ys, self.shade] if self.shading else self.ys:
             out.append(np.concatenate([y, np.interp(xi, x, y)])[order])
         for first, last in ((0, self.stations.size), (self.stations.size, at.size)):
             mk = np.full(x.size + xi.size, -1.0)

@@ -363,7 +363,9 @@ class Session:
                 self._show_curves(r.curves, self._index())
             self._show_summary(r.summary)
             self._show_status()
-            self.ui.compare_view.update(r.compare)
+            self.ui.compare_view.update(
+                r.compare, math.degrees(self.analysis.theta[self._index()]), r.curves.stations
+            )
 
     def _stale(self, gen: int) -> bool:
         with self.lock:
@@ -598,6 +600,7 @@ class Session:
         self.ui.where_md.content = self._where(k)
         for c in self.ui.curves:
             c.marker(math.degrees(self.analysis.theta[k]))
+        self.ui.compare_view.marker(math.degrees(self.analysis.theta[k]))
 
     def _on_angle(self, value: float) -> None:
         try:

@@ -400,14 +400,22 @@ def test_compare_tab(tab):
     for label in ("single roller", "double roller", "single concave", "double concave"):
         assert label in md
     assert "67.297" in md  # Table 1 reference column
-    data = s.ui.compare_view.fn.data
-    assert len(data) == 5 and data[0].size > 100
+    view = s.ui.compare_view
+    data = view.fn.handle.data  # θ, the four followers, the stations, θ now
+    assert len(data) == 7 and data[0].size > 100
     # one grid for the four followers: their curves are drawn at the same angles
-    xs = [r["theta_deg"] for r in s.ui.compare_view.results.values()]
-    assert all(np.array_equal(x.astype(np.float32), data[0]) for x in xs)  # sent as float32
+    xs = [r["theta_deg"] for r in view.results.values()]
+    assert all(np.array_equal(x, view.fn.x) for x in xs)
     assert all(d.shape == data[0].shape for d in data)
     assert np.all(np.isfinite(data[1])) and s.verified
     assert "geometric check max" in s.ui.status.content
+    # the design's stations dashed and its cam angle marked, as on the Curves tab: a
+    # teacher steps through the stations watching the four followers
+    spikes = lambda col: np.sort(data[0][data[col] > 1.0])  # noqa: E731
+    assert np.allclose(spikes(5), np.degrees(s.analysis.stations), atol=1e-4)
+    s.goto_station(2)
+    data = view.stress.handle.data
+    assert np.allclose(spikes(6), np.degrees(s.analysis.stations[2]), atol=1e-4)
 
 
 def test_tabs_are_isolated_and_freed(app):
