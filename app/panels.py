@@ -356,6 +356,9 @@ def where_markdown(
         f"<b>θ = {th:.1f}°</b> · {seg} · <b>{where}</b><br>"
         f"In contact: <b>{', '.join(faces) if faces else 'none'}</b> · "
         f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N"
+        # two faces touching share the load (Eqs. 36-38): a teacher read station 0's
+        # 17.5 N beside "from here S1 carries the load alone" as S1's whole load
+        + (" per face" if int(a.in_contact[:, k].sum()) > 1 else "")
         + (f"<br>{said}" if said else "")
     )
     # in room kept for the longest of these lines (they wrap by their lengths, the

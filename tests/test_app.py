@@ -304,12 +304,14 @@ def test_stations_angle_and_animation(tab):
     assert "at station 2" in s.ui.where_md.content
     assert "station 2: S2 touches; from here the load is shared" in s.ui.where_md.content
     assert "S1 (left face), S2 (right face)" in s.ui.where_md.content  # both on the dwell arc
+    assert "F_N = 68.4 N per face" in s.ui.where_md.content  # F_t / (2 cos psi_h): shared
     wxyz = np.array(s.view.cam_frame.wxyz)
     assert abs(2 * np.arctan2(-wxyz[3], wxyz[0]) - s.analysis.stations[2]) < 1e-2
     assert s.ui.angle_slider.value == pytest.approx(107.4)  # as the text says, not 107.5
     assert "θ = 107.4°" in s.ui.where_md.content
     s.ui.angle_slider.value = 50.0
     assert s.theta_deg == 50.0 and "rise" in s.ui.where_md.content
+    assert "per face" not in s.ui.where_md.content  # S1 alone drives the rise
     y = s.view.follower_frame.position[1]
     assert abs(y - float(np.interp(np.radians(50), s.analysis.theta, s.analysis.prog.S))) < 1e-4
     s.ui.angle_slider.value = 0.0  # a boundary: both segments are named
