@@ -152,7 +152,7 @@ class Analysis(Local):
     @property
     def on_curve(self) -> np.ndarray:
         """(F, N) where a face touches a rise or fall curve (not a dwell arc)."""
-        return self.in_contact & np.isin(self.segment_code, motion.MOTIONS)
+        return extremes.on_curve(self, np.array([g.code for g in self.segments], dtype=np.int8))
 
     @property
     def n_contacts(self) -> np.ndarray:

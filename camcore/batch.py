@@ -40,7 +40,7 @@ from . import checks, extremes, forces, machine, motion, profile, train
 from .analysis import stations
 from .contact import compliance, conservative_stress, half_width, hertz_line_stress
 from .model import Design, allowable_contact_stress_MPa, omega_rad_s
-from .motion import FALL, HIGH, MOTIONS, RISE
+from .motion import FALL, HIGH, RISE
 from .report import _finite, _train
 from .units import MM, to_deg
 
@@ -212,8 +212,7 @@ def _stress(d0: Design, FN, rho, r) -> np.ndarray:
 
 
 def _on_curve(loc, segs) -> np.ndarray:
-    codes = np.array([g.code for g in segs], dtype=np.int8)[loc.part]
-    return loc.in_contact & np.isin(codes, MOTIONS)
+    return extremes.on_curve(loc, np.array([g.code for g in segs], dtype=np.int8))
 
 
 def _quantities(bt: Batch) -> dict:
@@ -227,6 +226,15 @@ def _quantities(bt: Batch) -> dict:
     if bt.r[0] != 0.0:
         names.append("stress_max")
     return {n: extremes.QUANTITIES[n] for n in names}
+
+
+def _brackets(th: np.ndarray, des: np.ndarray, k: np.ndarray, last: np.ndarray):
+    """extremes.brackets of the candidates k of designs ``des`` on their own grids
+    (rows of ``th``, real up to ``last``, the rest padding)."""
+    two_pi = 2 * np.pi
+    lo = np.where(k > 0, th[des, np.maximum(k - 1, 0)], th[des, last[des]] - two_pi)
+    hi = np.where(k < last[des], th[des, np.minimum(k + 1, last[des])], th[des, 0] + two_pi)
+    return lo, hi
 
 
 def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
@@ -248,8 +256,7 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
         return out
     kk = des * N + k
     last = bt.real.sum(axis=1) - 1  # each design's last real grid index (the rest pads)
-    lo = th[des, np.maximum(k - 1, 0)]  # extremes.brackets, on each design's own grid
-    hi = th[des, np.minimum(k + 1, last[des])]
+    lo, hi = _brackets(th, des, k, last)
     getters = list(qs.values())
     sense = np.array([s for _, s in getters])[q]
     codes = np.array([g.code for g in bt.segs], dtype=np.int8)
@@ -357,8 +364,7 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
         row, k = extremes.top_peaks(grid, np.isfinite(grid) & np.tile(bt.real, (len(needs), 1)))
         q, des = row // B, row % B
         last = bt.real.sum(axis=1) - 1  # each design's last real grid index
-        lo = bt.theta[des, np.maximum(k - 1, 0)]
-        hi = bt.theta[des, np.minimum(k + 1, last[des])]
+        lo, hi = _brackets(bt.theta, des, k, last)
 
         def g(x):  # the need of each bracket at its POINTS angles, bracket-major
             p = motion.program(d0, x, bt.segs)
@@ -501,7 +507,7 @@ def _peak(grid: list[float | None], cands: np.ndarray) -> list[float | None]:
     candidates' worst (``cands`` (B, C) from _refine)."""
     w = _worst(cands, 1.0)
     return [
-        g if g is None or not np.isfinite(v) else float(g + max(0.0, v - g))
+        g if g is None or not np.isfinite(v) else float(max(g, v))
         for g, v in zip(grid, w, strict=True)
     ]
 

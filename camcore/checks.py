@@ -91,8 +91,17 @@ def runs_deg(
     spans = [
         (float(theta[a]), float(theta[b - 1])) for a, b in zip(edges[::2], edges[1::2], strict=True)
     ]
+    two_pi = 2 * np.pi
+    turn = []  # a bracket across theta = 0 (extremes.brackets) as its two parts in [0, 2 pi]
+    for lo, hi in extra:
+        if lo < 0.0:
+            turn += [(lo + two_pi, two_pi), (0.0, hi)]
+        elif hi > two_pi:
+            turn += [(lo, two_pi), (0.0, hi - two_pi)]
+        else:
+            turn.append((lo, hi))
     merged: list[list[float]] = []
-    for lo, hi in sorted(spans + list(extra)):
+    for lo, hi in sorted(spans + turn):
         if merged and lo <= merged[-1][1] + 1e-12:
             merged[-1][1] = max(merged[-1][1], hi)
         else:

@@ -92,15 +92,18 @@ def distinct_rows(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def brackets(theta: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The bracket [rad] of each candidate sample k of the grid ``theta``: its two
-    neighbours, also where a neighbour is on another segment or contact window (the
-    search then counts only the angles where the face still drives a curve: see
-    ``on_curve``). Segment boundaries are grid samples and a boundary belongs to what
-    begins there, so a rise's last interval is the rise's up to its end: a supremum
-    can be there only (F_N at the end of a rise, where guide friction acts until the
-    follower stops: 0.25 % above the last sample's on the paper's example)."""
-    n = theta.size
-    return theta[np.maximum(k - 1, 0)], theta[np.minimum(k + 1, n - 1)]
+    """The bracket [rad] of each candidate sample k of the grid ``theta`` (one turn,
+    increasing from 0): its two neighbours around the circle (the first sample's lower
+    one is the last minus 2 pi, the last's upper one the first plus 2 pi), also where a
+    neighbour is on another segment or contact window: the search then counts only the
+    angles where the face still drives a curve (``on_curve``). So the interval between
+    a rise's last sample and its end is searched: a supremum can be there only (F_N,
+    where guide friction acts until the follower stops at the end of a rise: 0.25 %
+    above the last sample's for the paper's double rollers)."""
+    n, two_pi = theta.size, 2 * np.pi
+    lo = np.where(k > 0, theta[np.maximum(k - 1, 0)], theta[-1] - two_pi)
+    hi = np.where(k < n - 1, theta[np.minimum(k + 1, n - 1)], theta[0] + two_pi)
+    return lo, hi
 
 
 def on_curve(loc, codes: np.ndarray) -> np.ndarray:
@@ -117,8 +120,7 @@ def peak(a, name: str, grid: float | None) -> float | None:
     w = a.worst.get(name)
     if grid is None or w is None or not np.isfinite(w.value):
         return grid
-    sense = QUANTITIES[name][1]
-    return float(grid + max(0.0, sense * (w.value - grid)) * sense)
+    return float(max(grid, w.value) if QUANTITIES[name][1] > 0 else min(grid, w.value))
 
 
 def zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -186,7 +188,7 @@ def worst_values(a) -> dict[str, Worst | None]:
         s = sense[b]
         out[name] = Worst(
             float(s * best[b]),
-            float(at[b]),
+            float(at[b] % (2 * np.pi)),  # (a bracket may cross theta = 0)
             int(face[b]),
             tuple((float(s * best[i]), float(lo[i]), float(hi[i])) for i in m),
         )
@@ -207,8 +209,7 @@ def refine_maxes(f, theta: np.ndarray, values: list[np.ndarray]) -> list[tuple[f
         qa, ka = top_peaks(grid_values, np.isfinite(grid_values))
         if not ka.size:
             return out
-        lo = theta[np.maximum(ka - 1, 0)]
-        hi = theta[np.minimum(ka + 1, theta.size - 1)]
+        lo, hi = brackets(theta, ka)
 
         def g(x):  # the quantity of each bracket at its POINTS angles, bracket-major
             per = x.size // qa.size
@@ -222,5 +223,5 @@ def refine_maxes(f, theta: np.ndarray, values: list[np.ndarray]) -> list[tuple[f
         m = np.flatnonzero(qa == j)
         if m.size:
             i = m[np.argmax(best[m])]
-            out[j] = (float(best[i]), float(at[i]))
+            out[j] = (float(best[i]), float(at[i] % (2 * np.pi)))
     return out

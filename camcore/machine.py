@@ -211,17 +211,21 @@ def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None
 
 
 PROPOSAL_DIGITS = 4
+ROUND_OFF = 1e-9  # relative: a ratio this close to the safety factor meets it
 
 
 def proposed_rate(n: float, k_min: float) -> float:
     """The spring rate to propose [N/m]: n k_min rounded up to PROPOSAL_DIGITS
     significant figures, so that the figure a user copies meets the safety factor (the
     exact 2089.334 shown as 2089.3 had read 'k = 1.49 k_min: close to jump' once typed
-    in). inf stays inf, 0 stays 0."""
+    in). Decimal digits, not binary arithmetic (0.001 stays 0.001; subnormal rates
+    too); inf stays inf, 0 stays 0."""
     x = n * k_min
     if not math.isfinite(x) or x <= 0.0:
         return x
-    unit = 10.0 ** (math.floor(math.log10(x)) - PROPOSAL_DIGITS + 1)
-    up = math.ceil(x / unit) * unit
-    clean = float(f"{up:.{PROPOSAL_DIGITS}g}")  # without the binary noise of ``unit``
-    return clean if clean >= x else up
+    mantissa, exponent = f"{x:.{PROPOSAL_DIGITS - 1}e}".split("e")  # the nearest 4 figures
+    digits = round(float(mantissa) * 10 ** (PROPOSAL_DIGITS - 1))
+    near = float(f"{digits}e{int(exponent) - PROPOSAL_DIGITS + 1}")
+    if near >= x * (1 - ROUND_OFF):
+        return near
+    return float(f"{digits + 1}e{int(exponent) - PROPOSAL_DIGITS + 1}")  # the next up

@@ -308,8 +308,8 @@ def _train_text(t: dict | None) -> str:
 
 def _down(x: float) -> str:
     """A margin to 2 decimals, rounded down: 1.4996 is '1.49', not '1.5' beside a
-    warning that it is below 1.5."""
-    return f"{math.floor(x * 100) / 100:.2f}"
+    warning that it is below 1.5 (round-off aside: 0.3 / 0.1 is 2.9999999999999996)."""
+    return f"{math.floor(x * (1 + machine.ROUND_OFF) * 100) / 100:.2f}"
 
 
 def _margin_text(s: dict) -> str:
@@ -324,7 +324,7 @@ def _margin_text(s: dict) -> str:
     rate = m["spring_rate"]
     if rate is not None and rate < 1.0:
         text += " (below k_min: the follower jumps)"
-    elif rate is not None and rate < n:
+    elif rate is not None and rate < n * (1 - machine.ROUND_OFF):
         text += f" (below the safety factor {n:g}: close to jump)"
     return text
 

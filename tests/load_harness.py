@@ -329,6 +329,7 @@ class LoadResult:
     errors: list[str]
     sweeps_s: list[float] = field(default_factory=list)  # explorers' sweeps, click -> end
     sweep_designs: list[int] = field(default_factory=list)  # designs of each of them
+    sweeps_per_explorer: list[int] = field(default_factory=list)
 
     @property
     def latencies_ms(self) -> list[float]:
@@ -457,6 +458,7 @@ async def run_load(
         errors,
         [s for e in sweepers for s in e.sweeps_s],
         [n for e in sweepers for n in e.designs],
+        [len(e.sweeps_s) for e in sweepers],
     )
 
 

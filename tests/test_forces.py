@@ -200,9 +200,11 @@ def test_section6_claims():
 
 
 # The paper example's cycle maxima from an implementation of Eqs. 29-42 written for a
-# review (its own numpy, not camcore's; 2026-11-26): reached at the end of the rise
-# (100 deg), where guide friction acts until the follower stops (mode (b): the printed
-# mode (a) gives F1, F2 < 0 on this rise). F_N [N], F1, F2 [N], stress [MPa].
+# review (its own numpy, not camcore's; 2026-11-26). F_N (both followers; and the
+# double rollers' F1, F2 and stress) peaks at the end of the rise (100 deg), where
+# guide friction acts until the follower stops (mode (b): the printed mode (a) gives
+# F1, F2 < 0 on this rise); the concave faces' F1, F2 mid-rise, their stress at ~79
+# deg. F_N [N], F1, F2 [N], stress [MPa].
 INDEPENDENT_PEAKS = {
     FollowerKind.double_concave: (140.1901, 61.4058, 44.5902, 52.4146),
     FollowerKind.double_roller: (142.3358, 32.6789, 18.8488, 216.6377),
@@ -233,6 +235,43 @@ def test_cycle_maxima_are_the_real_cams(kind):
     b = analyze(_with(PAPER.with_kind(kind), allowable_contact_stress_MPa=between), verify=False)
     assert "contact_stress" in {v.code for v in b.violations}
     assert summary(b)["contact_stress_max_MPa"]["cycle"] * sf > between
+
+
+def test_cycle_maxima_do_not_depend_on_where_the_turn_starts():
+    """The same cam with its program started elsewhere (the rise now ends at 360 deg,
+    where the grid's last interval reaches round to the first sample) has the same
+    cycle maxima, and its stress check fires at the same allowable: a review found the
+    search stopped at the grid's last sample, 0.1 % low, and the check silent."""
+    from camcore.report import summary
+
+    d = PAPER.with_kind(FollowerKind.double_roller)
+    data = d.model_dump(mode="json")
+    data["motion"] = {
+        "segments": [
+            {"kind": "dwell", "angle_deg": 70.0},
+            {"kind": "fall", "angle_deg": 130.0, "lift_mm": 15.0, "law": "cycloidal"},
+            {"kind": "dwell", "angle_deg": 60.0},
+            {"kind": "rise", "angle_deg": 100.0, "lift_mm": 15.0, "law": "cycloidal"},
+        ]
+    }
+    turned = Design.model_validate(data)
+    s0, s1 = summary(analyze(d, verify=False)), summary(analyze(turned, verify=False))
+    for key, sub in (
+        ("contact_force_max_N", "cycle"),
+        ("guide_force_max_N", "F1"),
+        ("guide_force_max_N", "F2"),
+        ("contact_stress_max_MPa", "cycle"),
+    ):
+        assert s1[key][sub] == pytest.approx(s0[key][sub], rel=1e-6), (key, sub)
+    worst = analyze(turned, verify=False).worst["stress_max"]
+    assert 0 <= worst.theta < 2 * math.pi  # (found across 360 deg, said on the turn)
+    allow = (
+        s0["contact_stress_max_MPa"]["cycle"] * 0.9999 * PAPER.limits.contact_stress_safety_factor
+    )
+    broken = analyze(_with(turned, allowable_contact_stress_MPa=allow), verify=False)
+    v = {v.code: v for v in broken.violations}["contact_stress"]
+    assert all(0 <= lo <= hi <= 360 for lo, hi in v.ranges_deg)
+    assert any(hi >= 359.9 for _, hi in v.ranges_deg)  # the stretch before 360 deg
 
 
 def test_hertz_against_handbook_roller_on_flat_and_concave():

@@ -59,6 +59,12 @@ def test_the_proposed_spring_is_rounded_up_to_four_figures():
     assert machine.proposed_rate(2.0, 500.0) == 1000.0  # already 4 figures: unchanged
     assert machine.proposed_rate(1.5, 0.0) == 0.0
     assert machine.proposed_rate(1.5, math.inf) == math.inf
+    # decimal, not binary, rounding: no 0.001001 for 0.001, no overflow for a subnormal
+    assert machine.proposed_rate(1.0, 0.001) == 0.001
+    assert machine.proposed_rate(3.0, 0.1) == 0.3  # (3 x 0.1 = 0.30000000000000004)
+    assert machine.proposed_rate(1.0, 1e-310) == pytest.approx(1e-310)
+    assert machine.proposed_rate(1.0, 9999.5) == 10000.0
+    assert machine.proposed_rate(1.0, 1.00000001) == 1.001
 
 
 def test_preload_min_is_the_edge_of_jump():
