@@ -98,6 +98,7 @@ class Layout:
     open_saved_btn: Any
     delete_saved_btn: Any
     download_btns: dict[str, Any]
+    aside_btn: Any  # downloads the working design set aside as unreadable (hidden: none)
     files_md: Any
     stations_img: Any = field(default=None)  # added on the first diagram
 
@@ -200,6 +201,9 @@ def _files_tab(gui, h: dict) -> None:
     h["saved_dd"] = gui.add_dropdown("Saved designs", ("–",), initial_value="–")
     h["open_saved_btn"] = gui.add_button("Open saved")
     h["delete_saved_btn"] = gui.add_button("Delete saved")
+    h["aside_btn"] = gui.add_button(  # shown while the browser holds one (Session._restore)
+        "⬇ The design this version could not open", visible=False
+    )
     gui.add_markdown("**Download**")
     h["download_btns"] = {kind: gui.add_button(label) for kind, label in DOWNLOADS}
     h["files_md"] = gui.add_markdown("")

@@ -122,6 +122,7 @@ class Session:
         self._busy = threading.Lock()  # a download being made (one at a time)
         self._drawing = threading.Lock()  # the stations diagram being drawn (one at a time)
         self._unread: dict = {}  # saved-list entries this version could not read (kept)
+        self._aside: str | None = None  # a working design set aside as unreadable
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -162,6 +163,7 @@ class Session:
         ui.save_btn.on_click(lambda _: self.save_named(ui.save_name.value))
         ui.open_saved_btn.on_click(lambda _: self.open_saved(ui.saved_dd.value))
         ui.delete_saved_btn.on_click(lambda _: self.delete_saved(ui.saved_dd.value))
+        ui.aside_btn.on_click(lambda _: self.download_set_aside())
         for kind, b in ui.download_btns.items():
             b.on_click(lambda _, k=kind: self.download(k))
         ui.explore.bind(self.analyst, lambda: self.design, self.set_design)
@@ -482,6 +484,7 @@ class Session:
         saved = storage.parse_saved(saved_text)
         self._unread = storage.unread_entries(saved_text, saved)
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
+        aside = self.store.read(storage.UNREADABLE_KEY)  # set aside by an earlier visit?
         if self.closed.is_set():
             return
         if self.store.silent:  # nothing is written over what the tab could not read
@@ -494,6 +497,11 @@ class Session:
         kept = why is not None and raw is not None and len(raw) <= MAX_DESIGN_BYTES
         if kept and raw is not None:  # (never the saved list here: a failed read is {})
             self.store.write(storage.UNREADABLE_KEY, raw)
+            aside = raw
+        if isinstance(aside, str) and 0 < len(aside) <= MAX_DESIGN_BYTES:
+            with self.lock:  # the user can take it out of the browser, to a later version
+                self._aside = aside
+                self.ui.aside_btn.visible = True
         with self.lock:
             self._show_saved(saved)
             restore = working is not None and self.gen == gen0 and working != self.design
@@ -527,6 +535,21 @@ class Session:
             logging.getLogger(__name__).exception("a kept Explore setup failed; ignored")
         self.ui.explore.keep_setup_with(
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
+        )
+
+    def download_set_aside(self) -> None:
+        """Send the working design this version could not open, as the browser kept it
+        (its own text, back to its own browser; at most MAX_DESIGN_BYTES)."""
+        with self.lock:
+            aside = self._aside
+        if aside is None:
+            return self._say("Nothing is set aside in this browser.")
+        self.client.send_file_download(
+            "camdesigner-set-aside.json", aside.encode(), save_immediately=True
+        )
+        self._say(
+            f"Sent the design set aside ({len(aside):,} characters): open it with the "
+            "version that wrote it."
         )
 
     def _save_working(self) -> None:

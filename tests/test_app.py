@@ -1472,6 +1472,31 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
         assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
 
 
+def test_a_set_aside_design_can_be_taken_out_of_the_browser(app, monkeypatch):
+    """The working design this version could not open is set aside in the browser's
+    storage; a button (shown only then, and on later visits while it is there) sends
+    it back as the browser kept it, to open with the version that wrote it."""
+    import json
+
+    from app import storage
+
+    newer = json.loads(design_to_json(load_preset("paper_example")))
+    newer["schema_version"] = 3
+    text = json.dumps(newer)
+    with restored_tab(app, monkeypatch, {}) as s:  # nothing set aside: no button
+        assert not s.ui.aside_btn.visible
+    for stored in ({storage.WORKING_KEY: text}, {storage.UNREADABLE_KEY: text}):
+        with restored_tab(app, monkeypatch, stored) as s:  # now, or on an earlier visit
+            sent: list[tuple[str, bytes]] = []
+            s.client.send_file_download = lambda name, data, _to=sent, **kw: _to.append(
+                (name, data)
+            )
+            assert s.ui.aside_btn.visible
+            s.ui.aside_btn.value = True  # click
+            assert sent == [("camdesigner-set-aside.json", text.encode())]
+            assert "Sent the design set aside" in s.ui.files_md.content
+
+
 def test_a_kept_entry_this_version_cannot_open_says_why(app, monkeypatch):
     """Opening a kept design of a later version had said 'Choose a saved design first'."""
     import json
