@@ -95,16 +95,26 @@ class CompareView:
         self.results = results
         self.md.content = table_markdown(results)
         ok = [r for r in results.values() if not isinstance(r, str)]
-        if not ok:
-            return
-        x = ok[0]["theta_deg"]  # camcore's compare puts every follower on one grid
-        nan = np.full(x.shape, np.nan)
-        fn = [nan if isinstance(r, str) else r["FN_N"] for r in results.values()]
-        st = [nan if isinstance(r, str) else r["stress_MPa"] for r in results.values()]
-        self.fn.show(x, tuple(fn), nan, at, stations)
-        self.stress.show(x, tuple(st), nan, at, stations)
+        # camcore's compare puts every follower on one grid; with none computable the
+        # plots keep the stations and the marker of this design, and no curve
+        x = ok[0]["theta_deg"] if ok else np.array([0.0, 360.0])
+        zero = np.zeros(x.shape)
+        failed = [isinstance(r, str) for r in results.values()]
+        for curve, key in ((self.fn, "FN_N"), (self.stress, "stress_MPa")):
+            ys = tuple(zero if isinstance(r, str) else r[key] for r in results.values())
+            _hide(curve, failed)  # (not NaN: uPlot cannot range a NaN series: blank plot)
+            curve.show(x, ys, zero, at, stations)
 
     def marker(self, theta_deg: float) -> None:
         """The cam angle on both plots."""
         self.fn.marker(theta_deg)
         self.stress.marker(theta_deg)
+
+
+def _hide(curve: Curve, hidden: list[bool]) -> None:
+    """Hide the follower series of ``curve`` that have no curve (not computable)."""
+    ser = list(curve.handle.series)
+    for i, off in enumerate(hidden, start=1):  # (series 0 is the cam angle)
+        ser[i] = {**ser[i], "show": not off}
+    if ser != list(curve.handle.series):
+        curve.handle.series = tuple(ser)

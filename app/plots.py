@@ -67,8 +67,9 @@ class Curve:
                 "stroke": s["stroke"],
                 "width": s.get("width", 1.5),
             }
-            if "dash" in s:
-                cfg["dash"] = s["dash"]
+            for key in ("dash", "show"):
+                if key in s:
+                    cfg[key] = s[key]
             ser.append(cfg)
         # shading and marker live on their own fixed [0, 1] scales (no axis): they never
         # disturb the auto-range of the curves
@@ -191,7 +192,8 @@ class Curve:
         xi = np.repeat(at, 3)
         order = np.argsort(np.concatenate([x, xi]), kind="stable")  # a spike's 3 stay together
         out = [np.concatenate([x, xi])[order]]
-        for y in [*self.ys, self.shade] if self.shading else self.ys:
+        columns = [*self.ys, self.shade] if self.shading else self.ys
+        for y in columns:
             out.append(np.concatenate([y, np.interp(xi, x, y)])[order])
         for first, last in ((0, self.stations.size), (self.stations.size, at.size)):
             mk = np.full(x.size + xi.size, -1.0)
@@ -403,6 +405,7 @@ def curve_specs(a) -> list[dict]:
                     "stroke": "#d62728",
                     "dash": [6, 4],
                     "width": 1,
+                    "show": _stress_limit_shown(a),
                     "fn": _stress_limit_line,
                 },
             ],
@@ -501,13 +504,16 @@ def _stress_limit_shown(a) -> bool:
 
 
 def _stress_limit_label(a) -> str:
-    far = "" if _stress_limit_shown(a) else " (far above: not drawn)"
+    if a.design.follower.radius_mm == 0.0:
+        return "no Hertz stress (knife edge)"
+    far = "" if _stress_limit_shown(a) else " (far above: hidden)"
     return f"limit {contact_stress_limit_MPa(a.design):.4g} MPa{far}"
 
 
 def _stress_limit_line(a) -> np.ndarray:
-    v = contact_stress_limit_MPa(a.design) if _stress_limit_shown(a) else np.nan
-    return np.full(a.theta.size, v)
+    # (hidden by the series' show flag, not by NaN: uPlot cannot range a scale with a
+    # NaN series, and the whole plot went blank)
+    return np.full(a.theta.size, contact_stress_limit_MPa(a.design))
 
 
 def relabel_limits(curves: list[Curve], a) -> None:
@@ -519,9 +525,13 @@ def relabel_limits(curves: list[Curve], a) -> None:
         "Radius of curvature": (2, f"{ref_label} = {ref:g} mm (limit)"),
         "Contact (Hertz) stress": (2, _stress_limit_label(a)),
     }
+    shown = {"Contact (Hertz) stress": _stress_limit_shown(a)}  # (a far limit: hidden)
     for title, (si, text) in labels.items():
         h = next(c for c in curves if c.title.startswith(title)).handle
         ser = list(h.series)
-        if ser[si].get("label") != text:
-            ser[si] = {**ser[si], "label": text}
+        want = {**ser[si], "label": text}
+        if title in shown:
+            want["show"] = shown[title]
+        if ser[si] != want:
+            ser[si] = want
             h.series = tuple(ser)

@@ -498,7 +498,7 @@ class Session:
         if kept and raw is not None:  # (never the saved list here: a failed read is {})
             self.store.write(storage.UNREADABLE_KEY, raw)
             aside = raw
-        if isinstance(aside, str) and 0 < len(aside) <= MAX_DESIGN_BYTES:
+        if isinstance(aside, str) and 0 < len(aside.encode()) <= MAX_DESIGN_BYTES:
             with self.lock:  # the user can take it out of the browser, to a later version
                 self._aside = aside
                 self.ui.aside_btn.visible = True
@@ -544,13 +544,19 @@ class Session:
             aside = self._aside
         if aside is None:
             return self._say("Nothing is set aside in this browser.")
-        self.client.send_file_download(
-            "camdesigner-set-aside.json", aside.encode(), save_immediately=True
-        )
-        self._say(
-            f"Sent the design set aside ({len(aside):,} characters): open it with the "
-            "version that wrote it."
-        )
+        if not self._busy.acquire(blocking=False):  # one download at a time, as the others
+            return self._say("… Still sending the previous file: one at a time, please.")
+        try:
+            data = aside.encode()
+            self.client.send_file_download(
+                "camdesigner-set-aside.json", data, save_immediately=True
+            )
+            self._say(
+                f"Sent the design set aside ({len(data):,} bytes): open it with the version "
+                "that wrote it."
+            )
+        finally:
+            self._busy.release()
 
     def _save_working(self) -> None:
         if self._persist and self.error is None:
@@ -619,11 +625,14 @@ class Session:
             if markers:
                 self._show_markers(k)
 
-    def _show_markers(self, k: int) -> None:
+    def _show_markers(self, k: int, compare: bool = True) -> None:
+        """The line under the slider and the curves' markers at grid index k; the
+        Compare tab's too unless ``compare`` is False (while playing: ~35 kB each)."""
         self.ui.where_md.content = self._where(k)
         for c in self.ui.curves:
             c.marker(math.degrees(self.analysis.theta[k]))
-        self.ui.compare_view.marker(math.degrees(self.analysis.theta[k]))
+        if compare:
+            self.ui.compare_view.marker(math.degrees(self.analysis.theta[k]))
 
     def _on_angle(self, value: float) -> None:
         try:
@@ -700,7 +709,7 @@ class Session:
             self._goto(to, markers=stop is not None, slider=slow)
             k = self._index()
             if n % 15 == 0:  # curve markers at 2 Hz: each one resends the plot data
-                self._show_markers(k)
+                self._show_markers(k, compare=False)  # (Compare's at stops and pauses)
             elif slow:
                 self.ui.where_md.content = self._where(k)
 

@@ -230,7 +230,8 @@ def _quantities(bt: Batch) -> dict:
 
 def _brackets(th: np.ndarray, des: np.ndarray, k: np.ndarray, last: np.ndarray):
     """extremes.brackets of the candidates k of designs ``des`` on their own grids
-    (rows of ``th``, real up to ``last``, the rest padding)."""
+    (rows of ``th``, real up to ``last``, the rest padding): a batch's grids are the
+    designs' own, whole turns (extremes.whole_turn), so the brackets go round."""
     two_pi = 2 * np.pi
     lo = np.where(k > 0, th[des, np.maximum(k - 1, 0)], th[des, last[des]] - two_pi)
     hi = np.where(k < last[des], th[des, np.minimum(k + 1, last[des])], th[des, 0] + two_pi)

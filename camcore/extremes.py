@@ -101,9 +101,22 @@ def brackets(theta: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     where guide friction acts until the follower stops at the end of a rise: 0.25 %
     above the last sample's for the paper's double rollers)."""
     n, two_pi = theta.size, 2 * np.pi
-    lo = np.where(k > 0, theta[np.maximum(k - 1, 0)], theta[-1] - two_pi)
-    hi = np.where(k < n - 1, theta[np.minimum(k + 1, n - 1)], theta[0] + two_pi)
+    first, last = theta[np.maximum(k - 1, 0)], theta[np.minimum(k + 1, n - 1)]
+    if not whole_turn(theta):  # angles a caller chose (analyze's theta): never beyond them
+        return first, last
+    lo = np.where(k > 0, first, theta[-1] - two_pi)
+    hi = np.where(k < n - 1, last, theta[0] + two_pi)
     return lo, hi
+
+
+def whole_turn(theta: np.ndarray) -> bool:
+    """Whether the increasing angles ``theta`` [rad] go round one turn with no gap
+    wider than their widest step (the design's grid does; a caller's part does not)."""
+    if theta.size < 2:
+        return False
+    steps = np.diff(theta)
+    gap = theta[0] + 2 * np.pi - theta[-1]
+    return bool(np.all(steps > 0) and 0 < gap <= steps.max() * (1 + 1e-9))
 
 
 def on_curve(loc, codes: np.ndarray) -> np.ndarray:

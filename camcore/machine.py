@@ -212,6 +212,7 @@ def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None
 
 PROPOSAL_DIGITS = 4
 ROUND_OFF = 1e-9  # relative: a ratio this close to the safety factor meets it
+EPS = float(np.finfo(float).eps)
 
 
 def proposed_rate(n: float, k_min: float) -> float:
@@ -226,6 +227,7 @@ def proposed_rate(n: float, k_min: float) -> float:
     mantissa, exponent = f"{x:.{PROPOSAL_DIGITS - 1}e}".split("e")  # the nearest 4 figures
     digits = round(float(mantissa) * 10 ** (PROPOSAL_DIGITS - 1))
     near = float(f"{digits}e{int(exponent) - PROPOSAL_DIGITS + 1}")
-    if near >= x * (1 - ROUND_OFF):
-        return near
-    return float(f"{digits + 1}e{int(exponent) - PROPOSAL_DIGITS + 1}")  # the next up
+    if near >= x * (1 - 4 * EPS):  # (n k_min's own round-off: 3 x 0.1 is 0.3)
+        return near if math.isfinite(near) else x
+    up = float(f"{digits + 1}e{int(exponent) - PROPOSAL_DIGITS + 1}")  # the next up
+    return up if math.isfinite(up) else x

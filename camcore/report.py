@@ -322,7 +322,7 @@ def _margin_text(s: dict) -> str:
         parts.append(f"jumps at {_down(m['jump_speed'])} x this speed")
     text = ", ".join(parts) or "-"
     rate = m["spring_rate"]
-    if rate is not None and rate < 1.0:
+    if rate is not None and rate < 1.0 - machine.ROUND_OFF:
         text += " (below k_min: the follower jumps)"
     elif rate is not None and rate < n * (1 - machine.ROUND_OFF):
         text += f" (below the safety factor {n:g}: close to jump)"

@@ -150,12 +150,14 @@ def test_material_and_allowable_stress_are_set_in_the_app(tab):
     stress_plot = next(c for c in s.ui.curves if c.title.startswith("Contact (Hertz)"))
 
     def limit_drawn() -> float | None:
-        line = np.asarray(stress_plot.handle.data[2], float)
-        return float(np.nanmax(line)) if np.isfinite(line).any() else None
+        if not stress_plot.handle.series[2].get("show", True):
+            return None  # hidden (its values stay finite: uPlot cannot range NaN)
+        return float(np.max(stress_plot.handle.data[2]))
 
     assert "1000 MPa / 1.25 = 800.0 MPa" in s.ui.summary_md.content
-    # 212 MPa under an 800 MPa line would flatten the curve: the line is not drawn
+    # 212 MPa under an 800 MPa line would flatten the curve: the line is hidden
     assert limit_drawn() is None
+    assert np.isfinite(np.asarray(stress_plot.handle.data[2], float)).all()
     assert "limit 800 MPa (far above" in stress_plot.handle.series[2]["label"]
     s.ui.controls["material.grade"].value = "bronze (350 MPa)"
     assert s.design.material.grade.value == "bronze"
@@ -422,6 +424,30 @@ def test_compare_tab(tab):
     s.goto_station(2)
     data = view.stress.handle.data
     assert np.allclose(spikes(6), np.degrees(s.analysis.stations[2]), atol=1e-4)
+
+
+def test_compare_tab_with_no_follower_computable(tab):
+    """A design none of the four followers can take: the table says so and the plots
+    show this design's stations with no curve (a review: they had kept the previous
+    design's curves and stations; and a curve of NaN leaves uPlot no range, a blank
+    plot, so a follower without a curve is hidden, not NaN)."""
+    import json
+
+    s = tab
+    s.refine()
+    data = json.loads(design_to_json(load_preset("paper_example")))
+    data["follower"].update(kind="flat_face", offset_mm=1000.0, single_offset_mm=1000.0)
+    data["cam"]["base_radius_mm"] = 5.0
+    data["motion"] = {"lift_mm": 3.0, "rise_deg": 100.0, "high_dwell_deg": 70.0, "fall_deg": 130.0}
+    s.set_design(Design.model_validate(data))
+    s.refine()
+    view = s.ui.compare_view
+    assert all(isinstance(r, str) for r in view.results.values())
+    assert "not computable" in view.md.content
+    for plot in (view.fn, view.stress):
+        assert [ser.get("show", True) for ser in plot.handle.series[1:5]] == [False] * 4
+        assert np.allclose(plot.stations, np.degrees(s.analysis.stations))
+        assert all(np.isfinite(np.asarray(col, float)).all() for col in plot.handle.data)
 
 
 def test_tabs_are_isolated_and_freed(app):
@@ -1485,6 +1511,9 @@ def test_a_set_aside_design_can_be_taken_out_of_the_browser(app, monkeypatch):
     text = json.dumps(newer)
     with restored_tab(app, monkeypatch, {}) as s:  # nothing set aside: no button
         assert not s.ui.aside_btn.visible
+    wide = "\U0001f600" * (storage.MAX_DESIGN_BYTES // 2)  # characters within, bytes not
+    with restored_tab(app, monkeypatch, {storage.UNREADABLE_KEY: wide}) as s:
+        assert not s.ui.aside_btn.visible  # nothing that large goes back out
     for stored in ({storage.WORKING_KEY: text}, {storage.UNREADABLE_KEY: text}):
         with restored_tab(app, monkeypatch, stored) as s:  # now, or on an earlier visit
             sent: list[tuple[str, bytes]] = []

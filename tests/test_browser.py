@@ -45,6 +45,19 @@ S_CURVE_PIXELS = """() => { const c = document.querySelector('.uplot canvas');
     return n }"""
 
 
+# JS: pixels of colour [r, g, b] on the canvas of the uPlot whose title contains a text
+PLOT_PIXELS = """([title, r, g, b]) => {
+    const u = [...document.querySelectorAll('.uplot')]
+      .find(e => (e.querySelector('.u-title') || {}).innerText?.includes(title));
+    const c = u && u.querySelector('canvas');
+    if (!c || !c.width || !c.height) return 0; let n = 0;
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    for (let i = 0; i < d.length; i += 4)
+      if (Math.abs(d[i] - r) + Math.abs(d[i + 1] - g) + Math.abs(d[i + 2] - b) < 60
+          && d[i + 3] > 200) n++;
+    return n }"""
+
+
 def _field(page, label: str):
     """The number box of the control whose label starts with ``label``."""
     return page.evaluate_handle(
@@ -161,6 +174,15 @@ def test_app_in_headless_chromium(tmp_path):
             # the curves arrive as float32 (app.viser_speedups) and uPlot draws them: the
             # first plot's canvas carries its blue S curve
             page.wait_for_function(f"() => ({S_CURVE_PIXELS})() > 100")
+            # the stress plot draws its curve (COLORS[4], #8c564b) while its limit, far
+            # above, is hidden: a limit series of NaN had left uPlot no range, the plot
+            # blank on the default design
+            page.locator(".uplot").filter(
+                has_text="Contact (Hertz) stress"
+            ).first.scroll_into_view_if_needed()
+            page.wait_for_function(
+                f"(a) => ({PLOT_PIXELS})(a) > 100", arg=["Contact (Hertz) stress", 140, 86, 75]
+            )
             # and they fit the panel, and stay so (a clip rule on the status box's
             # containers had let the charts widen the panel, step by step, to 1800 px)
             page.wait_for_timeout(6000)

@@ -274,6 +274,19 @@ def test_cycle_maxima_do_not_depend_on_where_the_turn_starts():
     assert any(hi >= 359.9 for _, hi in v.ranges_deg)  # the stretch before 360 deg
 
 
+def test_a_part_of_the_turn_is_searched_only_there():
+    """analyze on angles a caller chose (0-90 deg) searches between them only: the
+    search round the turn is for whole turns (a review: the bracket 89.9-360 deg had
+    reported F_N at 99.99 deg, an angle never asked about)."""
+    theta = np.radians(np.arange(0.0, 90.05, 0.1))
+    a = analyze(PAPER.with_kind(FollowerKind.double_roller), verify=False, theta=theta)
+    end = theta[-1] + 1e-12
+    for name, w in a.worst.items():
+        if w is not None:
+            assert 0.0 <= w.theta <= end, name
+            assert all(0.0 <= lo <= hi <= end for _, lo, hi in w.others), name
+
+
 def test_hertz_against_handbook_roller_on_flat_and_concave():
     """Carvill, Mechanical Engineer's Data Handbook (1993) p. 52, same material:
     contact width w_c = sqrt(32 F (1 - nu^2) / (pi L E (1/r1 +- 1/r2))), sigma = 4F/(pi w_c L)."""

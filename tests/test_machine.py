@@ -62,7 +62,10 @@ def test_the_proposed_spring_is_rounded_up_to_four_figures():
     # decimal, not binary, rounding: no 0.001001 for 0.001, no overflow for a subnormal
     assert machine.proposed_rate(1.0, 0.001) == 0.001
     assert machine.proposed_rate(3.0, 0.1) == 0.3  # (3 x 0.1 = 0.30000000000000004)
-    assert machine.proposed_rate(1.0, 1e-310) == pytest.approx(1e-310)
+    assert machine.proposed_rate(1.0, 1e-310) == 1e-310  # (subnormal: 1e-310 exactly)
+    assert machine.proposed_rate(1.0, 5e-324) >= 5e-324
+    assert machine.proposed_rate(1.0, 1000.0000005) == 1001.0  # never below n k_min
+    assert machine.proposed_rate(1.0, 1.7976931348623157e308) == 1.7976931348623157e308
     assert machine.proposed_rate(1.0, 9999.5) == 10000.0
     assert machine.proposed_rate(1.0, 1.00000001) == 1.001
 
