@@ -86,7 +86,8 @@ def distinct_rows(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The distinct rows of ``x`` (brackets, POINTS) and, per row of x, its row among
     them: brackets of several quantities often sample the very same angles (a stress
     peak where F_N peaks), and the closed forms need evaluating there once. (The batch
-    uses it; for one design's ~30 brackets the sort costs more than it saves.)"""
+    uses it; worst_values tells one design's brackets apart by their two ends, which
+    costs less than this sort of whole rows.)"""
     rows, inv = np.unique(x, axis=0, return_inverse=True)
     return rows, inv.reshape(-1)
 
@@ -181,10 +182,17 @@ def worst_values(a) -> dict[str, Worst | None]:
         codes = np.array([g.code for g in a.segments], dtype=np.int8)
 
         def f(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
-            loc = a.local(x)
             per = x.size // q.size
-            vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, len(x))
-            fc, col = np.repeat(face, per), np.arange(x.size)
+            rows = x.reshape(q.size, per)
+            # brackets of several quantities are often the same (F_N, F1, F2 and the
+            # stress peak together): each evaluated once (a bracket is its two ends)
+            _, first, inv = np.unique(
+                rows[:, 0] + 1j * rows[:, -1], return_index=True, return_inverse=True
+            )
+            loc = a.local(rows[first].ravel())
+            vals = np.stack([get(loc) for get, _ in getters])  # (Q, F, distinct x)
+            fc = np.repeat(face, per)
+            col = (inv.reshape(-1)[:, None] * per + np.arange(per)).ravel()
             out = np.repeat(sense, per) * vals[np.repeat(q, per), fc, col]
             return np.where(on_curve(loc, codes)[fc, col], out, -np.inf)
 
