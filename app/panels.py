@@ -386,8 +386,13 @@ def segment_sums_markdown(segs: list[dict]) -> str:
 
 
 def slug(name: str) -> str:
-    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower()
-    return (s or "cam")[:40].rstrip("_")
+    """A file-name-safe form of a design's name: letters, digits and "_", at most 40
+    characters, cut at a word where one ends past the 20th (not "..._doubl")."""
+    s = re.sub(r"[^A-Za-z0-9]+", "_", name).strip("_").lower() or "cam"
+    if len(s) <= 40:
+        return s
+    cut = s[:41].rfind("_")  # (a word ending at the 40th character keeps it)
+    return (s[:cut] if cut >= 20 else s[:40]).rstrip("_")
 
 
 def file_stem(design: Design) -> str:

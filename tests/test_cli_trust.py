@@ -343,5 +343,13 @@ def test_html_and_pdf_report(tmp_path):
         assert external not in text  # nothing to fetch: XML namespaces only
     assert "Hertz contact stress" in text and "Jerk" in text
     assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 10_000
+    # every page A4 (595.28 x 841.89 pt), a wide one turned: the plot pages had been
+    # 11 x 9.6 in and 5 x 5 in, printed at whatever scale the printer chose
+    import re
+
+    boxes = re.findall(rb"/MediaBox \[ *0 0 ([\d.]+) ([\d.]+) *\]", pdf.read_bytes())
+    assert len(boxes) == 4
+    for w, h in boxes:
+        assert sorted((float(w), float(h))) == pytest.approx([595.44, 841.68], abs=0.5)
     proc = run("report", str(src), "--html", str(src))
     assert proc.returncode == 2 and "input design file" in proc.stderr
