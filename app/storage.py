@@ -122,7 +122,10 @@ class BrowserStore:
     def read(self, key: str) -> str | None:
         """The stored string, or None if absent, unreadable or the browser is silent
         (then ``silent`` is set: a tab that writes after such a read could replace what
-        the browser holds without having seen it)."""
+        the browser holds without having seen it). Once silent, later reads return None
+        at once: the tab keeps nothing anyway, and each would wait READ_TIMEOUT_S."""
+        if self.silent:
+            return None
         try:
             with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
                 warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")

@@ -462,3 +462,22 @@ def test_escaped_text_makes_no_links():
     for linkable in ("://", "www.", "@b"):  # (a second review: '_www.' had made a link)
         assert linkable not in out
     assert out.replace("\u2060", "").replace("\\_", "_") == text
+
+
+def test_a_silent_browser_costs_one_read_timeout_not_one_per_key():
+    """A browser that never answers made the tab wait READ_TIMEOUT_S per key it reads
+    (four keys: 20 s before it said so); after the first silent read, the rest return
+    None at once (nothing is written anyway: BrowserStore.silent)."""
+    from types import SimpleNamespace
+
+    from app.storage import BrowserStore
+
+    asked = []
+
+    def get_item(key, timeout=None):
+        asked.append(key)
+        raise TimeoutError
+
+    store = BrowserStore(SimpleNamespace(local_storage=SimpleNamespace(get_item=get_item)))
+    assert [store.read(k) for k in ("a", "b", "c", "d")] == [None] * 4
+    assert asked == ["a"] and store.silent
