@@ -139,11 +139,29 @@ def _field_name(path: str) -> str:
     return f"<b>{html.escape(label)}</b> {code}" if label else code
 
 
+def in_words(text: str) -> str:
+    """An input error's text with the design's field names as the panel labels them
+    ("rise_deg + high_dwell_deg" -> "Rise β_r [°] + High dwell β_h [°]": a student reads
+    the controls, not the file format). Whole names only (dotted paths first; a name
+    without "_" is an ordinary word)."""
+    from .controls import SPECS
+
+    labels = {s.path: s.label for s in SPECS if "_" in s.path.split(".")[-1]}
+    bare: dict[str, str | None] = {}
+    for path, label in labels.items():
+        key = path.split(".")[-1]
+        bare[key] = None if key in bare and bare[key] != label else label  # ambiguous
+    words = {**labels, **{k: v for k, v in bare.items() if v is not None}}
+    pattern = r"(?<![\w.])(" + "|".join(map(re.escape, sorted(words, key=len, reverse=True)))
+    return re.sub(pattern + r")(?![\w])", lambda m: words[m.group(1)], text)
+
+
 def _status_boxes(error, violations, lift_error, verified, mesh_error) -> str:
     parts = []
     if error:
         items = "".join(
-            f"<li>{_field_name(p.split(': ', 1)[0])}: {html.escape(p.split(': ', 1)[-1])}</li>"
+            f"<li>{_field_name(p.split(': ', 1)[0])}: "
+            f"{html.escape(in_words(p.split(': ', 1)[-1]))}</li>"
             for p in error.split("; ")
         )
         parts.append(

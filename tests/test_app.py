@@ -102,6 +102,8 @@ def test_invalid_value_keeps_last_design_and_explains(tab):
     assert s.design == good and s.analysis is a or s.analysis.design == good
     assert "Invalid input" in s.ui.status.content
     assert "exceeds 360 deg by 90 deg" in s.ui.status.content
+    # in the controls' words (a first-hour user read "rise_deg + high_dwell_deg + ...")
+    assert "Rise β_r [°] + High dwell β_h [°] + Fall β_f [°]" in s.ui.status.content
     assert "−90" in s.ui.low_dwell_md.content or "-90" in s.ui.low_dwell_md.content
     s.ui.controls["follower.face_radius_mm"].value = -50.0  # still invalid, now two problems
     assert s.design == good
