@@ -47,6 +47,7 @@ from .panels import (
     WIDE_WHERE_LINES,
     esc,
     file_stem,
+    in_words,
     low_dwell_text,
     nearest_index,
     status_html,
@@ -439,7 +440,7 @@ class Session:
                 f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
                 f"{d.follower.kind.label}."
                 + ("" if note is None else f"<br>⚠ **Before you make it:** {esc(note)}.")
-                + ("" if mount is None else f"<br>ℹ {esc(mount)} (Design → Cam).")
+                + ("" if mount is None else f"<br>ℹ {esc(in_words(mount))} (Design → Cam).")
             )
             self.client.send_file_download(name, data, save_immediately=True)
         finally:

@@ -292,6 +292,8 @@ def test_preset_and_downloads(tab, downloads):
     s.ui.quick_stl_btn.value = True  # the same part from the button above the tabs
     assert downloads[-1] == (name, data)
     assert "no shaft bore" in s.ui.quick_md.content  # a solid disc: said where one looks
+    said = s.ui.quick_md.content
+    assert "Bore diameter" in said and "bore_diameter_mm" not in said  # the control's name
     s.ui.download_btns["json"].value = True
     assert "no shaft bore" not in s.ui.files_md.content  # (a design file is no part)
     assert downloads[-1][1].decode().startswith("{")
