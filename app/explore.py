@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from camcore.explore import FIGURES, PROFILE_FIGURES, distinct, pareto
+from camcore.explore import FIGURES, OFFERED, PROFILE_FIGURES, distinct, offered, pareto
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError
 from camcore.sweep import design_at, with_point
 
@@ -42,7 +42,7 @@ FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
 MAX_STEPS = 15  # per axis
 MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
 CHUNK = 12  # designs per background job: ~0.1 s, the cancel latency
-MAX_FRONT = 30  # designs of the front offered for loading
+MAX_FRONT = OFFERED  # designs of the front offered for loading (spread along it)
 NO_FIGURE = "none"  # the third figure is optional
 
 
@@ -270,7 +270,7 @@ class ExplorePanel:
         front = pareto(rows, names)
         png = self._analyst.explore_png(rows, x, y, names, front, limits)
         offers = {}
-        for n, i in enumerate(front[:MAX_FRONT], start=1):
+        for n, i in enumerate(offered(front, MAX_FRONT), start=1):
             r = rows[i]
             point = {k[5:]: v for k, v in r.items() if k.startswith("grid.")}
             figs = ", ".join(f"{FIGURES[m].get(r):.4g} {FIGURES[m].unit}" for m in names)
@@ -294,8 +294,14 @@ class ExplorePanel:
             if first.all()
             else f" ({int(first.sum())} distinct: a follower ignores a field it does not use)"
         )
+        listed = (
+            ""
+            if len(front) <= MAX_FRONT
+            else f" ({MAX_FRONT} of them numbered and listed, spread along it)"
+        )
         self.progress.content = (
-            f"**{len(rows)} designs**{done}{same}: {ok} valid, {len(front)} on the Pareto front."
+            f"**{len(rows)} designs**{done}{same}: {ok} valid, "
+            f"{len(front)} on the Pareto front{listed}."
         )
 
     def load(self, label: str) -> None:

@@ -135,6 +135,8 @@ def _field_name(path: str) -> str:
     from .controls import SPECS
 
     label = next((spec.label for spec in SPECS if spec.path == path), None)
+    if label is None and re.fullmatch(SEGMENT_FIELD, path):
+        label = in_words(path)
     code = f"<code>{html.escape(path)}</code>"
     return f"<b>{html.escape(label)}</b> {code}" if label else code
 
@@ -153,7 +155,19 @@ def in_words(text: str) -> str:
         bare[key] = None if key in bare and bare[key] != label else label  # ambiguous
     words = {**labels, **{k: v for k, v in bare.items() if v is not None}}
     pattern = r"(?<![\w.])(" + "|".join(map(re.escape, sorted(words, key=len, reverse=True)))
+    text = re.sub(SEGMENT_FIELD, _segment_words, text)
     return re.sub(pattern + r")(?![\w])", lambda m: words[m.group(1)], text)
+
+
+# a segment's field ("motion.segments.4.angle_deg", counted from 0) as the segment
+# table labels it, its rows counted from 1 (a review read row 5's error as row 4's)
+SEGMENT_FIELD = r"(?<![\w.])(?:motion\.)?segments\.(\d+)(?:\.(\w+))?(?![\w])"
+SEGMENT_WORDS = {"angle_deg": "angle [°]", "lift_mm": "lift [mm]", "law": "law", "kind": "kind"}
+
+
+def _segment_words(m: re.Match) -> str:
+    row, key = int(m.group(1)) + 1, m.group(2)
+    return f"segment {row}" + (f" {SEGMENT_WORDS.get(key, key)}" if key else "")
 
 
 def _status_boxes(error, violations, lift_error, verified, mesh_error) -> str:

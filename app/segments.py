@@ -100,7 +100,13 @@ class SegmentTable:
             self._build(rows)
         self._quiet = True
         try:
-            for r, g in zip(self.rows, rows, strict=True):
+            for r, g, kind in zip(self.rows, rows, typed, strict=True):
+                # a row whose kind the user changed in place keeps its widgets: their
+                # lift and law follow the kind (a dwell made a rise had kept them greyed)
+                dwell = kind == "dwell"
+                for key in ("lift", "law"):
+                    if r[key].disabled != dwell:
+                        r[key].disabled = dwell
                 r["angle"].value = g.angle_deg
                 if g.lift_mm is not None:
                     r["lift"].value = float(g.lift_mm)

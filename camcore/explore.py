@@ -101,6 +101,18 @@ def distinct(rows: list[dict]) -> np.ndarray:
     return out
 
 
+OFFERED = 30  # designs of a front numbered on the map and listed for loading
+
+
+def offered(front: np.ndarray, most: int = OFFERED) -> np.ndarray:
+    """At most ``most`` designs of ``front`` (ordered by the first figure), spread
+    evenly along it, both ends included: the first ``most`` had offered only the
+    smallest cams of a 107-design front, none of the low-stress large ones."""
+    if len(front) <= most:
+        return front
+    return front[np.unique(np.linspace(0, len(front) - 1, most).round().astype(int))]
+
+
 def pareto(rows: list[dict], names: list[str]) -> np.ndarray:
     """Indices of the valid rows on the Pareto front of FIGURES[names] (all minimized),
     ordered by the first figure; a design swept several times (``distinct``) once."""
@@ -402,7 +414,7 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
     span = np.nanmax(v[front, :2], axis=0) - np.nanmin(v[front, :2], axis=0)
     span = np.where(span > 0, span, 1.0)
     shown: list[np.ndarray] = []
-    for n, i in enumerate(front[:30], start=1):
+    for n, i in enumerate(offered(front), start=1):
         at = v[i, :2] / span
         if any(np.hypot(*(at - p)) < 0.04 for p in shown):
             continue

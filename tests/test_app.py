@@ -722,6 +722,20 @@ def test_segment_table_edits_the_program(tab):
     assert s.error is not None and "kind" in s.error
     s.ui.segments.rows[1]["kind"].value = "dwell"
     assert s.error is None
+    # a dwell made a rise in place: its lift and law become editable (a review: they
+    # stayed greyed, the program could not be finished), and greyed again as a dwell
+    table = s.ui.segments
+    table.rows[3]["kind"].value = "rise"
+    assert not table.rows[3]["lift"].disabled and not table.rows[3]["law"].disabled
+    table.rows[3]["kind"].value = "dwell"
+    assert table.rows[3]["lift"].disabled and table.rows[3]["law"].disabled
+    assert s.error is None
+    # an error names the row as the table numbers it (from 1; the model counts from 0)
+    fall = table.rows[2]["angle"].value
+    table.rows[2]["angle"].value = 0.0
+    assert "segments.2.angle_deg" in s.error and "segment 3 angle [°]" in s.ui.status.content
+    table.rows[2]["angle"].value = fall
+    assert s.error is None
     s.ui.segments.act(4, "↑")  # the new dwell before the low dwell... (4 -> 3)
     kinds = [g.kind.value for g in s.design.motion.segments]
     assert kinds == ["rise", "dwell", "fall", "dwell", "dwell"]

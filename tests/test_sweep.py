@@ -837,3 +837,16 @@ def test_a_point_that_changes_the_follower_renames_it():
     assert roller.name == "Chuang, Hsu & Chang, Section 6 example (single roller)"
     same = sweep.design_at(base, {"cam.base_radius_mm": 90})
     assert same.name == base["name"]
+
+
+def test_the_offered_front_designs_spread_along_the_front():
+    """A front longer than the list offers designs spread along it, both ends kept, in
+    order (a review: the first 30 of a 107-design front were all small cams, and the
+    low-stress large ones could not be loaded)."""
+    from camcore.explore import offered
+
+    front = np.arange(100, 207)  # 107 row indices, ordered by the first figure
+    picks = offered(front, 30)
+    assert len(picks) == 30 and picks[0] == 100 and picks[-1] == 206
+    assert np.all(np.diff(picks) > 0) and np.all(np.diff(picks) <= 5)  # no big gap
+    assert np.array_equal(offered(front[:12], 30), front[:12])  # short: all of it
