@@ -342,6 +342,10 @@ def test_html_and_pdf_report(tmp_path):
     for external in ("<link", "<script", "<img", "src=", 'href="http', "url(http"):
         assert external not in text  # nothing to fetch: XML namespaces only
     assert "Hertz contact stress" in text and "Jerk" in text
+    # the inputs, the program segment by segment (a teacher's own program had not
+    # been named in its report)
+    assert "<h2>Inputs</h2>" in text
+    assert "1. rise 100 deg 15 mm cycloidal; 2. dwell 10 deg; 3. fall 130 deg" in text
     assert pdf.read_bytes().startswith(b"%PDF") and pdf.stat().st_size > 10_000
     # every page A4 (595.28 x 841.89 pt), a wide one turned: the plot pages had been
     # 11 x 9.6 in and 5 x 5 in, printed at whatever scale the printer chose
