@@ -124,6 +124,9 @@ class Session:
         self._drawing = threading.Lock()  # the stations diagram being drawn (one at a time)
         self._unread: dict = {}  # saved-list entries this version could not read (kept)
         self._aside: str | None = None  # a working design set aside as unreadable
+        # the program table's segments while they do not make a valid design: another
+        # control's edit keeps them (it had dropped them for the last valid program)
+        self._typed_program: list[dict] | None = None
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -187,12 +190,19 @@ class Session:
                 return  # (a newer change came while this one waited its turn)
             self._widen_sliders()
             values = self._values()
-            design, err = controls.try_design(self.base, values)
+            if self._typed_program is not None:  # the table's unfinished program stays
+                data = controls.merged(self.base, values)
+                data["motion"] = {"segments": self._typed_program}
+                design, err = controls.try_design_dict(data)
+            else:
+                design, err = controls.try_design(self.base, values)
             if design is None:
                 self._show_error(err)
                 self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
                 return
             self.error = self.file_error = None
+            if self._typed_program is not None:  # the table's program, valid at last:
+                self.base, self._typed_program = design, None  # the program from now on
             self._apply(self._renamed_for_kind(design))
 
     def _renamed_for_kind(self, design: Design) -> Design:
@@ -211,10 +221,13 @@ class Session:
         with self.lock:
             if self._syncing or self.closed.is_set():
                 return
-            data = self.design.model_dump(mode="json")
+            # every other control as it shows (an edit made while the program was
+            # unfinished is the user's too)
+            data = controls.merged(self.base, self._values())
             data["motion"] = {"segments": segs}
             design, err = controls.try_design_dict(data)
             if design is None:
+                self._typed_program = segs  # kept through other edits until it is valid
                 self.ui.segments.show(segs)
                 self._show_error(err)
                 return
@@ -224,6 +237,7 @@ class Session:
         """Replace the whole design (preset, upload, program table): controls follow."""
         with self.lock:
             self.base, self.error, self.file_error = design, None, None
+            self._typed_program = None
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
 

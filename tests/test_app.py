@@ -716,8 +716,14 @@ def test_segment_table_edits_the_program(tab):
     s.ui.segments.rows[1]["angle"].value = 50.0  # the sum is 340: invalid, the design stays
     assert s.error is not None and "360" in s.error and len(s.design.motion.segments) == 5
     assert "340" in s.ui.segments.sums.content
+    # another control's edit keeps the unfinished program (a review: it had snapped
+    # back to the last valid one without a word) and the error with it
+    s.ui.controls["cam.speed_rpm"].value = 900.0
+    assert s.ui.segments.rows[1]["angle"].value == 50.0 and "340" in s.ui.segments.sums.content
+    assert s.error is not None and "360" in s.error
     s.ui.segments.rows[4]["angle"].value = 20.0  # 360 again
     assert s.error is None and s.design.motion.segments[4].angle_deg == 20.0
+    assert s.design.cam.speed_rpm == 900.0  # (the edit made meanwhile holds)
     s.ui.segments.rows[1]["kind"].value = "spin"  # a hostile value: refused, naming the field
     assert s.error is not None and "kind" in s.error
     s.ui.segments.rows[1]["kind"].value = "dwell"
