@@ -386,9 +386,16 @@ def try_design_dict(data: dict) -> tuple[Design | None, str | None]:
         return None, format_validation_error(exc)
 
 
-def try_design(base: Design, values: dict[str, object]) -> tuple[Design | None, str | None]:
-    """(design, None) if the control values make a valid design, else (None, message)."""
-    return try_design_dict(merged(base, values))
+def try_design(
+    base: Design, values: dict[str, object], program: list[dict] | None = None
+) -> tuple[Design | None, str | None]:
+    """(design, None) if the control values make a valid design, else (None, message).
+    ``program``: the segment table's segments as the motion (the table's edit, with
+    every other control as it shows)."""
+    data = merged(base, values)
+    if program is not None:
+        data["motion"] = {"segments": program}
+    return try_design_dict(data)
 
 
 TYPED_DECIMALS = 6  # what a number box keeps of a typed value

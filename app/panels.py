@@ -8,6 +8,7 @@ raw HTML).
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import html
 import math
@@ -146,6 +147,15 @@ def in_words(text: str) -> str:
     ("rise_deg + high_dwell_deg" -> "Rise β_r [°] + High dwell β_h [°]": a student reads
     the controls, not the file format). Whole names only (dotted paths first; a name
     without "_" is an ordinary word)."""
+    words, pattern = _field_words()
+    text = re.sub(SEGMENT_FIELD, _segment_words, text)
+    return pattern.sub(lambda m: words[m.group(1)], text)
+
+
+@functools.cache
+def _field_words() -> tuple[dict[str, str], re.Pattern]:
+    """in_words' table (field path or unambiguous name -> label) and its pattern, made
+    once (an invalid value redraws the status at every slider event)."""
     from .controls import SPECS
 
     labels = {s.path: s.label for s in SPECS if "_" in s.path.split(".")[-1]}
@@ -154,9 +164,8 @@ def in_words(text: str) -> str:
         key = path.split(".")[-1]
         bare[key] = None if key in bare and bare[key] != label else label  # ambiguous
     words = {**labels, **{k: v for k, v in bare.items() if v is not None}}
-    pattern = r"(?<![\w.])(" + "|".join(map(re.escape, sorted(words, key=len, reverse=True)))
-    text = re.sub(SEGMENT_FIELD, _segment_words, text)
-    return re.sub(pattern + r")(?![\w])", lambda m: words[m.group(1)], text)
+    names = "|".join(map(re.escape, sorted(words, key=len, reverse=True)))
+    return words, re.compile(r"(?<![\w.])(" + names + r")(?![\w])")
 
 
 # a segment's field ("motion.segments.4.angle_deg", counted from 0) as the segment

@@ -190,12 +190,8 @@ class Session:
                 return  # (a newer change came while this one waited its turn)
             self._widen_sliders()
             values = self._values()
-            if self._typed_program is not None:  # the table's unfinished program stays
-                data = controls.merged(self.base, values)
-                data["motion"] = {"segments": self._typed_program}
-                design, err = controls.try_design_dict(data)
-            else:
-                design, err = controls.try_design(self.base, values)
+            # an unfinished program in the table stays (with this edit) until it is valid
+            design, err = controls.try_design(self.base, values, self._typed_program)
             if design is None:
                 self._show_error(err)
                 self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
@@ -221,11 +217,7 @@ class Session:
         with self.lock:
             if self._syncing or self.closed.is_set():
                 return
-            # every other control as it shows (an edit made while the program was
-            # unfinished is the user's too)
-            data = controls.merged(self.base, self._values())
-            data["motion"] = {"segments": segs}
-            design, err = controls.try_design_dict(data)
+            design, err = controls.try_design(self.base, self._values(), segs)
             if design is None:
                 self._typed_program = segs  # kept through other edits until it is valid
                 self.ui.segments.show(segs)
