@@ -18,16 +18,19 @@ from typing import Any
 import numpy as np
 
 from camcore.model import Design, design_to_json
-from camcore.motion import SEGMENT_NAMES
+from camcore.motion import segment_word
 from camcore.report import machine_rows
 from camcore.units import to_mm
+
+from .controls import LAW_LABELS, LAWS
 
 
 def program_text(design: Design) -> str:
     """One line describing a program the classic sliders cannot edit."""
     parts = []
     for g in design.motion.segments:
-        lift = f" {g.lift_mm:g} mm {g.law.value}" if g.lift_mm and g.law else ""
+        law = LAW_LABELS[LAWS.index(g.law.value)] if g.law else ""
+        lift = f" {g.lift_mm:g} mm {law}" if g.lift_mm and g.law else ""
         parts.append(f"{g.kind.value} {g.angle_deg:g}°{lift}")
     return (
         "Program of "
@@ -105,9 +108,11 @@ def status_html(
     mesh_error: str | None = None,
     file_error: str | None = None,
     cutter_note: str | None = None,
+    headline: str = "",
 ) -> str:
     """The always-visible panel (STATUS_CSS): input errors (red), limit violations
-    (amber), or OK; a file that could not be opened (``file_error``) above them.
+    (amber), or OK; a file that could not be opened (``file_error``) above them, the
+    design's headline figures (``headline``, see headline_html) below them.
 
     With an input error the panel says so and nothing green: the limits shown below it
     are those of the last valid design, which stays on screen (and in the downloads'
@@ -126,7 +131,10 @@ def status_html(
         else ""
     )
     boxes = _status_boxes(error, violations, lift_error, verified, mesh_error)
-    return f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}{_cutter_box(cutter_note)}</div>"
+    return (
+        f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}{_cutter_box(cutter_note)}"
+        f"{headline}</div>"
+    )
 
 
 def _field_name(path: str) -> str:
@@ -269,6 +277,36 @@ def _stress_limit_MPa(s: dict) -> float:
     return s["contact_stress_allowable_MPa"] / s["contact_stress_safety_factor"]
 
 
+def headline_html(s: dict) -> str:
+    """The figures a designer watches while moving a slider, in one line that stays in
+    view with the status (the key numbers' table sits below the Design tab's controls):
+    the largest pressure angle, the smallest radius of curvature, the largest contact
+    stress against its limit and the jump speed. Numbers only (nothing typed by a user).
+    """
+
+    def mm(x: float | None) -> str:
+        return "–" if x is None else f"{x:.1f}"
+
+    angles = [v for v in s["pressure_angle_max_deg"].values() if v is not None]
+    rho = s["radius_of_curvature_mm"]
+    concave = "" if rho["concave_min"] is None else f", concave ≥ {mm(rho['concave_min'])}"
+    jump, stress = s["jump_speed_rpm"], s["contact_stress_max_MPa"]["cycle"]
+    items = (
+        f"φ ≤ {max(angles):.1f}°" if angles else "φ –",
+        f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
+        "σ<sub>H</sub> –"  # (a knife edge: no Hertz stress)
+        if stress is None
+        else f"σ<sub>H</sub> ≤ {stress:.1f} MPa (limit {_stress_limit_MPa(s):.4g})",
+        "no jump" if jump is None else f"jumps at {jump:.0f} rpm",
+    )
+    return (
+        "<div id='cam-headline' style='font-size:0.8em;color:#444;margin:2px 2px 0' "
+        "title='the design on screen: largest pressure angle, smallest radius of "
+        "curvature, largest contact stress (its limit), the speed where the follower "
+        "leaves the cam; all figures in Design › Key numbers'>" + " · ".join(items) + "</div>"
+    )
+
+
 def summary_markdown(s: dict) -> str:
     """Key numbers of camcore.report.summary as a compact table."""
 
@@ -376,8 +414,8 @@ def where_markdown(
     if at and after:
         stay = {face for i in at if i < len(after) for face in after[i]}
         faces = [f if f.split(" ")[0] in stay else f"{f} leaving the cam" for f in faces]
-    seg = SEGMENT_NAMES[int(a.prog.segment[k])]
     j, n = int(a.prog.index[k]), len(a.segments)
+    seg = segment_word(a.segments, j)
 
     def here(angle: float) -> bool:
         return abs(math.remainder(angle - a.theta[k], 2 * math.pi)) < 1e-9
@@ -386,7 +424,7 @@ def where_markdown(
         i = (j + step) % n  # meets a rise through an empty dwell, motion.segments)
         while a.segments[i].length <= 1e-12 and i != j:
             i = (i + step) % n
-        return SEGMENT_NAMES[a.segments[i].code]
+        return segment_word(a.segments, i)
 
     # a boundary belongs to one of its segments (motion.segment_index): say both
     if here(a.segments[j].start):

@@ -15,11 +15,15 @@ from typing import Any
 
 from camcore.model import MAX_SEGMENTS, MotionLaw
 
-from .controls import fine
+from .controls import LAW_LABELS, fine
 from .panels import segment_sums_markdown
 
 KINDS = ("rise", "fall", "dwell")
 LAWS = tuple(law.value for law in MotionLaw)
+# the law dropdown shows the classic law dropdowns' words ("3-4-5 polynomial"), the
+# design keeps the law's id ("poly_345")
+LAW_OF_LABEL = dict(zip(LAW_LABELS, LAWS, strict=True))
+LABEL_OF_LAW = dict(zip(LAWS, LAW_LABELS, strict=True))
 
 
 @dataclass(frozen=True)
@@ -86,7 +90,10 @@ class SegmentTable:
         """The table's segments as the user sees them."""
         return [
             Row(
-                r["kind"].value, float(r["angle"].value), float(r["lift"].value), r["law"].value
+                r["kind"].value,
+                float(r["angle"].value),
+                float(r["lift"].value),
+                LAW_OF_LABEL.get(r["law"].value, r["law"].value),
             ).as_dict()
             for r in self.rows
         ]
@@ -111,7 +118,7 @@ class SegmentTable:
                 if g.lift_mm is not None:
                     r["lift"].value = float(g.lift_mm)
                 if g.law is not None:
-                    r["law"].value = g.law
+                    r["law"].value = LABEL_OF_LAW[g.law]
         finally:
             self._quiet = False
         self.sums.content = segment_sums_markdown([g.as_dict() for g in rows])
@@ -159,7 +166,10 @@ class SegmentTable:
                 )
             ),
             "law": gui.add_dropdown(
-                f"{n} law", LAWS, disabled=dwell, initial_value=g.law or LAWS[0]
+                f"{n} law",
+                LAW_LABELS,
+                disabled=dwell,
+                initial_value=LABEL_OF_LAW[g.law or LAWS[0]],
             ),
             "move": gui.add_button_group(n, ("↑", "↓", "✕")),
         }

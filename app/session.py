@@ -47,6 +47,7 @@ from .panels import (
     WIDE_WHERE_LINES,
     esc,
     file_stem,
+    headline_html,
     in_words,
     low_dwell_text,
     nearest_index,
@@ -102,6 +103,7 @@ class Session:
         self.file_error: str | None = None
         self.verified = False  # self.analysis is the geometrically checked one
         self.cutter_note: str | None = None  # the cutter gouges (found with the check)
+        self.headline = ""  # the design's headline figures (panels.headline_html)
         self.gen = 0  # bumped by every new design: background results of older ones drop
         self.theta_deg = 0.0
         self.speed = 45.0  # animation, cam degrees per second
@@ -198,7 +200,8 @@ class Session:
                 return
             self.error = self.file_error = None
             if self._typed_program is not None:  # the table's program, valid at last:
-                self.base, self._typed_program = design, None  # the program from now on
+                self.base = design  # the program from now on
+                self._keep_typed(None)
             self._apply(self._renamed_for_kind(design))
 
     def _renamed_for_kind(self, design: Design) -> Design:
@@ -219,17 +222,25 @@ class Session:
                 return
             design, err = controls.try_design(self.base, self._values(), segs)
             if design is None:
-                self._typed_program = segs  # kept through other edits until it is valid
+                self._keep_typed(segs)  # kept through other edits until it is valid
                 self.ui.segments.show(segs)
                 self._show_error(err)
                 return
             self.set_design(design, reset_camera=False)
 
+    def _keep_typed(self, segs: list[dict] | None) -> None:
+        """The table's unfinished program (None: there is none), kept in the browser
+        too, so that a reload brings it back (the working design is the last valid
+        one). Lock held."""
+        if segs != self._typed_program and self._persist:
+            self.store.write(storage.PROGRAM_KEY, "" if segs is None else json.dumps(segs))
+        self._typed_program = segs
+
     def set_design(self, design: Design, reset_camera: bool = True) -> None:
         """Replace the whole design (preset, upload, program table): controls follow."""
         with self.lock:
             self.base, self.error, self.file_error = design, None, None
-            self._typed_program = None
+            self._keep_typed(None)
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
 
@@ -270,7 +281,9 @@ class Session:
             for spec in controls.SPECS:
                 h, v = self.ui.controls[spec.path], controls.control_value(design, spec)
                 if spec.path.startswith("motion."):
-                    h.disabled = not classic  # other programs: edited as segments
+                    # other programs are edited as segments: the classic sliders go
+                    # (greyed, they had shown a stale program and still taken typing)
+                    h.disabled, h.visible = not classic, classic
                 if v is None:
                     continue
                 if spec.widget == "slider":
@@ -342,11 +355,13 @@ class Session:
             self.view.mesh_error,
             self.file_error,
             self.cutter_note,
+            self.headline,
         )
 
     def _show_summary(self, s: dict) -> None:
         """Key numbers, and what happens at each station in words (for where_md)."""
         self.ui.summary_md.content = summary_markdown(s)
+        self.headline = headline_html(s)  # shown with the status (_show_status)
         self.station_events = [st["event"] for st in s["stations"]]
         self.station_faces = [st["contacts"] for st in s["stations"]]
 
@@ -491,6 +506,7 @@ class Session:
         saved = storage.parse_saved(saved_text)
         self._unread = storage.unread_entries(saved_text, saved)
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
+        typed = storage.parse_program(self.store.read(storage.PROGRAM_KEY))
         aside = self.store.read(storage.UNREADABLE_KEY)  # set aside by an earlier visit?
         if self.closed.is_set():
             return
@@ -523,6 +539,14 @@ class Session:
             )
             self._say(note)
             self._say_quick(note)
+        if working is not None and typed is not None and self.gen == gen0 + restore:
+            self.on_segments(typed)  # the unfinished program, as it was left
+            if self._typed_program is not None:
+                self._say(
+                    "The segment table's unfinished program is back as it was left "
+                    "(not yet a valid design: the status says why; the design on "
+                    "screen is the last valid one)."
+                )
         if why is not None:  # what the browser kept is not lost without a word
             where = (
                 f"it is set aside in this browser's storage as it was "

@@ -15,7 +15,14 @@ from __future__ import annotations
 import json
 import warnings
 
-from camcore.model import MAX_DESIGN_BYTES, Design, DesignError, design_from_json, design_to_json
+from camcore.model import (
+    MAX_DESIGN_BYTES,
+    MAX_SEGMENTS,
+    Design,
+    DesignError,
+    design_from_json,
+    design_to_json,
+)
 
 WORKING_KEY = "camdesigner.working"
 SAVED_KEY = "camdesigner.saved"
@@ -23,6 +30,9 @@ EXPLORE_KEY = "camdesigner.explore"  # the Explore tab's setup (not its results)
 # a working design this version could not open (a later version's, a damaged one),
 # set aside as it was rather than overwritten by the default design
 UNREADABLE_KEY = "camdesigner.unreadable"
+# the segment table's program while it does not make a valid design (the working design
+# is the last valid one): a reload brings the unfinished program back; "" once valid
+PROGRAM_KEY = "camdesigner.program"
 MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
@@ -98,6 +108,38 @@ def parse_setup(text: str | None) -> dict | None:
     except (ValueError, RecursionError):  # (deep nesting fits in 4,096 characters)
         return None
     return raw if isinstance(raw, dict) else None
+
+
+_SEGMENT_FIELDS = {"kind": (str,), "angle_deg": (int, float), "lift_mm": (int, float, type(None))}
+_FIELDS = {*_SEGMENT_FIELDS, "law"}  # law: a string (or None)
+
+
+def parse_program(text: str | None) -> list[dict] | None:
+    """The stored unfinished program as the table's segment dicts, or None if absent
+    or not one: a JSON list of 1 to MAX_SEGMENTS objects of at most the table's fields
+    (kind, angle_deg, lift_mm, law) with numbers as numbers (the model then says what
+    is wrong with it, as with the user's own edit)."""
+    if not text or len(text) > MAX_SETUP_BYTES:
+        return None
+    try:  # (NaN and Infinity are not numbers the table could have sent)
+        raw = json.loads(text, parse_constant=_refuse)
+    except (ValueError, RecursionError):
+        return None
+    if not isinstance(raw, list) or not 0 < len(raw) <= MAX_SEGMENTS:
+        return None
+    for g in raw:
+        if not isinstance(g, dict) or not {"kind", "angle_deg"} <= set(g) <= _FIELDS:
+            return None
+        if any(
+            isinstance(v, bool) or not isinstance(v, _SEGMENT_FIELDS.get(k, (str, type(None))))
+            for k, v in g.items()
+        ):
+            return None
+    return raw
+
+
+def _refuse(name: str):
+    raise ValueError(name)
 
 
 def with_saved(saved: dict[str, str], name: str, design: Design) -> dict[str, str]:

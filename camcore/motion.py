@@ -21,6 +21,7 @@ omega, omega^2, omega^3 for time derivatives.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import cache
 
@@ -167,6 +168,7 @@ def peak_factors(law: MotionLaw, n: int = 20001) -> tuple[float, float, float]:
 RISE, HIGH, FALL, LOW = 0, 1, 2, 3  # segment codes: rise, high dwell, fall, low dwell
 MOTIONS = (RISE, FALL)
 SEGMENT_NAMES = {RISE: "rise", HIGH: "high dwell", FALL: "fall", LOW: "low dwell"}
+
 # Every rise or fall gets at least this many analysis steps, whatever the resolution:
 # a segment shorter than the grid step is otherwise judged on one sample (issue 8).
 MIN_MOTION_STEPS = 120
@@ -305,6 +307,16 @@ def boundaries_rad(design: Design) -> tuple[float, float, float, float]:
     t2 = t1 + m.high_dwell_deg * DEG
     t3 = t2 + m.fall_deg * DEG
     return t1, t2, t3, 2 * math.pi
+
+
+def segment_word(segs: Sequence[Segment], i: int) -> str:
+    """Segment i in words: "rise", "fall", "low dwell" (at S = 0), "high dwell" (at the
+    program's largest lift, the paper's) or, for a dwell between them, "dwell at S =
+    8 mm" (the middle dwell of a program rising in two steps is not high)."""
+    g = segs[i]
+    if g.code == HIGH and g.S0 < max(s.S1 for s in segs) - REST_TOL_M:
+        return f"dwell at S = {g.S0 * 1e3:.4g} mm"
+    return SEGMENT_NAMES[g.code]
 
 
 def segment_index(segs: tuple[Segment, ...], theta: np.ndarray) -> np.ndarray:

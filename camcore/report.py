@@ -14,7 +14,7 @@ from .analysis import Analysis, analyze, compare, contacts
 from .contact import hertz_validity
 from .extremes import peak
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
-from .motion import FALL, HIGH, RISE, SEGMENT_NAMES
+from .motion import FALL, HIGH, RISE, segment_word
 from .units import to_um_per_mcycle
 
 R2D = 180.0 / math.pi
@@ -103,14 +103,13 @@ def _dwells(a: Analysis) -> list[dict]:
     return out
 
 
-def _event(k: int, names: list[str], before, after, seg_before: int, seg_after: int) -> str:
-    """What happens at station k, in words (for a class): the segment that begins and
-    the faces that start or stop touching, and who carries the load from there."""
+def _event(k: int, names: list[str], before, after, seg_before: str, seg_after: str) -> str:
+    """What happens at station k, in words (for a class): the segment that begins (its
+    motion.segment_word) and the faces that start or stop touching, and who carries the
+    load from there."""
     parts = []
     if seg_before != seg_after:
-        parts.append(
-            f"the {SEGMENT_NAMES[seg_before]} ends and the {SEGMENT_NAMES[seg_after]} begins"
-        )
+        parts.append(f"the {seg_before} ends and the {seg_after} begins")
     gained = [names[i] for i in range(len(names)) if after[i] and not before[i]]
     lost = [names[i] for i in range(len(names)) if before[i] and not after[i]]
     parts += [f"{n} touches" for n in gained] + [f"{n} leaves the cam" for n in lost]
@@ -131,7 +130,8 @@ def _station_list(a: Analysis) -> list[dict]:
     x = np.mod(np.concatenate([st - 1e-7, st + 1e-7]), two_pi)
     both = contacts(a.design, a.geo, a.segments, x)  # the geometry alone, once
     before_in, after_in = both.in_contact[:, :n], both.in_contact[:, n:]
-    before_seg, after_seg = both.prog.segment[:n], both.prog.segment[n:]
+    words = [segment_word(a.segments, int(i)) for i in both.prog.index]
+    before_seg, after_seg = words[:n], words[n:]
     return [
         {
             "theta_deg": float(t * R2D),
@@ -144,8 +144,8 @@ def _station_list(a: Analysis) -> list[dict]:
                     names,
                     before_in[:, k],
                     after_in[:, k],
-                    int(before_seg[k]),
-                    int(after_seg[k]),
+                    before_seg[k],
+                    after_seg[k],
                 )
             ),
         }

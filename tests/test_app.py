@@ -17,8 +17,9 @@ from conftest import wait_for
 from fake_tab import FakeTab
 from viser._gui_handles import GuiEvent, UploadedFile
 
-from app import scene
+from app import panels, scene
 from camcore.model import Design, design_to_json, load_preset
+from camcore.report import summary
 
 
 @contextlib.contextmanager
@@ -497,17 +498,22 @@ def test_new_follower_kinds_render_and_offset(tab, kind):
 
 def test_a_multi_segment_program_loads_and_keeps_its_segments(tab):
     """The double-indexing preset is not rise-dwell-fall-dwell: the classic motion
-    sliders are greyed out, say so, and editing another control keeps the segments."""
+    sliders leave (greyed, they had shown a stale program and taken typing), the panel
+    says so, and editing another control keeps the segments."""
     s = tab
     s.load_preset("double_index")
     assert s.error is None and len(s.design.motion.segments) == 8
-    assert s.ui.controls["motion.rise_deg"].disabled and s.ui.controls["motion.lift_mm"].disabled
+    classic = [h for p, h in s.ui.controls.items() if p.startswith("motion.")]
+    assert len(classic) == 6 and not any(h.visible for h in classic)
+    assert all(h.disabled for h in classic)
+    s.ui.controls["motion.rise_deg"].value = 33.0  # a client may still send one: unused
+    assert s.error is None and len(s.design.motion.segments) == 8
     assert "Program of 8 segments" in s.ui.low_dwell_md.content
     s.ui.controls["cam.base_radius_mm"].value = 90.0
     assert s.design.cam.base_radius_mm == 90.0 and len(s.design.motion.segments) == 8
     assert len(s.analysis.stations) == 12
     s.load_preset("paper_example")
-    assert not s.ui.controls["motion.rise_deg"].disabled
+    assert all(h.visible and not h.disabled for h in classic)
 
 
 def test_a_dropdown_value_outside_the_presets_reads_no_file(tab, tmp_path):
@@ -1227,6 +1233,16 @@ def test_dropdowns_show_words_and_take_them(tab):
     kind.value = "<b>tri-roller</b>"
     assert s.error is not None and "<b>tri-roller</b>" not in s.ui.status.content
     assert s.design.follower.kind.value == "double_roller"
+    # the segment table's law boxes alike (they had shown "poly_345")
+    kind.value = "double concave"
+    row = s.ui.segments.rows[0]
+    assert row["law"].value == "3-4-5 polynomial" and "poly_4567" not in row["law"].options
+    row["law"].value = "modified sine"
+    assert s.design.motion.segments[0].law.value == "modified_sine" and s.error is None
+    assert s.ui.controls["motion.rise_law"].value == "modified sine"
+    row["law"].value = "<i>sine</i>"  # anything else: refused by the model, escaped
+    assert s.error is not None and "<i>sine</i>" not in s.ui.status.content
+    assert s.design.motion.segments[0].law.value == "modified_sine"
 
 
 def _inside_any(points: np.ndarray, meshes) -> bool:
@@ -1642,3 +1658,45 @@ def test_saving_keeps_the_entries_this_version_cannot_read(app, monkeypatch):
         kept = json.loads(writes[storage.SAVED_KEY])
         assert set(kept) == {*other, "mine"} and kept["later"] == {"format": 9}
         assert tuple(s.ui.saved_dd.options) == ("mine",)
+
+
+def test_the_headline_follows_every_edit_in_the_status(tab):
+    """The headline figures sit in the always-visible status and follow an edit at
+    once (the key numbers' table is below the Design tab's controls)."""
+    s = tab
+    before = s.ui.status.content
+    assert "cam-headline" in before and "ρ ≥ 56.2 mm" in before
+    s.ui.controls["cam.base_radius_mm"].value = 100.0
+    after = s.ui.status.content
+    assert "cam-headline" in after and "ρ ≥ 56.2 mm" not in after
+    assert panels.headline_html(summary(s.analysis)) in after
+
+
+def test_an_unfinished_program_survives_a_reload(app, monkeypatch):
+    """The segment table's unfinished program is kept in the browser beside the last
+    valid design (a review: a reload had lost a half-typed program without a word), it
+    comes back as it was left with the error, and once valid the key is emptied. A
+    kept program that is not one (tampered, NaN) is ignored."""
+    from app import storage
+
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {}, writes) as s:
+        s.ui.segments.act(4, "+")
+        s.ui.segments.rows[1]["angle"].value = 50.0  # 340 deg: unfinished
+        assert s.error is not None and "360" in s.error
+        kept = writes[storage.PROGRAM_KEY]
+        assert storage.parse_program(kept) == s._typed_program
+    stored = {storage.WORKING_KEY: writes[storage.WORKING_KEY], storage.PROGRAM_KEY: kept}
+    again: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, stored, again) as s:
+        assert len(s.ui.segments.rows) == 5 and s.ui.segments.rows[1]["angle"].value == 50.0
+        assert "340" in s.ui.segments.sums.content and "360" in s.error
+        assert s.design.motion.segments[1].angle_deg == 70.0  # the last valid design
+        assert "unfinished program is back" in s.ui.files_md.content
+        s.ui.segments.rows[4]["angle"].value = 20.0  # finished: a valid design
+        assert s.error is None and s.design.motion.segments[4].angle_deg == 20.0
+        assert again[storage.PROGRAM_KEY] == ""
+        assert storage.parse_working(again[storage.WORKING_KEY]) == s.design
+    for bad in ('[{"kind": "rise", "angle_deg": NaN}]', "[]", "{}", "x" * 5000):
+        with restored_tab(app, monkeypatch, {**stored, storage.PROGRAM_KEY: bad}) as s:
+            assert s.error is None and s.ui.segments.rows[1]["angle"].value == 70.0

@@ -481,3 +481,22 @@ def test_a_silent_browser_costs_one_read_timeout_not_one_per_key():
     store = BrowserStore(SimpleNamespace(local_storage=SimpleNamespace(get_item=get_item)))
     assert [store.read(k) for k in ("a", "b", "c", "d")] == [None] * 4
     assert asked == ["a"] and store.silent
+
+
+def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analysis):
+    """The figures a designer watches while moving a slider stay in view with the
+    status: the summary's largest pressure angle, smallest radius, stress (with its
+    limit) and jump speed; what a design does not have is said, not a crash."""
+    from camcore.report import summary
+
+    s = summary(paper_analysis)
+    line = panels.headline_html(s)
+    pa = max(s["pressure_angle_max_deg"].values())
+    assert f"φ ≤ {pa:.1f}°" in line and "ρ ≥ 56.2 mm" in line and "concave" not in line
+    assert "≤ 52.4 MPa (limit 800)" in line and "jumps at 1855 rpm" in line
+    odd = dict(s, jump_speed_rpm=None, contact_stress_max_MPa={"cycle": None})
+    odd["radius_of_curvature_mm"] = {"convex_min": 40.0, "concave_min": 12.34}
+    line = panels.headline_html(odd)
+    assert "no jump" in line and "σ<sub>H</sub> –" in line and "concave ≥ 12.3 mm" in line
+    status = panels.status_html(None, [], 1e-7, True, headline=line)
+    assert status.index("All design limits met") < status.index("cam-headline")

@@ -218,6 +218,35 @@ def test_station_events_tell_the_papers_story():
     assert "same angle as station 1" in single[2]["event"]
 
 
+def test_a_dwell_below_the_full_lift_is_not_called_high():
+    """A program rising in two steps: its middle dwell is "the dwell at S = 8 mm" in
+    the station events and the app's angle line (a review: it was called the high
+    dwell), the dwell at the full lift stays the paper's high dwell."""
+    from app import panels
+
+    a = analyze(
+        with_program(
+            [
+                _move("rise", 60, 8),
+                _dwell(40),
+                _move("rise", 60, 7),
+                _dwell(50),
+                _move("fall", 100, 15),
+                _dwell(50),
+            ]
+        ),
+        verify=False,
+    )
+    words = [motion.segment_word(a.segments, i) for i in range(len(a.segments))]
+    assert words[:5] == ["rise", "dwell at S = 8 mm", "rise", "high dwell", "fall"]
+    events = [st["event"] for st in summary(a)["stations"]]
+    assert events[1] == "station 1: the rise ends and the dwell at S = 8 mm begins"
+    assert events[3].startswith("station 3: the dwell at S = 8 mm ends and the rise begins")
+    assert events[4] == "station 4: the rise ends and the high dwell begins"
+    line = panels.where_markdown(a, panels.nearest_index(a.theta, 80.0), [])
+    assert "· dwell at S = 8 mm ·" in line
+
+
 def test_stations_figure_has_a_panel_per_station():
     """The paper's Fig. 4 for any program: one panel per station, titled with its angle
     and captioned with its event; in the printable report too."""
