@@ -43,7 +43,12 @@ class Spec:
 
 LAWS = tuple(m.value for m in MotionLaw)
 KINDS = tuple(k.value for k in FollowerKind)
-_LAW_WORDS = {"poly_345": "3-4-5 polynomial", "poly_4567": "4-5-6-7 polynomial"}
+_LAW_WORDS = {
+    "poly_345": "3-4-5 polynomial",
+    "poly_4567": "4-5-6-7 polynomial",
+    # (between two dwells it is the 3-4-5: a review's teacher saw two laws alike)
+    "polynomial": "polynomial fitted to its neighbours",
+}
 LAW_LABELS = tuple(_LAW_WORDS.get(v, v.replace("_", " ")) for v in LAWS)
 KIND_LABELS = tuple(FollowerKind(k).label for k in KINDS)
 GRADES = tuple(g.value for g in MaterialGrade)

@@ -296,14 +296,16 @@ def headline_html(s: dict) -> str:
         f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
         "σ<sub>H</sub> –"  # (a knife edge: no Hertz stress)
         if stress is None
-        else f"σ<sub>H</sub> ≤ {stress:.1f} MPa (limit {_stress_limit_MPa(s):.4g})",
+        else f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.4g} MPa",
         "no jump" if jump is None else f"jumps at {jump:.0f} rpm",
     )
+    # an item breaks only between items (a review: "rpm" alone on a second line)
+    kept = [item.replace(" ", "\u00a0") for item in items]
     return (
-        "<div id='cam-headline' style='font-size:0.8em;color:#444;margin:2px 2px 0' "
+        "<div id='cam-headline' style='font-size:0.8em;color:#444;margin:2px 12px 0 2px' "
         "title='the design on screen: largest pressure angle, smallest radius of "
-        "curvature, largest contact stress (its limit), the speed where the follower "
-        "leaves the cam; all figures in Design › Key numbers'>" + " · ".join(items) + "</div>"
+        "curvature, largest contact stress / its limit, the speed where the follower "
+        "leaves the cam; all figures in Design › Key numbers'>" + " · ".join(kept) + "</div>"
     )
 
 
@@ -344,8 +346,9 @@ def summary_markdown(s: dict) -> str:
         ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
         (
             "Stress limit: allowable / safety factor",
-            f"{f(s['contact_stress_allowable_MPa'], 0)} MPa / "
-            f"{f(s['contact_stress_safety_factor'])} = {f(_stress_limit_MPa(s), 1)} MPa",
+            # (significant figures: an allowable of 1e-300 MPa had read "0 MPa")
+            f"{s['contact_stress_allowable_MPa']:.6g} MPa / "
+            f"{s['contact_stress_safety_factor']:.6g} = {_stress_limit_MPa(s):.4g} MPa",
         ),
         *((k, _typeset_units(v)) for k, v in machine_rows(s)),
         (

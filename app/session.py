@@ -67,6 +67,11 @@ from .scene import (
 from .ticker import Debouncer, Ticker
 
 FPS = 30.0
+UNFINISHED_NOTE = (
+    "The segment table's unfinished program is back as it was left (Design › Motion "
+    "program › Program segments; not yet a valid design: the status says why, and the "
+    "design on screen is the last valid one)."
+)
 # Background work (the verified analysis and the comparison: ~0.1 s each) waits until a
 # tab has been still this long, and runs for one tab at a time across the server.
 SETTLE_S = 0.6
@@ -129,6 +134,7 @@ class Session:
         # the program table's segments while they do not make a valid design: another
         # control's edit keeps them (it had dropped them for the last valid program)
         self._typed_program: list[dict] | None = None
+        self._kept_program: str | None = None  # the browser's copy of it (_keep_typed)
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -197,12 +203,25 @@ class Session:
             if design is None:
                 self._show_error(err)
                 self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
+                self._keep_edit_beside_program(values)
                 return
             self.error = self.file_error = None
             if self._typed_program is not None:  # the table's program, valid at last:
                 self.base = design  # the program from now on
                 self._keep_typed(None)
+                self._sync_controls(design)  # (the classic sliders: this program's)
             self._apply(self._renamed_for_kind(design))
+
+    def _keep_edit_beside_program(self, values: dict[str, object]) -> None:
+        """An edit of another control while the table's program is unfinished: the
+        browser keeps it with the last valid program as the working design, so that a
+        reload brings back both the edit and the unfinished program (a review: the edit
+        was lost). Lock held."""
+        if self._typed_program is None or not self._persist:
+            return
+        kept, _ = controls.try_design(self.base, values)
+        if kept is not None:
+            self.store.write(storage.WORKING_KEY, design_to_json(kept))
 
     def _renamed_for_kind(self, design: Design) -> Design:
         """A new follower kind renames the follower the design's name mentions ("...
@@ -231,10 +250,21 @@ class Session:
     def _keep_typed(self, segs: list[dict] | None) -> None:
         """The table's unfinished program (None: there is none), kept in the browser
         too, so that a reload brings it back (the working design is the last valid
-        one). Lock held."""
-        if segs != self._typed_program and self._persist:
-            self.store.write(storage.PROGRAM_KEY, "" if segs is None else json.dumps(segs))
+        one). The browser's copy follows whatever it held (``_kept_program``, read at
+        the restore): a review found an old one left there, replacing a later design
+        at a later reload. The classic sliders wait while the table is unfinished (the
+        table's program, not theirs, is the one being edited). Lock held."""
+        if segs is None and self.ui.files_md.content == UNFINISHED_NOTE:
+            self.ui.files_md.content = ""  # (it is finished now)
+        text = None if segs is None else json.dumps(segs)
+        if self._persist and text != self._kept_program:
+            self.store.write(storage.PROGRAM_KEY, text or "")
+            self._kept_program = text
         self._typed_program = segs
+        classic = self.base.motion.classic is not None
+        for path, h in self.ui.controls.items():
+            if path.startswith("motion."):
+                h.disabled = segs is not None or not classic
 
     def set_design(self, design: Design, reset_camera: bool = True) -> None:
         """Replace the whole design (preset, upload, program table): controls follow."""
@@ -506,7 +536,8 @@ class Session:
         saved = storage.parse_saved(saved_text)
         self._unread = storage.unread_entries(saved_text, saved)
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
-        typed = storage.parse_program(self.store.read(storage.PROGRAM_KEY))
+        typed_text = self.store.read(storage.PROGRAM_KEY)
+        typed = storage.parse_program(typed_text)
         aside = self.store.read(storage.UNREADABLE_KEY)  # set aside by an earlier visit?
         if self.closed.is_set():
             return
@@ -529,6 +560,7 @@ class Session:
             self._show_saved(saved)
             restore = working is not None and self.gen == gen0 and working != self.design
             self._persist = True
+            self._kept_program = typed_text or None  # what the browser holds
             if not restore:
                 self._save_working()
         if working is not None and restore:
@@ -539,14 +571,7 @@ class Session:
             )
             self._say(note)
             self._say_quick(note)
-        if working is not None and typed is not None and self.gen == gen0 + restore:
-            self.on_segments(typed)  # the unfinished program, as it was left
-            if self._typed_program is not None:
-                self._say(
-                    "The segment table's unfinished program is back as it was left "
-                    "(not yet a valid design: the status says why; the design on "
-                    "screen is the last valid one)."
-                )
+        self._restore_program(typed if working is not None else None, gen0 + restore)
         if why is not None:  # what the browser kept is not lost without a word
             where = (
                 f"it is set aside in this browser's storage as it was "
@@ -567,6 +592,28 @@ class Session:
         self.ui.explore.keep_setup_with(
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
         )
+
+    def _restore_program(self, typed: list[dict] | None, gen: int) -> None:
+        """Bring back the table's unfinished program the browser kept (if this tab has
+        not been edited meanwhile: ``gen``); the browser then holds this tab's own
+        (none, once the program makes a valid design, or when it is not restored)."""
+        with self.lock:
+            if typed is not None and self.gen == gen:
+                try:  # what the browser kept must never cost the tab its restore
+                    self.on_segments(typed)
+                except Exception:  # the tab goes on with its design's own program
+                    logging.getLogger(__name__).exception("a kept program failed; ignored")
+                    self._typed_program, self.error = None, None
+                    self.ui.segments.show(self.design.motion.segments)
+                    self._show_status()
+                else:
+                    self._say(
+                        UNFINISHED_NOTE
+                        if self._typed_program is not None
+                        else "The segment table's program being edited at the last "
+                        "visit is back; with the other controls it makes a valid design."
+                    )
+            self._keep_typed(self._typed_program)
 
     def download_set_aside(self) -> None:
         """Send the working design this version could not open, as the browser kept it

@@ -112,6 +112,7 @@ def parse_setup(text: str | None) -> dict | None:
 
 _SEGMENT_FIELDS = {"kind": (str,), "angle_deg": (int, float), "lift_mm": (int, float, type(None))}
 _FIELDS = {*_SEGMENT_FIELDS, "law"}  # law: a string (or None)
+MAX_KEPT_NUMBER = 1e6  # beyond any angle [deg] or lift [mm] the table takes
 
 
 def parse_program(text: str | None) -> list[dict] | None:
@@ -121,7 +122,8 @@ def parse_program(text: str | None) -> list[dict] | None:
     is wrong with it, as with the user's own edit)."""
     if not text or len(text) > MAX_SETUP_BYTES:
         return None
-    try:  # (NaN and Infinity are not numbers the table could have sent)
+    try:  # (NaN and Infinity are not numbers the table could have sent; 1e400 is
+        # read as infinity, a 400-digit integer as one: MAX_KEPT_NUMBER refuses both)
         raw = json.loads(text, parse_constant=_refuse)
     except (ValueError, RecursionError):
         return None
@@ -131,7 +133,9 @@ def parse_program(text: str | None) -> list[dict] | None:
         if not isinstance(g, dict) or not {"kind", "angle_deg"} <= set(g) <= _FIELDS:
             return None
         if any(
-            isinstance(v, bool) or not isinstance(v, _SEGMENT_FIELDS.get(k, (str, type(None))))
+            isinstance(v, bool)
+            or not isinstance(v, _SEGMENT_FIELDS.get(k, (str, type(None))))
+            or (isinstance(v, int | float) and not abs(v) <= MAX_KEPT_NUMBER)
             for k, v in g.items()
         ):
             return None

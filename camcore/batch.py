@@ -39,7 +39,7 @@ import numpy as np
 from . import checks, extremes, forces, machine, motion, profile, train
 from .analysis import stations
 from .contact import compliance, conservative_stress, half_width, hertz_line_stress
-from .model import Design, allowable_contact_stress_MPa, omega_rad_s
+from .model import Design, allowable_contact_stress_MPa, contact_stress_limit_MPa, omega_rad_s
 from .motion import FALL, HIGH, RISE
 from .report import _finite, _train
 from .units import MM, to_deg
@@ -461,7 +461,7 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     )
     add(bad, "pressure_angle")
     if bt.r[0] != 0.0:  # Eq. 42
-        lim_pa = allowable_contact_stress_MPa(d0) * 1e6 / d0.limits.contact_stress_safety_factor
+        lim_pa = contact_stress_limit_MPa(d0) * 1e6
         stress = np.where(loc.in_contact, loc.stress, 0.0)
         add(
             grid_any(stress > lim_pa) | cand_any("stress_max", lambda v: v > lim_pa),

@@ -231,7 +231,7 @@ def _pressure_angle(a) -> list[Violation]:
     if not (bad.any() or extra):
         return []
     top = max(float(phi[bad].max()) if bad.any() else 0.0, to_deg(worst.value) if worst else 0)
-    ranges = runs_deg(a.theta, bad.any(0), extra)
+    ranges = runs_deg(a.theta, np.asarray(bad.any(0)), extra)
     return [
         Violation(
             "pressure_angle",
@@ -245,13 +245,13 @@ def _pressure_angle(a) -> list[Violation]:
 
 
 def _contact_stress(a) -> list[Violation]:
-    from .model import allowable_contact_stress_MPa
+    from .model import allowable_contact_stress_MPa, contact_stress_limit_MPa
 
     if a.geo.r == 0.0:  # knife edge: no Hertz stress to check (camcore.contact)
         return []
     allow = allowable_contact_stress_MPa(a.design) * 1e6  # [Pa]
     sf = a.design.limits.contact_stress_safety_factor
-    limit = allow / sf  # the largest stress the design may reach [Pa]
+    limit = contact_stress_limit_MPa(a.design) * 1e6  # the largest stress allowed [Pa]
     stress = np.where(a.in_contact, a.stress, 0.0)
     bad = stress > limit
     worst = a.worst.get("stress_max")
@@ -259,7 +259,7 @@ def _contact_stress(a) -> list[Violation]:
     if not (bad.any() or extra):
         return []
     top = max(float(stress.max()), worst.value if worst else 0.0)
-    ranges = runs_deg(a.theta, bad.any(0), extra)
+    ranges = runs_deg(a.theta, np.asarray(bad.any(0)), extra)
     return [
         Violation(
             "contact_stress",

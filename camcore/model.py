@@ -19,7 +19,7 @@ import math
 import re
 from enum import StrEnum
 from pathlib import Path
-from typing import Final, Literal
+from typing import Final, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -124,6 +124,21 @@ class MotionLaw(StrEnum):
 
 class _Part(BaseModel):
     model_config = ConfigDict(extra="forbid", validate_assignment=True, allow_inf_nan=False)
+
+    @field_validator("*", mode="before")
+    @classmethod
+    def _no_bool_as_number(cls, v, info):
+        """true / false is not a number: pydantic's lax mode reads true as 1.0 (a file
+        with "base_radius_mm": true made a 1 mm cam without a word)."""
+        types = _types(cls.model_fields[info.field_name])
+        if isinstance(v, bool) and bool not in types and ({float, int} & set(types)):
+            raise ValueError("a number, not true or false")
+        return v
+
+
+def _types(field) -> tuple:
+    """The types a field's annotation allows (``float | None`` -> (float, None))."""
+    return get_args(field.annotation) or (field.annotation,)
 
 
 class ClassicMotion(_Part):

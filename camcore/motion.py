@@ -315,7 +315,8 @@ def segment_word(segs: Sequence[Segment], i: int) -> str:
     8 mm" (the middle dwell of a program rising in two steps is not high)."""
     g = segs[i]
     if g.code == HIGH and g.S0 < max(s.S1 for s in segs) - REST_TOL_M:
-        return f"dwell at S = {g.S0 * 1e3:.4g} mm"
+        s_mm = f"{g.S0 * 1e3:.3f}".rstrip("0").rstrip(".")  # (as the app's S, to 1 um)
+        return f"dwell at S = {s_mm} mm"
     return SEGMENT_NAMES[g.code]
 
 

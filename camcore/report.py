@@ -226,6 +226,9 @@ def _train(a: Analysis) -> dict | None:
 def summary(a: Analysis) -> dict:
     """The report of one analysis as a JSON-ready dict (see README for the keys)."""
     seg = a.prog.segment
+    # the "high_dwell" figures: every dwell off the base circle (the paper's one high
+    # dwell; a program rising in steps adds its middle dwells, which the app's words
+    # call "the dwell at S = 8 mm": motion.segment_word)
     high = seg == HIGH
     two = high & (a.n_contacts == 2)
     phi = np.abs(a.pressure_angle) * R2D

@@ -249,6 +249,10 @@ def test_key_numbers_typeset_units_as_the_curves_do(paper_analysis):
     assert "Hub wall" not in text  # no bore, no hub wall
     bored = {**summary(paper_analysis), "profile": {"area_mm2": 1.0, "hub_wall_mm": 4.25}}
     assert "| Hub wall (thinnest, bore to profile) | 4.25 mm |" in panels.summary_markdown(bored)
+    # the stress limit in significant figures (an allowable of 1e-300 MPa read "0 MPa")
+    assert "| 1000 MPa / 1.25 = 800 MPa |" in text
+    tiny = {**summary(paper_analysis), "contact_stress_allowable_MPa": 1e-300}
+    assert "| 1e-300 MPa / 1.25 = 8e-301 MPa |" in panels.summary_markdown(tiny)
 
 
 @pytest.mark.parametrize("preset", ["paper_example", "valve_lift_roller"])
@@ -490,13 +494,16 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     from camcore.report import summary
 
     s = summary(paper_analysis)
-    line = panels.headline_html(s)
+    html = panels.headline_html(s)
+    body = html[html.index("'>") + 2 : html.rindex("</div>")]
+    assert " " not in body.replace(" · ", "")  # a line breaks between items only
+    line = html.replace("\u00a0", " ")
     pa = max(s["pressure_angle_max_deg"].values())
     assert f"φ ≤ {pa:.1f}°" in line and "ρ ≥ 56.2 mm" in line and "concave" not in line
-    assert "≤ 52.4 MPa (limit 800)" in line and "jumps at 1855 rpm" in line
+    assert "≤ 52.4 / 800 MPa" in line and "jumps at 1855 rpm" in line
     odd = dict(s, jump_speed_rpm=None, contact_stress_max_MPa={"cycle": None})
     odd["radius_of_curvature_mm"] = {"convex_min": 40.0, "concave_min": 12.34}
-    line = panels.headline_html(odd)
+    line = panels.headline_html(odd).replace("\u00a0", " ")
     assert "no jump" in line and "σ<sub>H</sub> –" in line and "concave ≥ 12.3 mm" in line
     status = panels.status_html(None, [], 1e-7, True, headline=line)
     assert status.index("All design limits met") < status.index("cam-headline")

@@ -107,3 +107,30 @@ def test_a_rename_keeps_the_rest_of_the_name(name, old, new, expected):
     followers or says 'single concave-faced' is left alone (None), capitals stay."""
     out = model.renamed_for_kind(name, FollowerKind(old), FollowerKind(new))
     assert out == (name if expected is None else expected)
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        ("cam", "base_radius_mm"),
+        ("dynamics", "spring_rate_N_per_m"),
+        ("limits", "allowable_contact_stress_MPa"),  # (a number or null)
+        ("motion", "segments", 0, "angle_deg"),
+    ],
+)
+def test_true_or_false_is_not_a_number(path):
+    """pydantic's lax mode reads true as 1.0: a file with "base_radius_mm": true had
+    made a 1 mm cam without a word. A number field refuses a boolean, naming it; a
+    boolean field still takes one."""
+    data = Design().model_dump(mode="json")
+    *parents, key = path
+    node = data
+    for p in parents:
+        node = node[p]
+    for flag in (True, False):
+        node[key] = flag
+        with pytest.raises(ValidationError, match="a number, not true or false"):
+            Design.model_validate(data)
+    data = Design().model_dump(mode="json")
+    data["limits"]["require_continuous_acceleration"] = False
+    assert Design.model_validate(data).limits.require_continuous_acceleration is False

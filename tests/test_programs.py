@@ -239,6 +239,14 @@ def test_a_dwell_below_the_full_lift_is_not_called_high():
     )
     words = [motion.segment_word(a.segments, i) for i in range(len(a.segments))]
     assert words[:5] == ["rise", "dwell at S = 8 mm", "rise", "high dwell", "fall"]
+    # to the micrometre, as the angle line's S (4 significant figures had made a dwell
+    # at 12.345 mm read higher than the high dwell at 12.346 mm)
+    M = motion
+    steps = (
+        M.Segment(M.HIGH, 0.0, 1.0, 12.345e-3, 12.345e-3),
+        M.Segment(M.HIGH, 1.0, 2.0, 12.346e-3, 12.346e-3),
+    )
+    assert [M.segment_word(steps, i) for i in (0, 1)] == ["dwell at S = 12.345 mm", "high dwell"]
     events = [st["event"] for st in summary(a)["stations"]]
     assert events[1] == "station 1: the rise ends and the dwell at S = 8 mm begins"
     assert events[3].startswith("station 3: the dwell at S = 8 mm ends and the rise begins")
