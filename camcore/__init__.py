@@ -14,8 +14,26 @@ Data flows one way: ``Design`` (camcore.model) -> ``analyze`` (camcore.analysis)
 - report, export, cli : numbers, files and the command line
 """
 
+import functools
+import hashlib
+from pathlib import Path
+
 from .analysis import Analysis, analyze, compare
 from .model import Design, DesignError, FollowerKind, MotionLaw, load_design, load_preset
+
+
+@functools.cache
+def code_fingerprint() -> str:
+    """A short hash of camcore's own files (its .py and the preset .json): two
+    checkouts of one version (or an edited install) differ here, where
+    ``package_version`` does not. A sweep's finished chunks and the Dask workers it
+    uses must share it (camcore.sweep)."""
+    root = Path(__file__).resolve().parent
+    h = hashlib.sha256()
+    for f in sorted(root.rglob("*")):
+        if f.suffix in (".py", ".json") and f.is_file():
+            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
+    return h.hexdigest()[:16]
 
 
 def package_version() -> str:

@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import package_version
+from . import code_fingerprint, package_version
 from .files import FileError, read_capped, write_atomic
 from .model import (
     Design,
@@ -53,6 +53,7 @@ MAX_VALUES = 100_000  # values per grid axis
 DEFAULT_CHUNK = 32
 SPEC_METADATA = "camcore.sweep"  # the table's key-value metadata: its SPEC (Spec.document)
 VERSION_METADATA = "camcore.version"
+CODE_METADATA = "camcore.code"  # camcore.code_fingerprint of the code that made the rows
 MEMO_ROWS = 1024  # designs an in-process run remembers across its chunks (~10 kB a row)
 
 
@@ -432,7 +433,7 @@ def _duration(seconds: float) -> str:
 
 def _parts_dir(out: Path, stamp: dict) -> Path:
     """``OUT.parts/``, holding the finished chunks of this very run: same spec, mode,
-    chunk size and camcore version (its ``stamp``). Parts of another run are refused
+    chunk size, camcore version and code (its ``stamp``). Parts of another run are refused
     with what differs; a parts directory with no chunk in it yet is taken over."""
     if out.is_dir():
         raise FileError(f"--out {out}: that is a directory; give a file name")
@@ -487,7 +488,13 @@ def run(
 
     out = Path(out)
     mode = "fast" if fast else "verify" if verify else "no-verify"
-    stamp = {"spec": spec.fingerprint(), "mode": mode, "chunk": chunk, "camcore": package_version()}
+    stamp = {
+        "spec": spec.fingerprint(),
+        "mode": mode,
+        "chunk": chunk,
+        "camcore": package_version(),
+        "code": code_fingerprint(),  # (two checkouts of one version differ here)
+    }
     total = spec.size
     n_chunks = -(-total // chunk)
     parts = _parts_dir(out, stamp)  # a bad output fails before any work or cluster
@@ -526,7 +533,11 @@ def run(
     tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
     table = pa.concat_tables(tables, promote_options="permissive")  # e.g. int with float
     table = table.replace_schema_metadata(
-        {SPEC_METADATA: spec.document(), VERSION_METADATA: package_version()}
+        {
+            SPEC_METADATA: spec.document(),
+            VERSION_METADATA: package_version(),
+            CODE_METADATA: code_fingerprint(),
+        }
     )
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
@@ -564,10 +575,33 @@ def _cluster(workers: int | None, scheduler: str | None):
             cluster.close()
 
 
+def same_code_on_workers(client) -> None:
+    """Refuse a cluster whose workers run another camcore (an existing cluster started
+    from another install or checkout): its rows would silently be another code's.
+    DesignError naming the workers that differ, or that have no camcore at all."""
+    try:
+        theirs = client.run(code_fingerprint)
+    except Exception as exc:  # e.g. a worker whose camcore has no code_fingerprint
+        raise DesignError(
+            f"the Dask workers cannot run this camcore ({type(exc).__name__}: {exc}); "
+            "install this camdesigner on them"
+        ) from None
+    mine = code_fingerprint()
+    other = sorted(w for w, fp in theirs.items() if fp != mine)
+    if other:
+        raise DesignError(
+            f"{len(other)} of {len(theirs)} Dask workers run another camcore "
+            f"({', '.join(other[:3])}{', ...' if len(other) > 3 else ''}: code "
+            f"{theirs[other[0]]}, this one {mine}): their rows would be another code's. "
+            "Install this camdesigner on them (or run with --workers N here)"
+        )
+
+
 def _run_dask(client, spec, chunk, todo, how, keep) -> None:
     """The chunks on a Dask cluster; each finished chunk is kept as it arrives."""
     from dask.distributed import as_completed
 
+    same_code_on_workers(client)
     # the base goes out wrapped in a list: a dict would be scattered key by key under
     # its own keys ("cam", "name", ...), shared with any other sweep on that cluster
     [base] = client.scatter([spec.base], broadcast=True)

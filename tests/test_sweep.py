@@ -115,10 +115,11 @@ def _interrupted(spec, out, chunk: int, **how) -> None:
         sweep.run(spec, out, chunk=chunk, progress=stop, **how)
 
 
-def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
-    """Finished chunks are reused only by the same spec, mode and chunk size (a resume
-    with another --chunk had written 32 rows of 60, or 88 with repeats); parts with no
-    chunk yet are taken over."""
+def test_parts_of_another_sweep_are_not_mixed_in(tmp_path, monkeypatch):
+    """Finished chunks are reused only by the same spec, mode, chunk size and camcore
+    code (a resume with another --chunk had written 32 rows of 60, or 88 with repeats;
+    one in another checkout of the same version would have mixed two codes' rows);
+    parts with no chunk yet are taken over."""
     spec = sweep.parse_spec(json.dumps(SPEC))
     out = tmp_path / "r.parquet"
     _interrupted(spec, out, 2, verify=False)
@@ -126,6 +127,11 @@ def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
         sweep.run(spec, out, chunk=3, verify=False, progress=None)
     with pytest.raises(DesignError, match=r"mode 'no-verify' \(this run: 'fast'\)"):
         sweep.run(spec, out, chunk=2, fast=True, progress=None)
+    # another checkout (or an edited install) of the same version: its code differs
+    monkeypatch.setattr(sweep, "code_fingerprint", lambda: "0123456789abcdef")
+    with pytest.raises(DesignError, match=r"code '[0-9a-f]{16}' \(this run: '0123456789abcdef'\)"):
+        sweep.run(spec, out, chunk=2, verify=False, progress=None)
+    monkeypatch.undo()
     other = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [70, 80]}}))
     with pytest.raises(DesignError, match="another sweep: spec"):
         sweep.run(other, out, chunk=2, verify=False, progress=None)
@@ -133,6 +139,12 @@ def test_parts_of_another_sweep_are_not_mixed_in(tmp_path):
     fresh = tmp_path / "fresh.parquet"
     sweep.run(spec, fresh, chunk=4, verify=False, progress=None)
     assert rows_of(out) == rows_of(fresh)
+    import pyarrow.parquet as pq
+
+    from camcore import code_fingerprint
+
+    meta = pq.read_schema(fresh).metadata  # the table says which code made it
+    assert meta[sweep.CODE_METADATA.encode()] == code_fingerprint().encode()
     empty = tmp_path / "e.parquet.parts"  # e.g. a run stopped before its first chunk
     empty.mkdir()
     (empty / "sweep.json").write_text("{}")
@@ -248,6 +260,31 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     sweep.run(spec, tmp_path / "local.parquet", chunk=2, progress=None)
     sweep.run(spec, tmp_path / "dask.parquet", chunk=2, workers=2, progress=None)
     assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
+
+
+def test_workers_running_another_camcore_are_refused():
+    """An existing cluster (--scheduler) whose workers run another camcore would give
+    another code's rows under this one's name: refused, naming them. A LocalCluster's
+    workers share this process's install (the Dask tests above pass the check)."""
+    from camcore import code_fingerprint
+
+    class Cluster:
+        def __init__(self, answer):
+            self.answer = answer
+
+        def run(self, fn):
+            if isinstance(self.answer, Exception):
+                raise self.answer
+            return {w: fp or fn() for w, fp in self.answer.items()}
+
+    sweep.same_code_on_workers(Cluster({"tcp://a:1": None, "tcp://b:2": None}))
+    with pytest.raises(
+        DesignError, match=r"1 of 2 Dask workers run another camcore \(tcp://b:2: code 0000"
+    ):
+        sweep.same_code_on_workers(Cluster({"tcp://a:1": None, "tcp://b:2": "0000"}))
+    with pytest.raises(DesignError, match="cannot run this camcore .AttributeError"):
+        sweep.same_code_on_workers(Cluster(AttributeError("no code_fingerprint")))
+    assert len(code_fingerprint()) == 16
 
 
 def test_sweeps_sharing_a_cluster_keep_their_own_base(tmp_path):
