@@ -11,7 +11,8 @@
    typed array: the curves are most of what a tab receives per edit (30 students
    editing once a second need the server's network), so float32 curve data, which
    app.plots sends, is kept as it is (half the bytes; 7 significant digits, more than
-   a plot shows). Everything else is cast as viser does.
+   a plot shows), and so are its int8 columns (the shading and the vertical lines).
+   Everything else is cast as viser does.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ _F16 = npt.NDArray[np.float16]
 _F32 = npt.NDArray[np.float32]
 _F64 = npt.NDArray[np.float64]
 _U8 = npt.NDArray[np.uint8]
+_KEPT = (np.dtype(np.float32), np.dtype(np.int8))  # uPlot data sent as app.plots makes it
 VISER_CAST = props_api.AssignablePropsBase._cast_value_recursive  # viser's own (tests)
 
 
@@ -44,7 +46,7 @@ def _cast_value_recursive(self, hint: Any, value: Any, prop_name: str) -> Any:
     """viser 1.1.1's AssignablePropsBase._cast_value_recursive with the hints built
     once, and float32 uPlot ``data`` kept (module docstring)."""
     if hint == _F64:
-        if prop_name == "data" and isinstance(value, np.ndarray) and value.dtype == np.float32:
+        if prop_name == "data" and isinstance(value, np.ndarray) and value.dtype in _KEPT:
             return value
         return np.asarray(value).astype(np.float64)
     if hint == _F32:

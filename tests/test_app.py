@@ -1791,3 +1791,16 @@ def test_a_kept_program_with_numbers_no_table_sends_is_ignored(app, monkeypatch,
         assert s.error is None and again[storage.PROGRAM_KEY] == ""
         s.ui.controls["cam.base_radius_mm"].value = 90.0
         assert s.error is None and s.design.cam.base_radius_mm == 90.0
+
+
+def test_every_plot_sends_its_curves_as_float32_and_its_flags_as_int8(tab):
+    """What a redraw sends: each plot's angle and curves float32, its shading (where it
+    has one) and its two vertical lines int8, in that order (app.plots.wire)."""
+    s = tab
+    plots = [*s.ui.curves, s.ui.compare_view.fn, s.ui.compare_view.stress]
+    wait_for(lambda: s.verified)
+    for c in plots:
+        kinds = [np.asarray(col).dtype for col in c.handle.data]
+        flags = 3 if c.shading else 2
+        assert kinds == [np.float32] * (len(kinds) - flags) + [np.int8] * flags, c.title
+        assert len(kinds) == c.nser
