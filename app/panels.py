@@ -296,7 +296,7 @@ def headline_html(s: dict) -> str:
         f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
         "σ<sub>H</sub> –"  # (a knife edge: no Hertz stress)
         if stress is None
-        else f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.4g} MPa",
+        else f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa",
         "no jump" if jump is None else f"jumps at {jump:.0f} rpm",
     )
     # an item breaks only between items (a review: "rpm" alone on a second line)
@@ -348,7 +348,7 @@ def summary_markdown(s: dict) -> str:
             "Stress limit: allowable / safety factor",
             # (significant figures: an allowable of 1e-300 MPa had read "0 MPa")
             f"{s['contact_stress_allowable_MPa']:.6g} MPa / "
-            f"{s['contact_stress_safety_factor']:.6g} = {_stress_limit_MPa(s):.4g} MPa",
+            f"{s['contact_stress_safety_factor']:.6g} = {_stress_limit_MPa(s):.6g} MPa",
         ),
         *((k, _typeset_units(v)) for k, v in machine_rows(s)),
         (

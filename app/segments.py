@@ -19,6 +19,8 @@ from .controls import LAW_LABELS, fine
 from .panels import segment_sums_markdown
 
 KINDS = ("rise", "fall", "dwell")
+ANGLE_RANGE = (0.0, 360.0)  # what a row's angle box takes [deg]
+LIFT_RANGE = (0.001, 1000.0)  # what a row's lift box takes [mm]
 LAWS = tuple(law.value for law in MotionLaw)
 # the law dropdown shows the classic law dropdowns' words ("3-4-5 polynomial"), the
 # design keeps the law's id ("poly_345")
@@ -153,14 +155,16 @@ class SegmentTable:
         row = {
             "kind": gui.add_dropdown(f"{n} kind", KINDS, initial_value=g.kind),
             "angle": fine(
-                gui.add_number(f"{n} angle [°]", g.angle_deg, min=0.0, max=360.0, step=0.5)
+                gui.add_number(
+                    f"{n} angle [°]", g.angle_deg, min=ANGLE_RANGE[0], max=ANGLE_RANGE[1], step=0.5
+                )
             ),
             "lift": fine(
                 gui.add_number(
                     f"{n} lift [mm]",
                     g.lift_mm or 5.0,
-                    min=0.001,
-                    max=1000.0,
+                    min=LIFT_RANGE[0],
+                    max=LIFT_RANGE[1],
                     step=0.5,
                     disabled=dwell,
                 )

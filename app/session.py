@@ -209,7 +209,10 @@ class Session:
             if self._typed_program is not None:  # the table's program, valid at last:
                 self.base = design  # the program from now on
                 self._keep_typed(None)
-                self._sync_controls(design)  # (the classic sliders: this program's)
+                # the classic sliders show this program (their stale values had
+                # reverted it at the next edit); no other control: a user's next edit
+                # may already sit in one
+                self._sync_controls(design, prefix="motion.")
             self._apply(self._renamed_for_kind(design))
 
     def _keep_edit_beside_program(self, values: dict[str, object]) -> None:
@@ -304,11 +307,14 @@ class Session:
     def _values(self) -> dict[str, object]:
         return {p: h.value for p, h in self.ui.controls.items()}
 
-    def _sync_controls(self, design: Design) -> None:
-        """Write the design's values into the controls (firing no change)."""
+    def _sync_controls(self, design: Design, prefix: str = "") -> None:
+        """Write the design's values into the controls (firing no change); only those
+        whose path starts with ``prefix``."""
         with self._quiet():
             classic = design.motion.classic is not None
             for spec in controls.SPECS:
+                if not spec.path.startswith(prefix):
+                    continue
                 h, v = self.ui.controls[spec.path], controls.control_value(design, spec)
                 if spec.path.startswith("motion."):
                     # other programs are edited as segments: the classic sliders go
@@ -560,7 +566,6 @@ class Session:
             self._show_saved(saved)
             restore = working is not None and self.gen == gen0 and working != self.design
             self._persist = True
-            self._kept_program = typed_text or None  # what the browser holds
             if not restore:
                 self._save_working()
         if working is not None and restore:
@@ -571,7 +576,7 @@ class Session:
             )
             self._say(note)
             self._say_quick(note)
-        self._restore_program(typed if working is not None else None, gen0 + restore)
+        self._restore_program(typed_text, typed if working is not None else None, gen0 + restore)
         if why is not None:  # what the browser kept is not lost without a word
             where = (
                 f"it is set aside in this browser's storage as it was "
@@ -593,11 +598,15 @@ class Session:
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
         )
 
-    def _restore_program(self, typed: list[dict] | None, gen: int) -> None:
-        """Bring back the table's unfinished program the browser kept (if this tab has
-        not been edited meanwhile: ``gen``); the browser then holds this tab's own
-        (none, once the program makes a valid design, or when it is not restored)."""
+    def _restore_program(self, text: str | None, typed: list[dict] | None, gen: int) -> None:
+        """Bring back the table's unfinished program the browser kept (``text``, read as
+        ``typed``) if this tab has not been edited meanwhile (``gen``); the browser then
+        holds this tab's own (none, once the program makes a valid design, or when it
+        is not restored). Only from here does the tab know, and change, the browser's
+        copy: the working design's restore before it must not empty it (a reload
+        between the two had lost the program)."""
         with self.lock:
+            self._kept_program = text or None  # what the browser holds
             if typed is not None and self.gen == gen:
                 try:  # what the browser kept must never cost the tab its restore
                     self.on_segments(typed)

@@ -24,6 +24,8 @@ from camcore.model import (
     design_to_json,
 )
 
+from .segments import ANGLE_RANGE, LIFT_RANGE
+
 WORKING_KEY = "camdesigner.working"
 SAVED_KEY = "camdesigner.saved"
 EXPLORE_KEY = "camdesigner.explore"  # the Explore tab's setup (not its results)
@@ -112,7 +114,8 @@ def parse_setup(text: str | None) -> dict | None:
 
 _SEGMENT_FIELDS = {"kind": (str,), "angle_deg": (int, float), "lift_mm": (int, float, type(None))}
 _FIELDS = {*_SEGMENT_FIELDS, "law"}  # law: a string (or None)
-MAX_KEPT_NUMBER = 1e6  # beyond any angle [deg] or lift [mm] the table takes
+# what the table's boxes take (a kept lift of 2000 mm had broken the table's rebuild)
+_RANGES = {"angle_deg": ANGLE_RANGE, "lift_mm": LIFT_RANGE}
 
 
 def parse_program(text: str | None) -> list[dict] | None:
@@ -123,7 +126,7 @@ def parse_program(text: str | None) -> list[dict] | None:
     if not text or len(text) > MAX_SETUP_BYTES:
         return None
     try:  # (NaN and Infinity are not numbers the table could have sent; 1e400 is
-        # read as infinity, a 400-digit integer as one: MAX_KEPT_NUMBER refuses both)
+        # read as infinity, a 400-digit integer as one: the table's ranges refuse both)
         raw = json.loads(text, parse_constant=_refuse)
     except (ValueError, RecursionError):
         return None
@@ -135,7 +138,7 @@ def parse_program(text: str | None) -> list[dict] | None:
         if any(
             isinstance(v, bool)
             or not isinstance(v, _SEGMENT_FIELDS.get(k, (str, type(None))))
-            or (isinstance(v, int | float) and not abs(v) <= MAX_KEPT_NUMBER)
+            or (isinstance(v, int | float) and not _RANGES[k][0] <= v <= _RANGES[k][1])
             for k, v in g.items()
         ):
             return None

@@ -30,9 +30,15 @@ def code_fingerprint() -> str:
     uses must share it (camcore.sweep)."""
     root = Path(__file__).resolve().parent
     h = hashlib.sha256()
-    for f in sorted(root.rglob("*")):
-        if f.suffix in (".py", ".json") and f.is_file():
-            h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
+    # the files a wheel ships, by name: not whatever else lies in a source tree (a
+    # review's stray .ipynb_checkpoints/*.py had made one commit two codes)
+    files = [
+        *root.glob("*.py"),
+        *(root / "presets").glob("*.py"),
+        *(root / "presets").glob("*.json"),
+    ]
+    for f in sorted(files):
+        h.update(f.relative_to(root).as_posix().encode() + b"\0" + f.read_bytes())
     return h.hexdigest()[:16]
 
 

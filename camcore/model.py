@@ -14,6 +14,7 @@ reports them as violations, so the user can still see the design.
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import re
@@ -130,15 +131,21 @@ class _Part(BaseModel):
     def _no_bool_as_number(cls, v, info):
         """true / false is not a number: pydantic's lax mode reads true as 1.0 (a file
         with "base_radius_mm": true made a 1 mm cam without a word)."""
-        types = _types(cls.model_fields[info.field_name])
-        if isinstance(v, bool) and bool not in types and ({float, int} & set(types)):
+        if isinstance(v, bool) and info.field_name in _number_fields(cls):
             raise ValueError("a number, not true or false")
         return v
 
 
-def _types(field) -> tuple:
-    """The types a field's annotation allows (``float | None`` -> (float, None))."""
-    return get_args(field.annotation) or (field.annotation,)
+@functools.cache
+def _number_fields(cls) -> frozenset[str]:
+    """The fields of a model class whose annotation allows a number and not a bool
+    (``float``, ``float | None``, ``int``)."""
+    out = set()
+    for name, field in cls.model_fields.items():
+        types = set(get_args(field.annotation) or (field.annotation,))
+        if types & {float, int} and bool not in types:
+            out.add(name)
+    return frozenset(out)
 
 
 class ClassicMotion(_Part):

@@ -578,7 +578,9 @@ def _cluster(workers: int | None, scheduler: str | None):
 def same_code_on_workers(client) -> None:
     """Refuse a cluster whose workers run another camcore (an existing cluster started
     from another install or checkout): its rows would silently be another code's.
-    DesignError naming the workers that differ, or that have no camcore at all."""
+    DesignError naming the workers that differ, or saying that they cannot run this
+    camcore's check at all. (A worker that joins later is checked by each chunk it
+    runs: ``checked_chunk``.)"""
     try:
         theirs = client.run(code_fingerprint)
     except Exception as exc:  # e.g. a worker whose camcore has no code_fingerprint
@@ -597,6 +599,18 @@ def same_code_on_workers(client) -> None:
         )
 
 
+def checked_chunk(code: str, base: dict, points: list[dict], *how) -> list[dict]:
+    """``run_chunk`` on a Dask worker, refused (DesignError) where the worker's camcore
+    is not the code of the run (``code``: the caller's code_fingerprint): a worker that
+    joined the cluster after the run's check would otherwise add another code's rows."""
+    if code_fingerprint() != code:
+        raise DesignError(
+            f"a Dask worker runs another camcore (code {code_fingerprint()}, this run "
+            f"{code}): its rows would be another code's. Install this camdesigner on it"
+        )
+    return run_chunk(base, points, *how)
+
+
 def _run_dask(client, spec, chunk, todo, how, keep) -> None:
     """The chunks on a Dask cluster; each finished chunk is kept as it arrives."""
     from dask.distributed import as_completed
@@ -605,8 +619,10 @@ def _run_dask(client, spec, chunk, todo, how, keep) -> None:
     # the base goes out wrapped in a list: a dict would be scattered key by key under
     # its own keys ("cam", "name", ...), shared with any other sweep on that cluster
     [base] = client.scatter([spec.base], broadcast=True)
+    code = code_fingerprint()
     futures = {
-        client.submit(run_chunk, base, spec.chunk(i, chunk), *how, pure=False): i for i in todo
+        client.submit(checked_chunk, code, base, spec.chunk(i, chunk), *how, pure=False): i
+        for i in todo
     }
     for fut in as_completed(futures):
         keep(futures[fut], fut.result())

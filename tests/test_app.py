@@ -1775,12 +1775,15 @@ def test_an_edit_beside_an_unfinished_program_survives_a_reload(app, monkeypatch
 
 
 @pytest.mark.parametrize(
-    "number", ["1e400", "1" + "0" * 400, "-1e7"], ids=["1e400", "400 digits", "-1e7"]
+    "number",
+    ["1e400", "1" + "0" * 400, "-1e7", "-5", "361"],
+    ids=["1e400", "400 digits", "-1e7", "-5", "361"],
 )
 def test_a_kept_program_with_numbers_no_table_sends_is_ignored(app, monkeypatch, number):
     """A review: 1e400 (read as infinity) and a 400-digit integer passed the kept
     program's parser; the integer killed the restore thread (OverflowError) and left
-    the tab refusing every edit. Numbers beyond MAX_KEPT_NUMBER are not a program."""
+    the tab refusing every edit. Numbers the table's boxes do not take are not a
+    program (a second review: a lift of 2000 mm had broken the table's rebuild)."""
     from app import storage
 
     writes = _left_unfinished(app, monkeypatch)
@@ -1798,9 +1801,47 @@ def test_every_plot_sends_its_curves_as_float32_and_its_flags_as_int8(tab):
     has one) and its two vertical lines int8, in that order (app.plots.wire)."""
     s = tab
     plots = [*s.ui.curves, s.ui.compare_view.fn, s.ui.compare_view.stress]
-    wait_for(lambda: s.verified)
+    # (the Compare plots get their curves with the refinement, after s.verified is set)
+    assert wait_for(lambda: all(len(c.handle.data[0]) > 2 for c in plots))
     for c in plots:
         kinds = [np.asarray(col).dtype for col in c.handle.data]
         flags = 3 if c.shading else 2
         assert kinds == [np.float32] * (len(kinds) - flags) + [np.int8] * flags, c.title
         assert len(kinds) == c.nser
+
+
+def test_a_kept_program_is_not_emptied_before_it_is_restored(app, monkeypatch):
+    """A review: the working design's restore emptied the browser's copy of the
+    unfinished program before the program's own restore wrote it back, so a reload
+    between the two lost it. Until the program's restore, nothing is written there;
+    a kept lift the table cannot take is not a program."""
+    from app import storage
+    from app.session import Session
+
+    kept = _left_unfinished(app, monkeypatch)
+    monkeypatch.setattr(Session, "_restore_program", lambda *a: None)  # the tab closes
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, dict(kept), writes) as s:
+        assert s.design.motion.segments[1].angle_deg == 70.0  # the working design is back
+        assert storage.PROGRAM_KEY not in writes
+    lifted = kept[storage.PROGRAM_KEY].replace('"lift_mm": 15.0', '"lift_mm": 2000', 1)
+    assert lifted != kept[storage.PROGRAM_KEY] and storage.parse_program(lifted) is None
+
+
+def test_a_program_made_valid_by_another_control_shows_in_the_sliders(tab):
+    """The table's program made valid by another control's edit: the classic sliders
+    show it (a review: their stale values reverted it at the next, unrelated edit),
+    and no other control is written (a user's next edit may already sit in one)."""
+    s = tab
+    s.ui.controls["cam.base_radius_mm"].value = 0.0  # invalid
+    s.ui.segments.rows[1]["angle"].value = 60.0  # the table's program: 350 deg
+    s.ui.segments.rows[3]["angle"].value = 70.0  # 360 deg, still refused by r_b
+    assert s._typed_program is not None and s.error is not None
+    width = s.ui.controls["cam.width_mm"]
+    width._impl.value = 22.0  # as viser holds a user's edit before its callback runs
+    s.ui.controls["cam.base_radius_mm"].value = 80.0  # valid: the table's program
+    assert s.error is None and s.design.motion.segments[1].angle_deg == 60.0
+    assert s.ui.controls["motion.high_dwell_deg"].value == 60.0
+    assert width.value == 22.0
+    s.ui.controls["cam.width_mm"].value = 16.0  # the next, unrelated edit
+    assert s.design.motion.segments[1].angle_deg == 60.0 and s.design.cam.width_mm == 16.0

@@ -255,6 +255,10 @@ def test_key_numbers_typeset_units_as_the_curves_do(paper_analysis):
     assert "| 1000 MPa / 1.25 = 800 MPa |" in text
     tiny = {**summary(paper_analysis), "contact_stress_allowable_MPa": 1e-300}
     assert "| 1e-300 MPa / 1.25 = 8e-301 MPa |" in panels.summary_markdown(tiny)
+    odd = {**summary(paper_analysis), "contact_stress_allowable_MPa": 12345.0}
+    odd["contact_stress_safety_factor"] = 1.0  # (4 significant figures read 1.234e+04)
+    assert "| 12345 MPa / 1 = 12345 MPa |" in panels.summary_markdown(odd)
+    assert "/\u00a012345\u00a0MPa" in panels.headline_html(odd)
 
 
 @pytest.mark.parametrize("preset", ["paper_example", "valve_lift_roller"])

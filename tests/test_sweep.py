@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pyarrow.parquet as pq
@@ -285,6 +286,44 @@ def test_workers_running_another_camcore_are_refused():
     with pytest.raises(DesignError, match="cannot run this camcore .AttributeError"):
         sweep.same_code_on_workers(Cluster(AttributeError("no code_fingerprint")))
     assert len(code_fingerprint()) == 16
+    # a worker that joins after that check: each chunk checks its worker's code
+    with pytest.raises(DesignError, match="a Dask worker runs another camcore"):
+        sweep.checked_chunk("0000", {}, [], False)
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    points = spec.chunk(0, 2)
+    assert sweep.checked_chunk(code_fingerprint(), spec.base, points, False) == sweep.run_chunk(
+        spec.base, points, False
+    )
+
+
+def test_the_code_fingerprint_is_of_the_files_a_wheel_ships(tmp_path, monkeypatch):
+    """A review: a stray file in the source tree (a Jupyter checkpoint's .py) changed
+    the hash, so one commit made two codes. Only the package's modules and presets
+    count, and each of them does."""
+    import shutil
+
+    import camcore
+
+    root = Path(camcore.__file__).resolve().parent
+    copy = tmp_path / "camcore"
+    shutil.copytree(root, copy, ignore=shutil.ignore_patterns("__pycache__"))
+
+    def fp(where: Path) -> str:
+        monkeypatch.setattr(camcore, "__file__", str(where / "__init__.py"))
+        camcore.code_fingerprint.cache_clear()
+        try:
+            return camcore.code_fingerprint()
+        finally:
+            camcore.code_fingerprint.cache_clear()
+
+    same = fp(copy)
+    (copy / ".ipynb_checkpoints").mkdir()
+    (copy / ".ipynb_checkpoints" / "model-checkpoint.py").write_text("x = 1\n")
+    (copy / "notes.json").write_text("{}")
+    assert fp(copy) == same
+    preset = copy / "presets" / "paper_example.json"
+    preset.write_text(preset.read_text() + " ")
+    assert fp(copy) != same
 
 
 def test_sweeps_sharing_a_cluster_keep_their_own_base(tmp_path):
