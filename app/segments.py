@@ -111,11 +111,13 @@ class SegmentTable:
         try:
             for r, g, kind in zip(self.rows, rows, typed, strict=True):
                 # a row whose kind the user changed in place keeps its widgets: their
-                # lift and law follow the kind (a dwell made a rise had kept them greyed)
+                # lift and law follow the kind (a dwell made a rise had kept them greyed),
+                # shown for a rise or fall only (a dwell's greyed "5 mm, cycloidal" read
+                # as values of the dwell)
                 dwell = kind == "dwell"
                 for key in ("lift", "law"):
                     if r[key].disabled != dwell:
-                        r[key].disabled = dwell
+                        r[key].disabled, r[key].visible = dwell, not dwell
                 r["angle"].value = g.angle_deg
                 if g.lift_mm is not None:
                     r["lift"].value = float(g.lift_mm)
@@ -167,12 +169,14 @@ class SegmentTable:
                     max=LIFT_RANGE[1],
                     step=0.5,
                     disabled=dwell,
+                    visible=not dwell,
                 )
             ),
             "law": gui.add_dropdown(
                 f"{n} law",
                 LAW_LABELS,
                 disabled=dwell,
+                visible=not dwell,
                 initial_value=LABEL_OF_LAW[g.law or LAWS[0]],
             ),
             "move": gui.add_button_group(n, ("↑", "↓", "✕")),

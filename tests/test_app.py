@@ -738,10 +738,14 @@ def test_segment_table_edits_the_program(tab):
     # a dwell made a rise in place: its lift and law become editable (a review: they
     # stayed greyed, the program could not be finished), and greyed again as a dwell
     table = s.ui.segments
+    row = table.rows[3]
+    assert not (row["lift"].visible or row["law"].visible)  # a dwell has no lift, no law
     table.rows[3]["kind"].value = "rise"
     assert not table.rows[3]["lift"].disabled and not table.rows[3]["law"].disabled
+    assert row["lift"].visible and row["law"].visible
     table.rows[3]["kind"].value = "dwell"
     assert table.rows[3]["lift"].disabled and table.rows[3]["law"].disabled
+    assert not (row["lift"].visible or row["law"].visible)
     assert s.error is None
     # an error names the row as the table numbers it (from 1; the model counts from 0)
     fall = table.rows[2]["angle"].value
