@@ -67,6 +67,7 @@ from .scene import (
 from .ticker import Debouncer, Ticker
 
 FPS = 30.0
+_UNREAD = "(not read yet)"  # Session._kept_program before the restore (never a program's JSON)
 UNFINISHED_NOTE = (
     "The segment table's unfinished program is back as it was left (Design › Motion "
     "program › Program segments; not yet a valid design: the status says why, and the "
@@ -134,7 +135,8 @@ class Session:
         # the program table's segments while they do not make a valid design: another
         # control's edit keeps them (it had dropped them for the last valid program)
         self._typed_program: list[dict] | None = None
-        self._kept_program: str | None = None  # the browser's copy of it (_keep_typed)
+        # the browser's copy of it (_keep_typed): _UNREAD until the restore has read it
+        self._kept_program: str | None = _UNREAD
         self._ticket_lock, self._ticket = threading.Lock(), 0
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -260,7 +262,8 @@ class Session:
         if segs is None and self.ui.files_md.content == UNFINISHED_NOTE:
             self.ui.files_md.content = ""  # (it is finished now)
         text = None if segs is None else json.dumps(segs)
-        if self._persist and text != self._kept_program:
+        unread = self._kept_program == _UNREAD  # (then nothing is emptied: not seen yet)
+        if self._persist and text != self._kept_program and not (unread and text is None):
             self.store.write(storage.PROGRAM_KEY, text or "")
             self._kept_program = text
         self._typed_program = segs
@@ -602,12 +605,15 @@ class Session:
         """Bring back the table's unfinished program the browser kept (``text``, read as
         ``typed``) if this tab has not been edited meanwhile (``gen``); the browser then
         holds this tab's own (none, once the program makes a valid design, or when it
-        is not restored). Only from here does the tab know, and change, the browser's
-        copy: the working design's restore before it must not empty it (a reload
-        between the two had lost the program)."""
+        is not restored). Only from here does the tab empty the browser's copy: the
+        working design's restore before it must not (a reload between the two had lost
+        the program). A program the user typed meanwhile wins over the kept one, even
+        unfinished (it is what the browser holds then: a review)."""
         with self.lock:
-            self._kept_program = text or None  # what the browser holds
-            if typed is not None and self.gen == gen:
+            if self._kept_program == _UNREAD:  # (else this tab has written its own)
+                self._kept_program = text or None
+            mine = self._typed_program is not None
+            if typed is not None and self.gen == gen and not mine:
                 try:  # what the browser kept must never cost the tab its restore
                     self.on_segments(typed)
                 except Exception:  # the tab goes on with its design's own program

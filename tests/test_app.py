@@ -1849,3 +1849,26 @@ def test_a_program_made_valid_by_another_control_shows_in_the_sliders(tab):
     assert width.value == 22.0
     s.ui.controls["cam.width_mm"].value = 16.0  # the next, unrelated edit
     assert s.design.motion.segments[1].angle_deg == 60.0 and s.design.cam.width_mm == 16.0
+
+
+def test_a_table_edit_before_the_programs_restore_wins(app, monkeypatch):
+    """A review: a table edit (still unfinished) arriving between the working design's
+    restore and the program's was written to the browser, then the restore replayed
+    the old kept program over it and believed the browser held that one: the screen
+    and a later reload disagreed. The user's edit wins, on screen and in the browser."""
+    from app import storage
+    from app.session import Session
+
+    kept = _left_unfinished(app, monkeypatch)
+    real = Session._restore_program
+
+    def user_first(self, text, typed, gen):
+        self.ui.segments.rows[1]["angle"].value = 55.0  # the user's edit comes first
+        return real(self, text, typed, gen)
+
+    monkeypatch.setattr(Session, "_restore_program", user_first)
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, dict(kept), writes) as s:
+        assert s.ui.segments.rows[1]["angle"].value == 55.0
+        assert json.loads(writes[storage.PROGRAM_KEY])[1]["angle_deg"] == 55.0
+        assert s._typed_program[1]["angle_deg"] == 55.0
