@@ -523,8 +523,12 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     assert " " not in body.replace(" · ", "")  # a line breaks between items only
     line = html.replace("\u00a0", " ")
     pa = max(s["pressure_angle_max_deg"].values())
-    assert f"φ ≤ {pa:.1f}°" in line and "ρ ≥ 56.2 mm" in line and "concave" not in line
-    assert "≤ 52.4 / 800 MPa" in line and "jumps at 1855 rpm" in line
+    rho, jump = s["radius_of_curvature_mm"]["convex_min"], s["jump_speed_rpm"]
+    stress = s["contact_stress_max_MPa"]["cycle"]
+    limit = s["contact_stress_allowable_MPa"] / s["contact_stress_safety_factor"]
+    assert f"φ ≤ {pa:.1f}°" in line and f"ρ ≥ {rho:.1f} mm" in line and "concave" not in line
+    assert f"≤ {stress:.1f} / {limit:g} MPa" in line and f"jumps at {jump:.0f} rpm" in line
+    assert "/ 800 MPa" in line  # the default grade: 1000 MPa over the factor 1.25
     odd = dict(s, jump_speed_rpm=None, contact_stress_max_MPa={"cycle": None})
     odd["radius_of_curvature_mm"] = {"convex_min": 40.0, "concave_min": 12.34}
     line = panels.headline_html(odd).replace("\u00a0", " ")
