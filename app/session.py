@@ -227,6 +227,7 @@ class Session:
         kept, _ = controls.try_design(self.base, values)
         if kept is not None:
             self.store.write(storage.WORKING_KEY, design_to_json(kept))
+            self._pair_program()
 
     def _renamed_for_kind(self, design: Design) -> Design:
         """A new follower kind renames the follower the design's name mentions ("...
@@ -654,6 +655,18 @@ class Session:
     def _save_working(self) -> None:
         if self._persist and self.error is None:
             self.store.write(storage.WORKING_KEY, design_to_json(self.design))
+            self._pair_program()
+
+    def _pair_program(self) -> None:
+        """Write this tab's unfinished program (or none) beside the working design it
+        just wrote: the browser's tabs share both keys, and a pair from two tabs (a
+        preset loaded in one, another's unfinished program) had come back as a red
+        table over the preset at a reload. Not before the restore has read the copy
+        (_UNREAD: it must not be emptied unseen). Lock held."""
+        if self._persist and self._kept_program != _UNREAD:
+            text = None if self._typed_program is None else json.dumps(self._typed_program)
+            self.store.write(storage.PROGRAM_KEY, text or "")
+            self._kept_program = text
 
     def _show_saved(self, saved: dict[str, str], write: bool = False) -> None:
         self.saved = saved

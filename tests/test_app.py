@@ -1873,3 +1873,37 @@ def test_a_table_edit_before_the_programs_restore_wins(app, monkeypatch):
         assert s.ui.segments.rows[1]["angle"].value == 55.0
         assert json.loads(writes[storage.PROGRAM_KEY])[1]["angle_deg"] == 55.0
         assert s._typed_program[1]["angle_deg"] == 55.0
+
+
+def test_tabs_of_one_browser_leave_a_coherent_pair(app, monkeypatch):
+    """The browser's tabs share the working design and the kept program. A Chromium
+    review: tab B loaded a preset while tab A's unfinished program was kept, and a
+    reload brought A's red table back over B's preset; and B's unfinished program was
+    lost after A finished its own. Every tab writes its program beside the working
+    design it writes, so the last writer leaves one coherent pair."""
+    from app import storage
+
+    shared: dict[str, str] = {}
+    with (
+        restored_tab(app, monkeypatch, shared, shared) as a,
+        restored_tab(app, monkeypatch, shared, shared) as b,
+    ):
+        a.ui.segments.rows[1]["angle"].value = 80.0  # A: unfinished (370 deg)
+        assert storage.parse_program(shared[storage.PROGRAM_KEY]) == a._typed_program
+        b.load_preset("double_index")  # B: a whole design
+        assert shared[storage.PROGRAM_KEY] == ""
+    with restored_tab(app, monkeypatch, shared, shared) as c:
+        assert c.error is None and len(c.design.motion.segments) == 8
+        c.load_preset("paper_example")
+    with (
+        restored_tab(app, monkeypatch, shared, shared) as a,
+        restored_tab(app, monkeypatch, shared, shared) as b,
+    ):
+        b.ui.segments.rows[1]["angle"].value = 80.0  # B: unfinished
+        a.ui.segments.rows[1]["angle"].value = 60.0  # A: unfinished, then finished
+        a.ui.segments.rows[3]["angle"].value = 70.0
+        assert a.error is None and shared[storage.PROGRAM_KEY] == ""
+        b.ui.controls["cam.base_radius_mm"].value = 85.0  # B edits last
+    with restored_tab(app, monkeypatch, shared, shared) as c:
+        assert c.ui.segments.rows[1]["angle"].value == 80.0 and c.error is not None
+        assert c.ui.controls["cam.base_radius_mm"].value == 85.0
