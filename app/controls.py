@@ -50,6 +50,8 @@ _LAW_WORDS = {
     "polynomial": "polynomial fitted to its neighbours",
 }
 LAW_LABELS = tuple(_LAW_WORDS.get(v, v.replace("_", " ")) for v in LAWS)
+LABEL_OF_LAW = dict(zip(LAWS, LAW_LABELS, strict=True))  # "poly_345" -> "3-4-5 polynomial"
+LAW_OF_LABEL = dict(zip(LAW_LABELS, LAWS, strict=True))  # and back
 KIND_LABELS = tuple(FollowerKind(k).label for k in KINDS)
 GRADES = tuple(g.value for g in MaterialGrade)
 GRADE_LABELS = tuple(

@@ -22,14 +22,14 @@ from camcore.motion import segment_word
 from camcore.report import machine_rows
 from camcore.units import to_mm
 
-from .controls import LAW_LABELS, LAWS
+from .controls import LABEL_OF_LAW
 
 
 def program_text(design: Design) -> str:
     """One line describing a program the classic sliders cannot edit."""
     parts = []
     for g in design.motion.segments:
-        law = LAW_LABELS[LAWS.index(g.law.value)] if g.law else ""
+        law = LABEL_OF_LAW[g.law.value] if g.law else ""
         lift = f" {g.lift_mm:g} mm {law}" if g.lift_mm and g.law else ""
         parts.append(f"{g.kind.value} {g.angle_deg:g}°{lift}")
     return (

@@ -13,19 +13,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from camcore.model import MAX_SEGMENTS, MotionLaw
+from camcore.model import MAX_SEGMENTS
 
-from .controls import LAW_LABELS, fine
+from .controls import LABEL_OF_LAW, LAW_LABELS, LAW_OF_LABEL, LAWS, fine
 from .panels import segment_sums_markdown
 
 KINDS = ("rise", "fall", "dwell")
 ANGLE_RANGE = (0.0, 360.0)  # what a row's angle box takes [deg]
 LIFT_RANGE = (0.001, 1000.0)  # what a row's lift box takes [mm]
-LAWS = tuple(law.value for law in MotionLaw)
-# the law dropdown shows the classic law dropdowns' words ("3-4-5 polynomial"), the
-# design keeps the law's id ("poly_345")
-LAW_OF_LABEL = dict(zip(LAW_LABELS, LAWS, strict=True))
-LABEL_OF_LAW = dict(zip(LAWS, LAW_LABELS, strict=True))
 
 
 @dataclass(frozen=True)

@@ -265,8 +265,7 @@ class Session:
         text = None if segs is None else json.dumps(segs)
         unread = self._kept_program == _UNREAD  # (then nothing is emptied: not seen yet)
         if self._persist and text != self._kept_program and not (unread and text is None):
-            self.store.write(storage.PROGRAM_KEY, text or "")
-            self._kept_program = text
+            self._write_program(text)
         self._typed_program = segs
         classic = self.base.motion.classic is not None
         for path, h in self.ui.controls.items():
@@ -664,9 +663,14 @@ class Session:
         table over the preset at a reload. Not before the restore has read the copy
         (_UNREAD: it must not be emptied unseen). Lock held."""
         if self._persist and self._kept_program != _UNREAD:
-            text = None if self._typed_program is None else json.dumps(self._typed_program)
-            self.store.write(storage.PROGRAM_KEY, text or "")
-            self._kept_program = text
+            typed = self._typed_program
+            self._write_program(None if typed is None else json.dumps(typed))
+
+    def _write_program(self, text: str | None) -> None:
+        """The browser's copy of the unfinished program (None: none, written ""), and
+        what this tab knows it holds. Lock held."""
+        self.store.write(storage.PROGRAM_KEY, text or "")
+        self._kept_program = text
 
     def _show_saved(self, saved: dict[str, str], write: bool = False) -> None:
         self.saved = saved

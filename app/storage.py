@@ -116,6 +116,9 @@ _SEGMENT_FIELDS = {"kind": (str,), "angle_deg": (int, float), "lift_mm": (int, f
 _FIELDS = {*_SEGMENT_FIELDS, "law"}  # law: a string (or None)
 # what the table's boxes take (a kept lift of 2000 mm had broken the table's rebuild)
 _RANGES = {"angle_deg": ANGLE_RANGE, "lift_mm": LIFT_RANGE}
+# a full table's JSON: ~110 characters a segment with full-precision floats (the Explore
+# setup's 4,096 had cut a 48-segment program: it was not kept)
+MAX_PROGRAM_CHARS = 200 * MAX_SEGMENTS
 
 
 def parse_program(text: str | None) -> list[dict] | None:
@@ -123,7 +126,7 @@ def parse_program(text: str | None) -> list[dict] | None:
     or not one: a JSON list of 1 to MAX_SEGMENTS objects of at most the table's fields
     (kind, angle_deg, lift_mm, law) with numbers as numbers (the model then says what
     is wrong with it, as with the user's own edit)."""
-    if not text or len(text) > MAX_SETUP_BYTES:
+    if not text or len(text) > MAX_PROGRAM_CHARS:
         return None
     try:  # (NaN and Infinity are not numbers the table could have sent; 1e400 is
         # read as infinity, a 400-digit integer as one: the table's ranges refuse both)

@@ -535,3 +535,17 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     assert "no jump" in line and "σ<sub>H</sub> –" in line and "concave ≥ 12.3 mm" in line
     status = panels.status_html(None, [], 1e-7, True, headline=line)
     assert status.index("All design limits met") < status.index("cam-headline")
+
+
+def test_a_full_table_is_a_program_the_browser_keeps():
+    """The kept program's size bound holds a full table written with full-precision
+    numbers (the Explore setup's 4,096 characters had refused 48 segments)."""
+    import json
+
+    from app import storage
+    from camcore.model import MAX_SEGMENTS
+
+    seg = {"kind": "rise", "angle_deg": 1 / 3, "lift_mm": 1000 / 7, "law": "modified_trapezoid"}
+    text = json.dumps([seg] * MAX_SEGMENTS)
+    assert len(text) > 4096 and storage.parse_program(text) == [seg] * MAX_SEGMENTS
+    assert storage.parse_program(json.dumps([seg] * (MAX_SEGMENTS + 1))) is None
