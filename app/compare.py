@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from camcore.model import PAPER_FOLLOWERS
-from camcore.report import PAPER_TABLE1_N
+from camcore.model import PAPER_FOLLOWERS, Design
+from camcore.report import paper_table1_N
 
 from .panels import esc
 from .plots import COLORS, Curve
@@ -16,9 +16,14 @@ from .plots import COLORS, Curve
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
 
-def table_markdown(results: dict) -> str:
+def table_markdown(results: dict, design: Design) -> str:
+    """The table of ``results`` (app.analyst.Refined.compare) for ``design``: the paper's
+    Table 1 column only where the design is the paper's example (report.paper_table1_N)."""
+
     def f(x, nd=2):
         return "–" if x is None else f"{x:.{nd}f}"
+
+    table1 = {k: paper_table1_N(design, k) for k in results}
 
     lines = [
         "| Follower | F_N high dwell [N] (a double: while both faces touch) | paper's Table 1 [N] "
@@ -29,9 +34,7 @@ def table_markdown(results: dict) -> str:
     notes = []
     for k, a in results.items():
         if isinstance(a, str):
-            lines.append(
-                f"| {k.label} | – | {PAPER_TABLE1_N[k]:.3f} | – | – | – | not computable |"
-            )
+            lines.append(f"| {k.label} | – | {f(table1[k], 3)} | – | – | – | not computable |")
             notes.append(f"- *{k.label}*: {esc(a)}")
             continue
         s = a["summary"]
@@ -40,7 +43,7 @@ def table_markdown(results: dict) -> str:
         dwell = fn["high_dwell_two_contact"] if k.is_double else fn["high_dwell"]
         lines.append(
             f"| {k.label} | {f(dwell, 3)} | "
-            f"{PAPER_TABLE1_N[k]:.3f} | {f(s['contact_force_max_N']['cycle'], 2)} | "
+            f"{f(table1[k], 3)} | {f(s['contact_force_max_N']['cycle'], 2)} | "
             f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | "
             f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |"
         )
@@ -49,7 +52,8 @@ def table_markdown(results: dict) -> str:
         "\n\n**F_N high dwell**: the largest contact force per face in the high dwell; "
         "for double followers while both faces touch (the load is shared; in the first "
         "and last 2ψ_h one face carries it all, see Key numbers). **Table 1** is the "
-        "paper's value for its own example (the `paper_example` preset), and ours "
+        "paper's value for its own example (the `paper_example` preset), shown for that "
+        "design only (its motion, follower, dynamics, r_b and speed), and ours "
         "differs from it: in the dwell Eqs. 29-38 give F_N = F_t = Mg + k(h + s_p) = "
         "136.509 N for a single follower and F_t / (2 cos ψ_h) for a double one "
         "(68.397 N concave, 68.579 N rollers); the paper's 133.5 / 129.2 N lie below "
@@ -89,11 +93,11 @@ class CompareView:
         )
         self.results: dict = {}
 
-    def update(self, results: dict, at: float, stations: np.ndarray) -> None:
-        """Show ``results`` (app.analyst.Refined.compare) with the marker at cam angle
-        ``at`` [deg] and the ``stations`` [deg] of the design on screen."""
+    def update(self, results: dict, design: Design, at: float, stations: np.ndarray) -> None:
+        """Show ``results`` (app.analyst.Refined.compare) of ``design`` with the marker at
+        cam angle ``at`` [deg] and the ``stations`` [deg] of the design on screen."""
         self.results = results
-        self.md.content = table_markdown(results)
+        self.md.content = table_markdown(results, design)
         ok = [r for r in results.values() if not isinstance(r, str)]
         # camcore's compare puts every follower on one grid; with none computable the
         # plots keep the stations and the marker of this design, and no curve

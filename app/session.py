@@ -427,7 +427,10 @@ class Session:
             self._show_summary(r.summary)
             self._show_status()
             self.ui.compare_view.update(
-                r.compare, math.degrees(self.analysis.theta[self._index()]), r.curves.stations
+                r.compare,
+                r.analysis.design,
+                math.degrees(self.analysis.theta[self._index()]),
+                r.curves.stations,
             )
 
     def _stale(self, gen: int) -> bool:

@@ -5,6 +5,8 @@ tables of ``camcore report`` and ``camcore compare``.
 
 from __future__ import annotations
 
+import functools
+import json
 import math
 
 import numpy as np
@@ -13,7 +15,14 @@ from . import checks, machine, profile, train, wear
 from .analysis import Analysis, analyze, compare, contacts
 from .contact import hertz_validity
 from .extremes import peak
-from .model import PAPER_FOLLOWERS, Design, FollowerKind, allowable_contact_stress_MPa, omega_rad_s
+from .model import (
+    PAPER_FOLLOWERS,
+    Design,
+    FollowerKind,
+    allowable_contact_stress_MPa,
+    load_preset,
+    omega_rad_s,
+)
 from .motion import FALL, HIGH, RISE, segment_word
 from .units import to_um_per_mcycle
 
@@ -26,6 +35,34 @@ PAPER_TABLE1_N = {
     FollowerKind.single_concave: 129.161,
     FollowerKind.double_concave: 67.297,
 }
+# What Table 1's figure (F_N in the high dwell, Eqs. 29-41) depends on: the design's
+# groups and fields that must be the paper example's for Table 1 to speak of it
+TABLE1_INPUTS = ("motion", "follower", "dynamics", "cam.base_radius_mm", "cam.speed_rpm")
+
+
+def _table1_inputs(design: Design) -> dict:
+    data = design.model_dump(mode="json")
+    data["follower"].pop("kind")  # Table 1 has a column per kind
+    out = {}
+    for path in TABLE1_INPUTS:
+        group, _, name = path.partition(".")
+        out[path] = data[group][name] if name else data[group]
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def _paper_inputs() -> str:
+    return json.dumps(_table1_inputs(load_preset("paper_example")), sort_keys=True)
+
+
+def paper_table1_N(design: Design, kind: FollowerKind) -> float | None:
+    """The paper's Table 1 value [N] for ``kind``, if ``design`` is the paper's own
+    example in every input of that figure (TABLE1_INPUTS: not its name, follower kind,
+    width, material or limits); None for another design (Table 1 says nothing of it:
+    a review saw the paper's column beside a 120 mm cam) and for the followers the
+    paper does not tabulate."""
+    same = json.dumps(_table1_inputs(design), sort_keys=True) == _paper_inputs()
+    return PAPER_TABLE1_N.get(kind) if same else None
 
 
 def _max(x: np.ndarray, mask: np.ndarray | None = None) -> float | None:
@@ -480,7 +517,8 @@ def report_text(s: dict) -> str:
 
 def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS) -> list[dict]:
     """Table 1 quantities and the stress maxima for each follower in ``kinds`` (default
-    the paper's four; ``paper_table1_N`` is None for the others)."""
+    the paper's four; ``paper_table1_N``: the paper's figure, for its own example only,
+    see paper_table1_N)."""
     rows = []
     for kind, a in compare(design, verify=True, kinds=kinds).items():
         assert not isinstance(a, str)  # compare raises (errors=False) on a bad follower
@@ -492,7 +530,7 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
                 "breaks": sorted({f"{v.code} ({v.equation})" for v in a.violations}),
                 "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
                 "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
-                "paper_table1_N": PAPER_TABLE1_N.get(kind),
+                "paper_table1_N": paper_table1_N(design, kind),
                 "FN_cycle_N": s["contact_force_max_N"]["cycle"],
                 "F1_max_N": s["guide_force_max_N"]["F1"],
                 "F2_max_N": s["guide_force_max_N"]["F2"],
@@ -537,6 +575,12 @@ def compare_text(rows: list[dict]) -> str:
     ]
     for r in rows:
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 3):>14}" for k in keys))
+    tabulated = [r for r in rows if FollowerKind(r["follower"]) in PAPER_TABLE1_N]
+    if tabulated and all(r["paper_table1_N"] is None for r in tabulated):
+        lines.append(
+            "(Table 1: the paper's figures for its own example, shown for the paper_example "
+            "design only: this one differs from it)"
+        )
     # the running machine: wear (the paper's claim, made measurable), life, spring, shaft
     head2 = ("follower", "wear max", "pitting life", "k min", "jump speed", "T drive")
     lines += [

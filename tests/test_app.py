@@ -415,6 +415,13 @@ def test_compare_tab(tab):
         assert label in md
     assert "67.297" in md  # Table 1 reference column
     view = s.ui.compare_view
+    # the paper's column speaks of its own example only (a review saw it beside any cam)
+    s.ui.controls["cam.base_radius_mm"].value = 90.0
+    s.refine()
+    assert "| 67.297 |" not in view.md.content and "that design only" in view.md.content
+    s.ui.controls["cam.base_radius_mm"].value = 80.0
+    s.refine()
+    assert "| 67.297 |" in view.md.content
     data = view.fn.handle.data  # θ, the four followers, the stations, θ now
     assert len(data) == 7 and data[0].size > 100
     # one grid for the four followers: their curves are drawn at the same angles

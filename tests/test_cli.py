@@ -96,6 +96,15 @@ def test_compare_table(capsys):
     )
     assert [r["follower"] for r in rows] == ["flat_face", "single_roller", "knife_edge"]
     assert rows[0]["paper_table1_N"] is None and rows[1]["paper_table1_N"] == 133.496
+    # Table 1 speaks of the paper's example only: not beside another cam, nor in words
+    for change in ("cam.base_radius_mm=120", "dynamics.mass_g=200", "follower.offset_mm=12"):
+        other = run_json(capsys, "compare", "--preset", "paper_example", "--set", change, "--json")
+        assert all(r["paper_table1_N"] is None for r in other), change
+    main(["compare", "--preset", "paper_example", "--set", "cam.base_radius_mm=120"])
+    assert "shown for the paper_example design only" in capsys.readouterr().out
+    same = "cam.width_mm=20"  # width, material, limits: Table 1's F_N does not depend on them
+    kept = run_json(capsys, "compare", "--preset", "paper_example", "--set", same, "--json")
+    assert [r["paper_table1_N"] for r in kept] == [133.496, 67.297, 129.161, 67.297]
     assert rows[2]["stress_max_MPa"] is None  # a knife edge has no Hertz stress
     assert main(["compare", "--preset", "paper_example", "--followers", "wheel"]) == 2
 
