@@ -25,6 +25,8 @@ from camcore.model import (
     MAX_DESIGN_BYTES,
     Design,
     DesignError,
+    defaulted_fields,
+    defaults_note,
     design_from_json,
     design_to_json,
     name_follows_kind,
@@ -462,7 +464,9 @@ class Session:
                 )
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
         self.set_design(d)
-        self._say(f"Opened **{esc(name)}** ({esc(d.name)}).")
+        left_out = defaulted_fields(content, d)
+        note = f" ⚠ {esc(defaults_note(left_out))}." if left_out else ""
+        self._say(f"Opened **{esc(name)}** ({esc(d.name)}).{note}")
 
     def upload_refused(self, name: str, size: int, why: str) -> None:
         """The upload guard (app.uploads) dropped a transfer: too large, larger than it

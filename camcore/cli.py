@@ -27,10 +27,11 @@ from .model import (
     Design,
     DesignError,
     FollowerKind,
-    load_design,
+    defaults_note,
     load_preset,
     name_follows_kind,
     preset_names,
+    read_design,
     set_field,
 )
 
@@ -57,7 +58,9 @@ def _design(args) -> Design:
     if args.preset:
         design = load_preset(args.preset)
     elif args.design:
-        design = load_design(args.design)
+        design, left_out = read_design(args.design)
+        if left_out:
+            print(f"note: {args.design}: {defaults_note(left_out)}", file=sys.stderr)
     else:
         raise DesignError(f"give a design file or --preset NAME ({', '.join(preset_names())})")
     if getattr(args, "follower", None):

@@ -195,6 +195,10 @@ def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     assert s.design == other and s.error is None
     assert s.ui.controls["cam.base_radius_mm"].value == other.cam.base_radius_mm
     assert s.ui.controls["follower.kind"].value == other.follower.kind.label
+    assert "not in the file" not in s.ui.files_md.content  # a complete file
+    fire_upload(s.ui.upload_btn, "short.json", b'{"cam": {"width_mm": 12}}')
+    assert s.design.cam.width_mm == 12 and s.design.cam.base_radius_mm == 80.0
+    assert panels.esc("cam.base_radius_mm = 80.0") in s.ui.files_md.content  # said, not silent
 
 
 def test_a_file_that_cannot_be_opened_does_not_block_downloads(tab, downloads):

@@ -12,7 +12,7 @@ import pytest
 import trimesh
 
 from camcore.cli import main
-from camcore.model import PAPER_FOLLOWERS, FollowerKind, load_preset, preset_names
+from camcore.model import PAPER_FOLLOWERS, FollowerKind, design_to_json, load_preset, preset_names
 
 KEYS = {
     "follower",
@@ -60,8 +60,26 @@ def test_report_from_file_and_text(tmp_path, capsys):
     path = tmp_path / "d.json"
     path.write_text(load_preset("paper_example").model_dump_json())
     assert main(["report", str(path)]) == 0
-    out = capsys.readouterr().out
-    assert "double_concave" in out and "Eq. 20" in out
+    out = capsys.readouterr()
+    assert "double_concave" in out.out and "Eq. 20" in out.out
+    assert "not in the file" not in out.err  # a complete file: nothing to say
+
+
+def test_a_file_leaving_inputs_out_says_which_took_defaults(tmp_path, capsys):
+    """A review: a file without the base radius, or ``{}``, was analysed as the paper
+    example ("valid yes") without a word. The inputs left out are named, with the
+    values they took; fields a follower does not use are not."""
+    data = json.loads(design_to_json(load_preset("paper_example")))
+    del data["cam"]["base_radius_mm"], data["dynamics"], data["follower"]["roller_radius_mm"]
+    path = tmp_path / "d.json"
+    path.write_text(json.dumps(data))
+    assert main(["report", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "cam.base_radius_mm = 80.0" in err and "dynamics (the whole group)" in err
+    assert "roller_radius_mm" not in err  # a concave face has no roller
+    path.write_text("{}")
+    assert main(["report", str(path)]) == 0
+    assert "motion (the whole group)" in capsys.readouterr().err
 
 
 def test_violations_are_reported_with_equation(capsys):
