@@ -37,9 +37,10 @@ def require_star_shaped(a) -> None:
     """ExportError unless the profile is star-shaped about the axis: no part, solid or
     cutter path, can be made of a profile that crosses itself."""
     if not a.profile.is_star_shaped():
+        broken = ", ".join(f"{v.code} ({v.equation})" for v in a.violations) or "none found"
         raise ExportError(
             "the profile is not star-shaped about the cam axis (it crosses itself): no "
-            "part can be made of it; fix the listed violations first"
+            f"part can be made of it; fix these first: {broken}"
         )
 
 
