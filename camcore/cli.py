@@ -91,7 +91,7 @@ def _report(args) -> int:
         _refuse_collisions(documents, args.design)
     a = analyze(_design(args))
     s = summary(a)
-    print(json.dumps(s, indent=2) if args.json else report_text(s))
+    print(json.dumps(s, indent=2) if args.json else report_text(s, a.design))
     _write(a, documents)
     return _verdict(a, "the report above has the details")
 

@@ -16,7 +16,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .analysis import Analysis
-from .report import report_text, summary
+from .report import inputs_text, report_text, summary
 from .units import to_deg, to_mm
 
 MAX_POINTS = 1500  # per curve in the embedded plots: the page stays a few hundred kB
@@ -203,53 +203,6 @@ def _svg(fig) -> str:
     return text[text.index("<svg") :]  # drop the XML prolog and doctype: inline SVG
 
 
-def inputs_text(design) -> str:
-    """The design's inputs in a few lines: the motion program segment by segment, the
-    follower, the cam, the dynamics and the material (a review: a report of a teacher's
-    own program had not said which program it was)."""
-    from .model import allowable_contact_stress_MPa
-
-    f, c, dyn = design.follower, design.cam, design.dynamics
-    parts = []
-    for i, g in enumerate(design.motion.segments, start=1):
-        law = g.law.value if g.law is not None else "cycloidal"
-        lift = "" if g.kind.value == "dwell" else f" {g.lift_mm:g} mm {law}"
-        parts.append(f"{i}. {g.kind.value} {g.angle_deg:g} deg{lift}")
-    used = [
-        f"{label} {getattr(f, key):g} mm"
-        for key, label in (
-            ("roller_radius_mm", "r_c"),
-            ("face_radius_mm", "r_f"),
-            ("offset_mm", "e"),
-            ("single_offset_mm", "e_s"),
-        )
-        if f.kind.uses(key)
-    ]
-    lines = [
-        ("program", "; ".join(parts)),
-        ("follower", ", ".join([f.kind.label, *used])),
-        (
-            "cam",
-            f"r_b {c.base_radius_mm:g} mm, width {c.width_mm:g} mm, {c.speed_rpm:g} rpm, "
-            f"bore {c.bore_diameter_mm:g} mm",
-        ),
-        (
-            "dynamics",
-            f"M {dyn.mass_g:g} g, k {dyn.spring_rate_N_per_m:g} N/m, s_p {dyn.preload_mm:g} "
-            f"mm, guide mu {dyn.guide_friction:g}, d {dyn.guide_width_mm:g} mm, "
-            f"l1 {dyn.overhang_mm:g} mm, l2 {dyn.guide_length_mm:g} mm",
-        ),
-        (
-            "material",
-            f"{design.material.grade.value.replace('_', ' ')}, allowable "
-            f"{allowable_contact_stress_MPa(design):g} MPa / safety factor "
-            f"{design.limits.contact_stress_safety_factor:g}",
-        ),
-    ]
-    width = max(len(k) for k, _ in lines)
-    return "\n".join(f"{k.ljust(width)}  {v}" for k, v in lines)
-
-
 def html_report(a: Analysis) -> str:
     """The report of one analysis as a self-contained HTML document."""
     s = summary(a)
@@ -303,7 +256,7 @@ def pdf_report(a: Analysis) -> bytes:
     from matplotlib.figure import Figure
 
     s = summary(a)
-    text = inputs_text(a.design) + "\n\n" + report_text(s)
+    text = report_text(s, a.design)
     if not s["valid"]:
         text += "\n\nThe design breaks the limits listed above (lines starting with '!')."
     page = Figure(figsize=A4_IN)

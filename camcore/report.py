@@ -8,6 +8,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import re
 
 import numpy as np
 
@@ -326,6 +327,10 @@ def summary(a: Analysis) -> dict:
     }
 
 
+# a row with no value at all ("- mm", "- / - N"): "-" alone, no unit on nothing
+_NO_VALUE = re.compile(r"^-( / -)* [^\d]*$")
+
+
 def _fmt(x, nd=3) -> str:
     if x is None:
         return "-"
@@ -416,8 +421,56 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
     ]
 
 
-def report_text(s: dict) -> str:
-    """A readable table of one summary."""
+def inputs_text(design) -> str:
+    """The design's inputs in a few lines: the motion program segment by segment, the
+    follower, the cam, the dynamics and the material (a review: a report of a teacher's
+    own program had not said which program it was; another: the CLI's text report
+    showed no input, so a value a file had left out went unseen)."""
+    f, c, dyn, m = design.follower, design.cam, design.dynamics, design.material
+    parts = []
+    for i, g in enumerate(design.motion.segments, start=1):
+        law = g.law.value if g.law is not None else "cycloidal"
+        lift = "" if g.kind.value == "dwell" else f" {g.lift_mm:g} mm {law}"
+        parts.append(f"{i}. {g.kind.value} {g.angle_deg:g} deg{lift}")
+    used = [
+        f"{label} {getattr(f, key):g} mm"
+        for key, label in (
+            ("roller_radius_mm", "r_c"),
+            ("face_radius_mm", "r_f"),
+            ("offset_mm", "e"),
+            ("single_offset_mm", "e_s"),
+        )
+        if f.kind.uses(key)
+    ]
+    lines = [
+        ("program", "; ".join(parts)),
+        ("follower", ", ".join([f.kind.label, *used])),
+        (
+            "cam",
+            f"r_b {c.base_radius_mm:g} mm, width {c.width_mm:g} mm, {c.speed_rpm:g} rpm, "
+            f"bore {c.bore_diameter_mm:g} mm",
+        ),
+        (
+            "dynamics",
+            f"M {dyn.mass_g:g} g, k {dyn.spring_rate_N_per_m:g} N/m, s_p {dyn.preload_mm:g} "
+            f"mm, guide mu {dyn.guide_friction:g}, d {dyn.guide_width_mm:g} mm, "
+            f"l1 {dyn.overhang_mm:g} mm, l2 {dyn.guide_length_mm:g} mm"
+            + (f", contact mu {dyn.contact_friction:g}" if dyn.contact_friction else ""),
+        ),
+        (
+            "material",
+            f"cam {design.material.grade.value.replace('_', ' ')} (allowable "
+            f"{allowable_contact_stress_MPa(design):g} MPa / safety factor "
+            f"{design.limits.contact_stress_safety_factor:g}), E {m.cam_E_GPa:g} GPa "
+            f"nu {m.cam_nu:g}; follower E {m.follower_E_GPa:g} GPa nu {m.follower_nu:g}",
+        ),
+    ]
+    width = max(len(k) for k, _ in lines)
+    return "\n".join(f"{k.ljust(width)}  {v}" for k, v in lines)
+
+
+def report_text(s: dict, design: Design | None = None) -> str:
+    """A readable table of one summary, under the ``design``'s inputs if given."""
     rows = [
         ("follower", s["follower"]),
         ("valid", "yes" if s["valid"] else "NO"),
@@ -509,7 +562,10 @@ def report_text(s: dict) -> str:
         ),
     ]
     w = max(len(k) for k, _ in rows)
-    lines = [f"{s['design']}", ""] + [f"  {k:<{w}}  {v}" for k, v in rows]
+    lines = [f"{s['design']}", ""]
+    if design is not None:
+        lines += [f"  {line}" for line in inputs_text(design).splitlines()] + [""]
+    lines += [f"  {k:<{w}}  {_NO_VALUE.sub('-', v)}" for k, v in rows]
     for v in s["violations"]:
         lines.append(f"  ! {v['equation']}: {v['message']}")
     return "\n".join(lines)

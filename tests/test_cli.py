@@ -63,6 +63,11 @@ def test_report_from_file_and_text(tmp_path, capsys):
     out = capsys.readouterr()
     assert "double_concave" in out.out and "Eq. 20" in out.out
     assert "not in the file" not in out.err  # a complete file: nothing to say
+    # the inputs head the text report (a review: a value a file left out went unseen),
+    # and a figure that does not apply is "-", not "- mm"
+    assert "r_b 80 mm, width 15 mm, 1200 rpm" in out.out and "E 210 GPa nu 0.29" in out.out
+    assert out.out.index("program   1. rise 100 deg 15 mm cycloidal") < out.out.index("Eq. 20")
+    assert "flat face width needed               -\n" in out.out and "  - mm" not in out.out
 
 
 def test_a_file_leaving_inputs_out_says_which_took_defaults(tmp_path, capsys):
