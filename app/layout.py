@@ -33,6 +33,7 @@ DOWNLOADS = (
     ("json", "Design JSON"),
     ("stl", "Cam STL (mm)"),
     ("dxf", "Profile DXF (mm)"),
+    ("dxf_cut", "Outline DXF, cut only (mm)"),
     ("csv", "Profile CSV"),
     ("series", "Per-angle CSV"),
     ("toolpath", "G-code (cutter path)"),

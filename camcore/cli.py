@@ -163,7 +163,7 @@ def _outputs(args) -> dict[str, str]:
     """The requested output files by export kind, refusing a path used twice or the input."""
     outputs = {k: p for k in EXPORT_FLAGS if (p := getattr(args, f"out_{k}", None))}
     if not outputs:
-        flags = ", ".join(f"--{k}" for k in EXPORT_FLAGS)
+        flags = ", ".join(f"--{k.replace('_', '-')}" for k in EXPORT_FLAGS)
         raise DesignError(f"nothing to export: give one or more of {flags} FILE")
     _refuse_collisions(outputs, args.design)
     return outputs
@@ -183,7 +183,7 @@ def _export(args) -> int:
     return _verdict(a)
 
 
-EXPORT_FLAGS = ("stl", "dxf", "csv", "series", "toolpath", "json", "html", "pdf")
+EXPORT_FLAGS = ("stl", "dxf", "dxf_cut", "csv", "series", "toolpath", "json", "html", "pdf")
 
 
 def _need_pyarrow(what: str) -> None:
@@ -374,7 +374,8 @@ def _parser() -> argparse.ArgumentParser:
     e = sub.add_parser("export", help="write STL / DXF / CSV / design JSON")
     source(e)
     for kind in EXPORT_FLAGS:
-        names = (f"--{kind}", "--angles") if kind == "series" else (f"--{kind}",)  # old name
+        flag = f"--{kind.replace('_', '-')}"
+        names = (flag, "--angles") if kind == "series" else (flag,)  # (its old name)
         e.add_argument(*names, dest=f"out_{kind}", metavar="FILE", help=EXPORTS[kind].help)
     e.add_argument(
         "--tolerance-mm",

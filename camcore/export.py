@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import io
 import math
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -200,10 +201,32 @@ def weld_float32(p: np.ndarray) -> np.ndarray:
         q = q[~drop]
 
 
+def plain(text: str, n: int = 80) -> str:
+    """User text (a design name) for a file format that has no escaping: printable
+    ASCII only, at most ``n`` characters (a newline would end a DXF value early)."""
+    return re.sub(r"[^A-Za-z0-9 _.,:=+\-/()&]", "_", text)[:n]
+
+
+def file_label(a) -> str:
+    """What an exported part is, written into the file (a maker's review: the STL's
+    header was all zeros, the DXF said nothing of its design)."""
+    from . import package_version
+
+    tol = a.design.limits.export_tolerance_mm
+    return (
+        f"camdesigner {package_version()}: cam {plain(a.design.name, 60)}, mm, "
+        f"profile within {tol:g} mm"
+    )
+
+
 def stl_bytes(a) -> bytes:
-    """Binary STL of the cam solid [mm], built from the float32-welded profile."""
+    """Binary STL of the cam solid [mm], built from the float32-welded profile; its
+    80-byte header says what it is (file_label; never "solid...", which some readers
+    take for an ASCII STL)."""
     p = weld_float32(_profile_mm(a))
-    return extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
+    blob = extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
+    header = file_label(a).encode("ascii")[:80].ljust(80, b" ")
+    return header + blob[80:]
 
 
 # the limits whose breach leaves a sharp corner in an exported profile (checks.py)
@@ -228,7 +251,7 @@ def warning(a) -> str | None:
     return text
 
 
-PART_KINDS = ("stl", "dxf", "csv", "toolpath")  # the exports that are the part itself
+PART_KINDS = ("stl", "dxf", "dxf_cut", "csv", "toolpath")  # the exports that are the part itself
 
 
 def mounting_note(a) -> str | None:
@@ -260,15 +283,18 @@ def datum_note(a) -> str:
     return f"THETA=0: follower on this ray {what}{axis}; cam turns CW seen from +Z"
 
 
-def dxf_bytes(a) -> bytes:
-    """DXF (R2010, mm) for CAM/CNC software.
+def dxf_bytes(a, reference: bool = True) -> bytes:
+    """DXF (R2010, mm) for CAM/CNC software; ``reference`` False: PROFILE and BORE only
+    (the outline to cut, for laser, waterjet and plasma software that cuts every layer
+    whatever its plot flag: a maker's review).
 
     Layers: PROFILE (the closed profile, one LWPOLYLINE), BORE (the shaft hole: a true
     circle, or with a keyway its outline of three lines and a true arc, which CAM
     software recognizes as the bore), and two reference layers that are not
     features and are set not to plot: CENTERLINES (a centre cross at the axis, CENTER
     linetype) and DATUM (the angular datum: a radial line on the theta = 0 ray, with a
-    note saying what the follower does there, ``datum_note``; the cam turns clockwise).
+    note saying what the follower does there, ``datum_note``, and one saying what the
+    file is, ``file_label``; the cam turns clockwise).
     """
     import ezdxf
 
@@ -277,20 +303,10 @@ def dxf_bytes(a) -> bytes:
     doc = ezdxf.new("R2010", setup=True)  # setup: the standard linetypes (CENTER)
     doc.units = ezdxf.units.MM
     doc.layers.add("PROFILE", color=7)
-    for name, color, ltype in (("CENTERLINES", 8, "CENTER"), ("DATUM", 1, "DASHED")):
-        layer = doc.layers.add(name, color=color, linetype=ltype)
-        layer.dxf.plot = 0  # reference geometry, not a feature
     msp = doc.modelspace()
     msp.add_lwpolyline(p.tolist(), close=True, dxfattribs={"layer": "PROFILE"})
-    r_min = float(np.hypot(p[:, 0], p[:, 1]).min())
-    c = 0.15 * r_min
-    msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTERLINES"})
-    msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
-    top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
-    msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
-    msp.add_text(datum_note(a), height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
-        (0.02 * r_min, 0.35 * r_min)
-    )
+    if reference:
+        _reference_layers(doc, a, p)
     hole = bore_outline(cam)
     if hole is not None:
         doc.layers.add("BORE", color=3)
@@ -311,6 +327,25 @@ def dxf_bytes(a) -> bytes:
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue().encode("utf-8")
+
+
+def _reference_layers(doc, a, p: np.ndarray) -> None:
+    """dxf_bytes' CENTERLINES and DATUM layers, set not to plot: the centre cross, the
+    theta = 0 ray with its note, and what the file is."""
+    for name, color, ltype in (("CENTERLINES", 8, "CENTER"), ("DATUM", 1, "DASHED")):
+        layer = doc.layers.add(name, color=color, linetype=ltype)
+        layer.dxf.plot = 0  # reference geometry, not a feature
+    msp = doc.modelspace()
+    r_min = float(np.hypot(p[:, 0], p[:, 1]).min())
+    c = 0.15 * r_min
+    msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTERLINES"})
+    msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
+    top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
+    msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
+    for text, y in ((datum_note(a), 0.35), (file_label(a), 0.29)):
+        msp.add_text(text, height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
+            (0.02 * r_min, y * r_min)
+        )
 
 
 _PART = {k: v.replace(" ", "_") for k, v in SEGMENT_NAMES.items()}  # CSV: no spaces
@@ -398,6 +433,11 @@ class ExportKind:
 EXPORTS: dict[str, ExportKind] = {
     "stl": ExportKind(".stl", "STL of the cam solid (mm)", stl_bytes),
     "dxf": ExportKind(".dxf", "DXF of the profile (mm)", dxf_bytes),
+    "dxf_cut": ExportKind(
+        "_cut.dxf",
+        "DXF of the outline to cut only (mm; profile and bore, no reference layers)",
+        lambda a: dxf_bytes(a, reference=False),
+    ),
     "csv": ExportKind(
         "_profile.csv", "CSV of the profile vertices", lambda a: csv_text(a).encode()
     ),

@@ -43,6 +43,30 @@ def test_bore_in_dxf():
     assert len(bores) == 1 and bores[0].dxf.radius == pytest.approx(15.0)
 
 
+def test_cut_only_dxf_and_what_the_files_say_they_are():
+    """A maker's review: laser and waterjet software cuts every layer whatever its plot
+    flag (the datum line and note would be cut), and the STL's header was all zeros.
+    The cut-only DXF has PROFILE and BORE alone, the same outline as the full one; the
+    STL header and a DATUM note say the program, the design and the tolerance; the
+    design's name, user text, cannot break out of them."""
+    data = _keyed().model_dump()
+    data["name"] = 'evil\n  0\nSECTION"(x)'
+    a = analyze(Design.model_validate(data), verify=False)
+    full = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
+    cut = ezdxf.read(io.StringIO(export.EXPORTS["dxf_cut"].write(a).decode()))
+    assert {e.dxf.layer for e in cut.modelspace()} == {"PROFILE", "BORE"}
+    for layer in ("PROFILE", "BORE"):
+        (f,) = [e for e in full.modelspace() if e.dxf.layer == layer]
+        (c,) = [e for e in cut.modelspace() if e.dxf.layer == layer]
+        assert list(f.get_points()) == list(c.get_points())
+    notes = [e.dxf.text for e in full.modelspace().query("TEXT")]
+    assert any("cam evil_  0_SECTION_(x)" in t and "within 0.001 mm" in t for t in notes)
+    stl = export.stl_bytes(a)
+    assert stl[:80].startswith(b"camdesigner ") and b"cam evil_" in stl[:80]
+    mesh = trimesh.load(io.BytesIO(stl), file_type="stl")
+    assert mesh.is_watertight
+
+
 def test_bore_larger_than_base_circle_is_rejected():
     with pytest.raises(ValidationError, match="bore_diameter_mm"):
         with_bore(160.0)
@@ -181,7 +205,8 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
         data["motion"] = {"segments": programs[segments]}
     a = analyze(Design.model_validate(data), verify=False)
     doc = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
-    (text,) = [e.dxf.text for e in doc.modelspace() if e.dxftype() == "TEXT"]
+    text, label = [e.dxf.text for e in doc.modelspace() if e.dxftype() == "TEXT"]
+    assert label.startswith("camdesigner ")  # the file says what it is
     lo, hi = np.array(doc.header["$EXTMIN"])[:2], np.array(doc.header["$EXTMAX"])[:2]
     P = a.profile.points * 1e3  # the extents hold the cam (viewers zoom to them)
     assert np.all(lo <= P.min(axis=0) + 1e-6) and np.all(hi >= P.max(axis=0) - 1e-6)
