@@ -305,6 +305,7 @@ def test_preset_and_downloads(tab, downloads):
     assert downloads[-1][1].decode().startswith("{")
     for kind, ext in (
         ("dxf", ".dxf"),
+        ("dxf_cut", "_cut.dxf"),
         ("csv", "_profile.csv"),
         ("series", "_series.csv"),
         ("toolpath", ".nc"),
