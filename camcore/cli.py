@@ -45,6 +45,10 @@ def _apply_set(data: dict, assignment: str) -> None:
         raise DesignError(
             f"--set {assignment!r}: expected FIELD.PATH=VALUE, e.g. cam.base_radius_mm=90"
         )
+    if raw.strip().lower().lstrip("+-") in ("nan", "inf", "infinity"):  # any spelling
+        raise DesignError(
+            f"{path.strip()}: {raw.strip()} is not a number a design may hold (it must be finite)"
+        )
     try:
         value = json.loads(raw)
     except ValueError:

@@ -934,8 +934,14 @@ def format_validation_error(exc) -> str:
         head, sep, tail = msg.partition(": ")
         if loc and sep and head.replace(".", "").replace("_", "").isalnum():
             loc, msg = f"{loc}.{head}", tail  # a validator naming a field inside loc
+        elif loc and _scalar(err.get("input")):  # the value refused, as the user wrote it
+            loc = f"{loc} = {json.dumps(err['input'])[:40]}"
         parts.append(f"{loc}: {msg}" if loc else msg)
     return "; ".join(parts)
+
+
+def _scalar(x) -> bool:
+    return isinstance(x, str | int | float | bool)
 
 
 def defaulted_fields(text: str | bytes, design: Design) -> list[str]:

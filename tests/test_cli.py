@@ -198,8 +198,16 @@ def test_invalid_value_names_field(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "camcore.cli", "report", str(p)], capture_output=True, text=True
     )
-    assert proc.returncode == 2 and "cam.base_radius_mm" in proc.stderr
+    assert proc.returncode == 2 and "cam.base_radius_mm = -5:" in proc.stderr  # the value too
     assert "Traceback" not in proc.stderr
+
+
+@pytest.mark.parametrize("raw", ["nan", "NaN", "-inf", "Infinity", " inf"])
+def test_every_spelling_of_a_non_number_is_refused_alike(raw, capsys):
+    """A review: '=nan' said 'Input should be a valid number', '=NaN' said what is
+    wrong; every spelling now says it."""
+    assert main(["report", "--preset", "paper_example", "--set", f"cam.width_mm={raw}"]) == 2
+    assert "is not a number a design may hold" in capsys.readouterr().err
 
 
 def test_presets_all_load_and_verify():

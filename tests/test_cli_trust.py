@@ -91,7 +91,7 @@ def test_one_unwritable_output_leaves_every_file_as_it_was(tmp_path, capsys):
     assert stl.read_bytes() == b"the old cam's STL" and csv.read_bytes() == b"the old cam's profile"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["cam.csv", "cam.stl"]  # no temp file
     (tmp_path / "typo").mkdir()
-    assert cli.main(args) == 0 and stl.read_bytes().startswith(b"\0" * 80)
+    assert cli.main(args) == 0 and stl.read_bytes().startswith(b"camdesigner ")
 
 
 def test_a_rename_that_fails_midway_gives_the_replaced_files_back(tmp_path, monkeypatch):
