@@ -27,24 +27,29 @@ def table_markdown(results: dict, design: Design) -> str:
 
     lines = [
         "| Follower | F_N high dwell [N] (a double: while both faces touch) | paper's Table 1 [N] "
-        "| F_N max cycle [N] | σ_H max [MPa] "
+        "| F_N max cycle [N] | σ_H max [MPa] | φ max [°] | ρ convex min [mm] "
         "| wear max [µm/10⁶ cycles] | limits |",
-        "|---|---|---|---|---|---|---|",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     notes = []
     for k, a in results.items():
         if isinstance(a, str):
-            lines.append(f"| {k.label} | – | {f(table1[k], 3)} | – | – | – | not computable |")
+            lines.append(
+                f"| {k.label} | – | {f(table1[k], 3)} | – | – | – | – | – | not computable |"
+            )
             notes.append(f"- *{k.label}*: {esc(a)}")
             continue
         s = a["summary"]
         ok = "✔" if s["valid"] else f"⚠ {len(s['violations'])}"
         fn = s["contact_force_max_N"]
         dwell = fn["high_dwell_two_contact"] if k.is_double else fn["high_dwell"]
+        phis = [v for v in s["pressure_angle_max_deg"].values() if v is not None]
+        phi = max(phis) if phis else None
         lines.append(
             f"| {k.label} | {f(dwell, 3)} | "
             f"{f(table1[k], 3)} | {f(s['contact_force_max_N']['cycle'], 2)} | "
-            f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | "
+            f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | {f(phi, 2)} | "
+            f"{f(s['radius_of_curvature_mm']['convex_min'], 1)} | "
             f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |"
         )
     text = "\n".join(lines)

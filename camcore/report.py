@@ -588,6 +588,10 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
                 "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
                 "paper_table1_N": paper_table1_N(design, kind),
                 "FN_cycle_N": s["contact_force_max_N"]["cycle"],
+                "pressure_angle_rise_deg": s["pressure_angle_max_deg"]["rise"],
+                "pressure_angle_fall_deg": s["pressure_angle_max_deg"]["fall"],
+                "rho_convex_min_mm": s["radius_of_curvature_mm"]["convex_min"],
+                "rho_concave_min_mm": s["radius_of_curvature_mm"]["concave_min"],
                 "F1_max_N": s["guide_force_max_N"]["F1"],
                 "F2_max_N": s["guide_force_max_N"]["F2"],
                 "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
@@ -637,6 +641,21 @@ def compare_text(rows: list[dict]) -> str:
             "(Table 1: the paper's figures for its own example, shown for the paper_example "
             "design only: this one differs from it)"
         )
+    # the geometry, where the followers differ most (a designer's review: not shown)
+    head3 = ("follower", "phi max rise", "phi max fall", "rho convex min", "rho concave min")
+    keys3 = (
+        "pressure_angle_rise_deg",
+        "pressure_angle_fall_deg",
+        "rho_convex_min_mm",
+        "rho_concave_min_mm",
+    )
+    lines += [
+        "",
+        "  ".join(f"{h:>14}" for h in head3),
+        "  ".join(f"{u:>14}" for u in ("", "deg", "deg", "mm", "mm")),
+    ]
+    for r in rows:
+        lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 2):>14}" for k in keys3))
     # the running machine: wear (the paper's claim, made measurable), life, spring, shaft
     head2 = ("follower", "wear max", "pitting life", "k min", "jump speed", "T drive")
     lines += [

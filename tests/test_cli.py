@@ -126,6 +126,15 @@ def test_compare_table(capsys):
     main(["compare", "--preset", "paper_example", "--set", "cam.base_radius_mm=120"])
     assert "shown for the paper_example design only" in capsys.readouterr().out
     same = "cam.width_mm=20"  # width, material, limits: Table 1's F_N does not depend on them
+    # the geometry the followers differ in most, as each one's own report gives it
+    one = run_json(capsys, "report", "--preset", "paper_example", "--json")
+    (dc,) = [
+        r
+        for r in run_json(capsys, "compare", "--preset", "paper_example", "--json")
+        if r["follower"] == "double_concave"
+    ]
+    assert dc["pressure_angle_rise_deg"] == one["pressure_angle_max_deg"]["rise"]
+    assert dc["rho_convex_min_mm"] == one["radius_of_curvature_mm"]["convex_min"]
     kept = run_json(capsys, "compare", "--preset", "paper_example", "--set", same, "--json")
     assert [r["paper_table1_N"] for r in kept] == [133.496, 67.297, 129.161, 67.297]
     assert rows[2]["stress_max_MPa"] is None  # a knife edge has no Hertz stress
