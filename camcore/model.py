@@ -435,7 +435,7 @@ class Follower(_Part):
         return self.offset_mm if self.kind.is_double else 0.0
 
 
-MAX_PASSES = 100  # of the toolpath export: its file grows with them
+MAX_PASSES = 100  # of the toolpath export (camcore.toolpath): its file grows with them
 
 
 class Cam(_Part):
@@ -502,17 +502,6 @@ class Cam(_Part):
             return 1
         ratio = min(self.cut_depth_mm / self.pass_depth_mm, 1e9)  # (a tiny depth: inf)
         return max(1, math.ceil(ratio - 1e-9))
-
-    @model_validator(mode="after")
-    def _few_enough_passes(self) -> Cam:
-        if self.passes > MAX_PASSES:
-            many = f"{self.passes} passes, " if self.passes < 1e9 else ""  # (1e9: capped)
-            raise ValueError(
-                f"pass_depth_mm = {self.pass_depth_mm:g} mm would cut the "
-                f"{self.cut_depth_mm:g} mm in {many}more than {MAX_PASSES} passes: "
-                f"use at least {math.ceil(self.cut_depth_mm / MAX_PASSES * 1000) / 1000:g} mm"
-            )
-        return self
 
     @model_validator(mode="after")
     def _bore_inside_base_circle(self) -> Cam:

@@ -9,7 +9,7 @@ import re
 import numpy as np
 import pytest
 
-from camcore import toolpath
+from camcore import export, toolpath
 from camcore.analysis import analyze
 from camcore.export import ExportError
 from camcore.model import Design, load_preset
@@ -202,19 +202,24 @@ def test_gcode_cuts_in_equal_passes_through_the_breakthrough(width, pass_depth, 
 
 
 def test_too_many_passes_is_refused_with_the_pass_depth_that_fits():
+    """A rule of the G-code export, not of the design: the design is analysed and its
+    other files made (a review: the report refused a design for its pass depth)."""
     data = PAPER.model_dump()
     data["cam"].update(width_mm=15.0, pass_depth_mm=0.1)  # 150 passes
+    a = analyze(Design.model_validate(data), verify=False)
+    assert a.valid and export.stl_bytes(a)
     with pytest.raises(
-        ValueError, match=r"in 150 passes, more than 100 passes: use at least 0\.15 mm"
+        ExportError, match=r"in 150 passes, more than 100 passes: use at least 0\.15 mm"
     ):
-        Design.model_validate(data)
+        toolpath.gcode(a)
     data["cam"]["pass_depth_mm"] = 0.15  # 15 / 0.15 = 100 up to rounding: allowed
-    assert Design.model_validate(data).cam.passes == 100
+    a = analyze(Design.model_validate(data), verify=False)
+    assert a.design.cam.passes == 100 and "(100 passes of " in toolpath.gcode(a)
     data["cam"]["pass_depth_mm"] = 1e-308  # the ratio overflows: still a clear refusal
     with pytest.raises(
-        ValueError, match=r"cut the 15 mm in more than 100 passes: use at least 0\.15"
+        ExportError, match=r"cut the 15 mm in more than 100 passes: use at least 0\.15"
     ):
-        Design.model_validate(data)
+        toolpath.gcode(analyze(Design.model_validate(data), verify=False))
 
 
 def test_a_self_crossing_profile_is_refused_as_such_not_as_a_gouge():
