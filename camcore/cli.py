@@ -56,7 +56,9 @@ def _apply_set(data: dict, assignment: str) -> None:
     set_field(data, path.strip(), value, "--set ")
 
 
-def _design(args) -> Design:
+def _design(args, unused_note: bool = True) -> Design:
+    """The design the arguments name: a file or a preset, --follower, --set (with a
+    note for a follower field the design's kind does not use, if ``unused_note``)."""
     if args.preset and args.design:
         raise DesignError("give a design file or --preset, not both")
     if args.preset:
@@ -83,7 +85,22 @@ def _design(args) -> Design:
         before = design
         design = design_from_json(json.dumps(data))  # strict: "--set x=true" is refused
         design = name_follows_kind(design, before.follower.kind, before.name)
+        if unused_note:
+            _note_unused(design, sets)
     return design
+
+
+def _note_unused(design: Design, sets: list[str]) -> None:
+    """Say which ``--set`` follower fields the design's follower does not use (a
+    review: e_s set on a double follower changed nothing, without a word)."""
+    kind = design.follower.kind
+    for assignment in sets:
+        block, _, name = assignment.partition("=")[0].strip().partition(".")
+        if block == "follower" and not kind.uses(name):
+            print(
+                f"note: --set follower.{name}: a {kind.label} follower does not use it",
+                file=sys.stderr,
+            )
 
 
 def _report(args) -> int:
@@ -155,7 +172,7 @@ def _compare(args) -> int:
                 f"choose from {', '.join(k.value for k in FollowerKind)}"
             )
         kinds = tuple(FollowerKind(n) for n in dict.fromkeys(names))
-    rows = compare_rows(_design(args), kinds)
+    rows = compare_rows(_design(args, unused_note=False), kinds)  # (every kind's fields)
     print(json.dumps(rows, indent=2) if args.json else compare_text(rows))
     for r in rows:
         if r["breaks"]:
@@ -170,6 +187,15 @@ def _outputs(args) -> dict[str, str]:
         flags = ", ".join(f"--{k.replace('_', '-')}" for k in EXPORT_FLAGS)
         raise DesignError(f"nothing to export: give one or more of {flags} FILE")
     _refuse_collisions(outputs, args.design)
+    from .export import EXPORTS
+
+    for kind, path in outputs.items():  # (a review wrote an STL into x.dxf unawares)
+        suffix = EXPORTS[kind].suffix.rpartition(".")[2]
+        if kind != "toolpath" and not path.lower().endswith("." + suffix):  # (G-code: many)
+            flag = kind.replace("_", "-")
+            print(
+                f"note: --{flag} {path}: written as .{suffix}, whatever its name", file=sys.stderr
+            )
     return outputs
 
 

@@ -288,3 +288,16 @@ def test_round_off_does_not_show_in_the_text_report(capsys):
     power = next(ln for ln in capsys.readouterr().out.splitlines() if "power max" in ln)
     assert power.endswith("/ 0.00 W")
     assert _where(((0.0, 0.0), (50.1, 234.9))) == "theta = 0, 50.1-234.9 deg"
+
+
+def test_notes_for_a_set_that_changes_nothing_and_a_misnamed_file(tmp_path, capsys):
+    """A review: e_s set on a double follower changed nothing, and an STL written to
+    x.dxf, both without a word."""
+    out = tmp_path / "x.dxf"
+    args = ["export", "--preset", "paper_example", "--stl", str(out)]
+    assert main([*args, "--set", "follower.single_offset_mm=10"]) == 0
+    err = capsys.readouterr().err
+    assert "--set follower.single_offset_mm: a double concave follower does not use it" in err
+    assert f"--stl {out}: written as .stl, whatever its name" in err
+    assert main(["export", "--preset", "paper_example", "--stl", str(tmp_path / "c.STL")]) == 0
+    assert "whatever its name" not in capsys.readouterr().err
