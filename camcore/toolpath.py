@@ -264,7 +264,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
         *_bore_comments(cam),
         *_deep_pass_comments(depths[0], to_mm(D)),
-        _comment("check them, and set the spindle speed: M3 carries no S word"),
+        _comment("feeds are defaults: check them, and set the spindle speed: M3 has no S word"),
         *_warning_comments(a),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",

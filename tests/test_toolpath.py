@@ -127,7 +127,7 @@ def test_gcode_header_says_what_the_operator_must_set():
     text = gcode(analyze(load_preset("paper_example"), verify=False))
     head = [line for line in text.splitlines() if line.startswith("(")]
     assert "(one pass, full depth, feed 200 plunge 50 mm/min)" in head
-    assert "(check them, and set the spindle speed: M3 carries no S word)" in head
+    assert "(feeds are defaults: check them, and set the spindle speed: M3 has no S word)" in head
 
 
 @pytest.mark.parametrize("tol_mm", [1e-3, 1e-4])
