@@ -279,8 +279,12 @@ def datum_note(a) -> str:
         what = f"in a dwell at S={to_mm(first.S0) + 0.0:g} mm" + (  # (no -0)
             f", the rise starts at THETA={to_deg(rise.start):g} deg" if rise else ""
         )
-    axis = "" if a.geo.stem_x == 0 else f"; follower axis at X={to_mm(a.geo.stem_x):g} mm"
-    return f"THETA=0: follower on this ray {what}{axis}; cam turns CW seen from +Z"
+    where = (  # an offset follower is not on the ray: its stroke is parallel to it
+        "follower on this ray"
+        if a.geo.stem_x == 0
+        else f"follower stroke parallel to this ray, axis at X={to_mm(a.geo.stem_x):g} mm,"
+    )
+    return f"THETA=0: {where} {what}; cam turns CW seen from +Z"
 
 
 def dxf_bytes(a, reference: bool = True) -> bytes:

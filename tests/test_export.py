@@ -173,10 +173,15 @@ def test_keyway_in_dxf_and_datum_layers():
 @pytest.mark.parametrize(
     "segments, offset, says",
     [
-        (None, 0.0, "as the rise starts"),
-        ("dwell first", 0.0, "in a dwell at S=0 mm, the rise starts at THETA=60 deg"),
-        ("fall first", 0.0, "as the fall starts"),
-        (None, 6.0, "as the rise starts; follower axis at X=-6 mm"),
+        (None, 0.0, "follower on this ray as the rise starts"),
+        (
+            "dwell first",
+            0.0,
+            "follower on this ray in a dwell at S=0 mm, the rise starts at THETA=60 deg",
+        ),
+        ("fall first", 0.0, "follower on this ray as the fall starts"),
+        # (a review read "on this ray ... axis at X=-6 mm" as a contradiction)
+        (None, 6.0, "follower stroke parallel to this ray, axis at X=-6 mm, as the rise starts"),
     ],
 )
 def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset, says):
@@ -211,7 +216,7 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
     P = a.profile.points * 1e3  # the extents hold the cam (viewers zoom to them)
     assert np.all(lo <= P.min(axis=0) + 1e-6) and np.all(hi >= P.max(axis=0) - 1e-6)
     assert np.all(hi - lo < 2 * np.ptp(P, axis=0))
-    assert text == f"THETA=0: follower on this ray {says}; cam turns CW seen from +Z"
+    assert text == f"THETA=0: {says}; cam turns CW seen from +Z"
     grows = a.theta[np.argmax(a.prog.V > 1e-9)]  # where the rise starts
     if "dwell" in says:
         assert a.prog.S[0] == 0.0 and math.degrees(grows) == pytest.approx(60.0, abs=0.2)
