@@ -377,14 +377,20 @@ def _margin_text(s: dict) -> str:
 def machine_rows(s: dict) -> list[tuple[str, str]]:
     """The running machine's figures of a summary as (label, value) rows: the text
     report and the app's key numbers show the same lines."""
+    spring = (
+        f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
+        f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
+        f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
+        f"{s['spring_proposal']['safety_factor']:g})"
+    )
+    if s["spring_rate_min_N_per_m"] == 0.0:  # (a review read "0.0 / 0.0" as an omission)
+        spring = (
+            "none needed: nothing pulls the follower off the cam"
+            if s["jump_speed_rpm"] is None
+            else "none needed at this speed: the follower's weight keeps it on the cam"
+        )
     return [
-        (
-            "spring rate min / proposed",
-            f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
-            f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
-            f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
-            f"{s['spring_proposal']['safety_factor']:g})",
-        ),
+        ("spring rate min / proposed", spring),
         ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
         (
             "jump speed",

@@ -301,3 +301,13 @@ def test_notes_for_a_set_that_changes_nothing_and_a_misnamed_file(tmp_path, caps
     assert f"--stl {out}: written as .stl, whatever its name" in err
     assert main(["export", "--preset", "paper_example", "--stl", str(tmp_path / "c.STL")]) == 0
     assert "whatever its name" not in capsys.readouterr().err
+
+
+def test_a_cam_that_needs_no_spring_says_so(capsys):
+    """A review read 'spring rate min / proposed 0.0 / 0.0 N/m (safety factor 1.5)' as
+    a figure left out; the weight keeps this slow cam's follower on it."""
+    s = run_json(capsys, "report", "--preset", "classroom_harmonic", "--json")
+    assert s["spring_rate_min_N_per_m"] == 0.0 and s["jump_speed_rpm"] > 0
+    assert main(["report", "--preset", "classroom_harmonic"]) == 0
+    out = capsys.readouterr().out
+    assert "none needed at this speed: the follower's weight keeps it on the cam" in out
