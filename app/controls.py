@@ -271,7 +271,8 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "dropdown",
                 options=GRADES,
                 labels=GRADE_LABELS,
-                hint="sets the default allowable contact stress (in brackets)",
+                hint="sets the default allowable contact stress (in brackets); the cam's "
+                "E1 and ν1 below are yours to set for it",
             ),
             Spec(
                 "limits.allowable_contact_stress_MPa",

@@ -620,7 +620,8 @@ class Material(_Part):
 
     grade: MaterialGrade = Field(
         MaterialGrade.through_hardened_steel,
-        description="cam surface; sets the default allowable contact stress",
+        description="cam surface; sets the default allowable contact stress (not E or nu: "
+        "set cam_E_GPa and cam_nu for the material)",
     )
 
     cam_E_GPa: float = Field(
