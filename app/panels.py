@@ -19,7 +19,7 @@ import numpy as np
 
 from camcore.model import Design, design_to_json
 from camcore.motion import segment_word
-from camcore.report import machine_rows
+from camcore.report import jam_note, machine_rows
 from camcore.units import to_mm
 
 from .controls import LABEL_OF_LAW
@@ -291,12 +291,16 @@ def headline_html(s: dict) -> str:
     rho = s["radius_of_curvature_mm"]
     concave = "" if rho["concave_min"] is None else f", concave ≥ {mm(rho['concave_min'])}"
     jump, stress = s["jump_speed_rpm"], s["contact_stress_max_MPa"]["cycle"]
+    if stress is None:  # (a knife edge: no Hertz stress)
+        sigma = "σ<sub>H</sub> –"
+    elif jam_note(s) is not None:  # toward a jam the stress has no bound
+        sigma = "σ<sub>H</sub> unbounded: the guide jams"
+    else:
+        sigma = f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa"
     items = (
         f"φ ≤ {max(angles):.1f}°" if angles else "φ –",
         f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
-        "σ<sub>H</sub> –"  # (a knife edge: no Hertz stress)
-        if stress is None
-        else f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa",
+        sigma,
         "no jump" if jump is None else f"jumps at {jump:.0f} rpm",
     )
     # an item breaks only between items (a review: "rpm" alone on a second line)
@@ -366,7 +370,9 @@ def summary_markdown(s: dict) -> str:
         rows.append(
             ("Hub wall (thinnest, bore to profile)", f"{f(s['profile']['hub_wall_mm'], 2)} mm")
         )
-    return "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
+    table = "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
+    jam = jam_note(s)  # (numbers and our words only: nothing a user typed)
+    return table if jam is None else f"**⚠ {jam[0].upper()}{jam[1:]}.**\n\n{table}"
 
 
 # --- where the cam is ----------------------------------------------------------------

@@ -475,6 +475,23 @@ def inputs_text(design) -> str:
     return "\n".join(f"{k.ljust(width)}  {v}" for k, v in lines)
 
 
+def jam_note(s: dict) -> str | None:
+    """Where the guide jams (self-locking, Eqs. 33-41 have no mode with F1, F2 >= 0),
+    what that makes of the force figures, or None. Toward a jam the forces grow
+    without bound, so the cycle's largest F_N, F1, F2, stress, torque and power are the
+    samples' largest, set by the grid, not by the cam (a review read '8690819489.753 N'
+    as a figure)."""
+    jam = next((v for v in s["violations"] if v["code"] == "guide_jam"), None)
+    if jam is None:
+        return None
+    where = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in jam["ranges_deg"][:4])
+    return (
+        f"the guide jams (self-locking) at theta = {where} deg: toward it the forces grow "
+        "without bound, so the cycle's force, stress, torque and power maxima are the "
+        "samples' largest, not the cam's"
+    )
+
+
 def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
     rows = [
@@ -572,6 +589,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
     if design is not None:
         lines += [f"  {line}" for line in inputs_text(design).splitlines()] + [""]
     lines += [f"  {k:<{w}}  {_NO_VALUE.sub('-', v)}" for k, v in rows]
+    if (jam := jam_note(s)) is not None:
+        lines.insert(lines.index(f"  {'valid':<{w}}  NO") + 1, f"  !! {jam}")
     for v in s["violations"]:
         lines.append(f"  ! {v['equation']}: {v['message']}")
     return "\n".join(lines)

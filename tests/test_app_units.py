@@ -537,6 +537,30 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     assert status.index("All design limits met") < status.index("cam-headline")
 
 
+def test_a_jammed_guide_says_its_force_figures_are_unbounded():
+    """A review read '8690819489.753 N' and '461062293.8 MPa' as figures: toward a jam
+    (self-locking guide) the forces have no bound, and the report, the key numbers and
+    the headline say so; a design without a jam says nothing of it."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.report import jam_note, report_text, summary
+
+    d = load_preset("paper_example").with_kind("single_roller")
+    data = d.model_dump()
+    data["motion"]["segments"][0]["lift_mm"] = data["motion"]["segments"][2]["lift_mm"] = 1000.0
+    s = summary(analyze(type(d).model_validate(data), verify=False))
+    assert "guide_jam" in {v["code"] for v in s["violations"]}
+    note = jam_note(s)
+    assert note is not None and "theta = 33.2-77.9 deg" in note and "without bound" in note
+    assert f"  !! {note}" in report_text(s)
+    assert "guide jams (self-locking) at theta = 33.2-77.9 deg" in panels.summary_markdown(s)
+    assert "σ<sub>H</sub> unbounded: the guide jams" in panels.headline_html(s).replace(
+        "\u00a0", " "
+    )
+    ok = summary(analyze(load_preset("paper_example"), verify=False))
+    assert jam_note(ok) is None and "jams" not in panels.summary_markdown(ok)
+
+
 def test_a_full_table_is_a_program_the_browser_keeps():
     """The kept program's size bound holds a full table written with full-precision
     numbers (the Explore setup's 4,096 characters had refused 48 segments)."""
