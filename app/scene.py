@@ -16,7 +16,7 @@ import trimesh
 
 from camcore import profile, wear
 from camcore.checks import violation_mask
-from camcore.export import ExportError, cam_mesh
+from camcore.export import ExportError, cam_mesh, thin_evenly
 from camcore.units import from_mm
 
 CAM_RGB = (150, 165, 185)
@@ -197,7 +197,7 @@ def _circle(r: float, n: int = 180) -> np.ndarray:
 
 def _display_points(a) -> np.ndarray:
     """The profile thinned to about DISPLAY_POINTS vertices for drawing."""
-    return a.profile.points[:: -(-a.profile.points.shape[0] // DISPLAY_POINTS)]
+    return a.profile.points[thin_evenly(a.profile.points, DISPLAY_POINTS)]
 
 
 LABEL_SHARE = 0.025  # a label's height in a preset view: of the view's height

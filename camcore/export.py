@@ -38,7 +38,8 @@ def require_star_shaped(a) -> None:
     """ExportError unless the profile is star-shaped about the axis: no part, solid or
     cutter path, can be made of a profile that crosses itself."""
     if not a.profile.is_star_shaped():
-        broken = ", ".join(f"{v.code} ({v.equation})" for v in a.violations) or "none found"
+        named = dict.fromkeys(f"{v.code} ({v.equation})" for v in a.violations)  # once each
+        broken = ", ".join(named) or "none found"
         raise ExportError(
             "the profile is not star-shaped about the cam axis (it crosses itself): no "
             f"part can be made of it; fix these first: {broken}"
@@ -50,6 +51,20 @@ def _profile_mm(a) -> np.ndarray:
     return a.profile.points * 1e3
 
 
+def thin_evenly(points: np.ndarray, n: int) -> np.ndarray:
+    """Indices of about ``n`` of a closed polyline's ``points`` (M, 2), evenly spaced
+    along its length, the first kept: for drawing. (Every k-th vertex had starved the
+    long stretches of a profile refined near a velocity jump: a teacher's review saw
+    a constant-velocity cam's 130 deg fall drawn as two chords.)"""
+    m = points.shape[0]
+    if m <= n:
+        return np.arange(m)
+    step = np.hypot(*np.diff(points, axis=0, append=points[:1]).T)
+    s = np.concatenate([[0.0], np.cumsum(step)[:-1]])  # arc length at each vertex
+    idx = np.searchsorted(s, np.linspace(0.0, s[-1] + step[-1], n, endpoint=False))
+    return np.unique(np.minimum(idx, m - 1))
+
+
 def cam_mesh(a, max_points: int | None = None):
     """trimesh.Trimesh of the cam: profile extruded by the width, in mm, with the
     design's shaft bore and keyway (if any) through it.
@@ -58,8 +73,8 @@ def cam_mesh(a, max_points: int | None = None):
     every vertex).
     """
     p = _profile_mm(a)
-    if max_points is not None and p.shape[0] > max_points:
-        p = p[:: -(-p.shape[0] // max_points)]
+    if max_points is not None:
+        p = p[thin_evenly(p, max_points)]
     return extrude(p, a.design.cam.width_mm, _checked_bore(a, p))
 
 

@@ -295,3 +295,29 @@ def test_a_name_with_dollars_makes_a_pdf(name):
     d = load_preset("paper_example").model_copy(update={"name": name})
     data = export.EXPORTS["pdf"].write(analyze(d, verify=False))
     assert data.startswith(b"%PDF") and len(data) > 10_000
+
+
+def test_the_drawn_profile_is_thinned_along_its_length():
+    """A teacher's review: a constant-velocity rise refines the profile near its
+    velocity jumps (tens of thousands of vertices there), and every k-th vertex left
+    the 130 deg fall two chords, with the contact point off the drawn cam. The drawn
+    (and displayed mesh's) vertices are even along the length: no gap much above the
+    mean, every stretch of the cam drawn."""
+    data = load_preset("paper_example").model_dump()
+    data["motion"]["segments"][0]["law"] = "constant_velocity"
+    a = analyze(Design.model_validate(data), verify=False)
+    p = a.profile.points
+    n = 1200
+    idx = export.thin_evenly(p, n)
+    q = p[idx]
+    gaps = np.hypot(*np.diff(q, axis=0, append=q[:1]).T)
+    edges = np.hypot(*np.diff(p, axis=0, append=p[:1]).T)
+    mean = edges.sum() / n
+    # (where the profile's own vertices are sparser than that, each is kept)
+    assert p.shape[0] > 10 * n and len(idx) > n / 2
+    assert gaps.max() < max(2.5 * mean, 1.01 * edges.max())
+    assert np.all(np.diff(idx) > 0) and idx[0] == 0
+    # the old stride left a gap of a fifth of the cam's perimeter
+    stride = p[:: -(-p.shape[0] // n)]
+    assert np.hypot(*np.diff(stride, axis=0).T).max() > 20 * mean
+    assert export.thin_evenly(p[:10], n).tolist() == list(range(10))
