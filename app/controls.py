@@ -294,6 +294,13 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
             Spec("material.follower_E_GPa", "Follower E2 [GPa]", "number", step=1),
             Spec("material.follower_nu", "Follower ν2", "number", step=0.01),
             Spec("limits.max_pressure_angle_deg", "Max pressure angle [°]", "number", step=1),
+            Spec(
+                "limits.require_continuous_acceleration",
+                "Require continuous acceleration",
+                "checkbox",
+                hint="off: accept jumps in the acceleration (an infinite jerk), e.g. simple "
+                "harmonic next to a dwell; the status then says where",
+            ),
             Spec("limits.resolution_deg", "Resolution [°]", "number", step=0.05),
             Spec(
                 "limits.min_hub_wall_mm",

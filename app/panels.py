@@ -109,6 +109,7 @@ def status_html(
     file_error: str | None = None,
     cutter_note: str | None = None,
     headline: str = "",
+    accepted: str | None = None,
 ) -> str:
     """The always-visible panel (STATUS_CSS): input errors (red), limit violations
     (amber), or OK; a file that could not be opened (``file_error``) above them, the
@@ -119,6 +120,8 @@ def status_html(
     refusal) until the input is fixed. A file that could not be opened changes nothing:
     the design on screen is still the one the controls describe. ``cutter_note``: the
     design's cutter does not fit its concave stretches (the G-code download refuses).
+    ``accepted``: what the design's limits accept that the checks would refuse
+    (camcore.checks.accepted_jumps), under the verdict.
     """
     file_box = (
         _BOX.format(
@@ -133,7 +136,7 @@ def status_html(
     boxes = _status_boxes(error, violations, lift_error, verified, mesh_error)
     return (
         f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}{_cutter_box(cutter_note)}"
-        f"{headline}</div>"
+        f"{_accepted_line(accepted)}{headline}</div>"
     )
 
 
@@ -248,6 +251,18 @@ def _mesh_box(mesh_error: str | None) -> str:
     return _BOX.format(
         bg="#fde2e2", fg="#d62728", body=f"<b>No solid:</b> {html.escape(mesh_error)}"
     )
+
+
+def _accepted_line(note: str | None) -> str:
+    """One grey line: what the design accepts that the checks would refuse, and the
+    control that says so."""
+    if not note:
+        return ""
+    text = html.escape(note).replace(
+        "limits.require_continuous_acceleration is off",
+        "<i>Require continuous acceleration</i> is off (Material &amp; limits)",
+    )
+    return f"<div style='font-size:0.8em;color:#555;margin:2px 12px 0 2px'>ℹ {text}</div>"
 
 
 def _cutter_box(note: str | None) -> str:

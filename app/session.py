@@ -19,7 +19,7 @@ import logging
 import math
 import threading
 
-from camcore import export
+from camcore import checks, export
 from camcore.analysis import Analysis
 from camcore.model import (
     MAX_DESIGN_BYTES,
@@ -397,6 +397,7 @@ class Session:
             self.file_error,
             self.cutter_note,
             self.headline,
+            checks.accepted_jumps(a.design),
         )
 
     def _show_summary(self, s: dict) -> None:

@@ -391,6 +391,27 @@ def _continuity(a) -> list[Violation]:
     return out
 
 
+def accepted_jumps(design) -> str | None:
+    """The acceleration jumps ``design`` accepts (limits.require_continuous_acceleration
+    off) in words, or None: said beside the verdict, so that a design with an infinite
+    jerk is not green without a word (a teacher's review: the same simple-harmonic law
+    was amber in one design and green in another, nothing on screen saying why)."""
+    from .motion import continuity_jumps, segments
+
+    if design.limits.require_continuous_acceleration:
+        return None
+    at = sorted(
+        to_deg(t) % 360.0 for t, what, _ in continuity_jumps(segments(design)) if what == "A"
+    )
+    if not at:
+        return None
+    where = ", ".join(f"{d:.3f}" for d in at[:6]) + (" ..." if len(at) > 6 else "")
+    return (
+        f"acceleration jumps accepted at theta = {where} deg (an infinite jerk): "
+        "limits.require_continuous_acceleration is off"
+    )
+
+
 def _forces(a) -> list[Violation]:
     out, touching = [], a.in_contact.any(0)
     bad = touching & (a.guide.FN <= 0)

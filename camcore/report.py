@@ -593,6 +593,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
         lines.insert(lines.index(f"  {'valid':<{w}}  NO") + 1, f"  !! {jam}")
     for v in s["violations"]:
         lines.append(f"  ! {v['equation']}: {v['message']}")
+    if design is not None and (accepted := checks.accepted_jumps(design)) is not None:
+        lines.append(f"  ~ {accepted}")
     return "\n".join(lines)
 
 

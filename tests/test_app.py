@@ -19,6 +19,7 @@ from fake_tab import FakeTab
 from viser._gui_handles import GuiEvent, UploadedFile
 
 from app import panels, scene
+from app.controls import LABEL_OF_LAW
 from camcore.model import Design, design_to_json, load_preset
 from camcore.report import summary
 
@@ -1919,3 +1920,21 @@ def test_tabs_of_one_browser_leave_a_coherent_pair(app, monkeypatch):
     with restored_tab(app, monkeypatch, shared, shared) as c:
         assert c.ui.segments.rows[1]["angle"].value == 80.0 and c.error is not None
         assert c.ui.controls["cam.base_radius_mm"].value == 85.0
+
+
+def test_acceleration_jumps_can_be_accepted_from_the_app_and_say_so(tab):
+    """A teacher's review: the warning for a simple-harmonic rise said to set
+    limits.require_continuous_acceleration = false, a field no control offered, and the
+    preset that sets it showed the same law green without a word. The checkbox turns
+    the warning into a line under the verdict that says what is accepted, and where."""
+    s = tab
+    s.ui.controls["motion.rise_law"].value = LABEL_OF_LAW["simple_harmonic"]
+    assert "acceleration_jump" in {v.code for v in s.analysis.violations}
+    assert "accepted at theta" not in s.ui.status.content
+    s.ui.controls["limits.require_continuous_acceleration"].value = False
+    assert not s.analysis.violations and "All design limits met" in s.ui.status.content
+    status = s.ui.status.content
+    assert "acceleration jumps accepted at theta = 0.000, 100.000 deg" in status
+    assert "<i>Require continuous acceleration</i> is off (Material &amp; limits)" in status
+    s.ui.controls["limits.require_continuous_acceleration"].value = True
+    assert "accepted at theta" not in s.ui.status.content
