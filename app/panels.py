@@ -316,7 +316,11 @@ def headline_html(s: dict) -> str:
         f"φ ≤ {max(angles):.1f}°" if angles else "φ –",
         f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
         sigma,
-        "no jump" if jump is None else f"jumps at {jump:.0f} rpm",
+        "no jump"
+        if jump is None
+        else "jumps at any speed"
+        if jump == 0.0
+        else f"jumps at {jump:.0f} rpm",
     )
     # an item breaks only between items (a review: "rpm" alone on a second line)
     kept = [item.replace(" ", "\u00a0") for item in items]

@@ -378,6 +378,8 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
     np.maximum.at(sup, row, best)
     unbounded = np.isinf(np.where(bt.real[None], grid.reshape(len(needs), B, N), 0.0))
     sup = np.where(unbounded.any(axis=2).ravel(), np.inf, np.maximum(sup, 0.0))
+    if machine.velocity_drop(bt.segs) is not None:  # machine._sups: A = -inf there
+        sup[:] = np.inf
     k_min, s_min, inv_w2 = sup.reshape(len(needs), B)
     n = d0.dynamics.spring_safety_factor
     return [

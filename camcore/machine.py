@@ -67,13 +67,27 @@ def _sups(
         return np.stack([fn(p) for fn in per_programs])
 
     found = extremes.refine_maxes(f, theta, grids)
+    drop = velocity_drop(segs)
     out = []
     for grid, (value, at) in zip(grids, found, strict=True):
-        if np.isinf(grid).any():  # unbounded: no finite value will do
+        if drop is not None:  # every need here grows with -A: unbounded at the drop
+            out.append((np.inf, drop))
+        elif np.isinf(grid).any():  # unbounded: no finite value will do
             out.append((np.inf, float(theta[np.argmax(grid)])))
         else:
             out.append((max(value, 0.0), at))
     return out
+
+
+def velocity_drop(segs: tuple[motion.Segment, ...]) -> float | None:
+    """The cam angle [rad] of the program's first instant drop in V (a velocity jump
+    down: A = -inf there, e.g. a constant-velocity rise's end), or None. There the
+    follower leaves the cam at any speed and no spring holds it: the needs of the spring
+    and the jump speed are unbounded (the grid's samples miss the impulse: a teacher's
+    review read 'jumps at 2411 rpm' for such a cam at 1200 rpm). A jump up is the cam
+    pushing (an infinite force, not a jump)."""
+    drops = [at for at, what, jump in motion.continuity_jumps(segs) if what == "V" and jump < 0]
+    return min(drops) if drops else None
 
 
 def _rate_need(design: Design):

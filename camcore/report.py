@@ -366,6 +366,8 @@ def _margin_text(s: dict) -> str:
     if m["jump_speed"] is not None:
         parts.append(f"jumps at {_down(m['jump_speed'])} x this speed")
     text = ", ".join(parts) or "-"
+    if m["jump_speed"] == 0.0:  # machine.velocity_drop: a jump speed of 0
+        return "none: the follower leaves the cam at any speed"
     rate = m["spring_rate"]
     if rate is not None and rate < 1.0 - machine.ROUND_OFF:
         text += " (below k_min: the follower jumps)"
@@ -383,7 +385,11 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
         f"{s['spring_proposal']['safety_factor']:g})"
     )
-    if s["spring_rate_min_N_per_m"] == 0.0:  # (a review read "0.0 / 0.0" as an omission)
+    if s["spring_rate_min_N_per_m"] is None:  # (inf: see machine.spring_rate_min)
+        spring = "no spring rate keeps contact at this preload"
+        if s["jump_speed_rpm"] == 0.0:
+            spring += " (the velocity drops instantly: an infinite deceleration)"
+    elif s["spring_rate_min_N_per_m"] == 0.0:  # (a review read "0.0 / 0.0" as an omission)
         spring = (
             "none needed: nothing pulls the follower off the cam"
             if s["jump_speed_rpm"] is None
@@ -396,6 +402,8 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
             "jump speed",
             "never (nothing pulls the follower off)"
             if s["jump_speed_rpm"] is None
+            else "at any speed (the velocity drops instantly: see the continuity check)"
+            if s["jump_speed_rpm"] == 0.0
             else f"{_fmt(s['jump_speed_rpm'], 1)} rpm",
         ),
         ("margin to jump", _margin_text(s)),

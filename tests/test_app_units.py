@@ -533,6 +533,8 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     odd["radius_of_curvature_mm"] = {"convex_min": 40.0, "concave_min": 12.34}
     line = panels.headline_html(odd).replace("\u00a0", " ")
     assert "no jump" in line and "σ<sub>H</sub> –" in line and "concave ≥ 12.3 mm" in line
+    line = panels.headline_html(dict(s, jump_speed_rpm=0.0)).replace("\u00a0", " ")
+    assert "jumps at any speed" in line  # (machine.velocity_drop), not "jumps at 0 rpm"
     status = panels.status_html(None, [], 1e-7, True, headline=line)
     assert status.index("All design limits met") < status.index("cam-headline")
 

@@ -405,3 +405,25 @@ def test_a_margin_just_under_the_safety_factor_does_not_print_as_it():
     s["spring_proposal"] = {"safety_factor": 1.5}
     text = _margin_text(s)
     assert "k = 1.49 k_min" in text and "jumps at 0.99 x" in text and "close to jump" in text
+
+
+def test_an_instant_drop_in_velocity_jumps_at_any_speed():
+    """A teacher's review: a constant-velocity rise (V drops to 0 at its end: A = -inf)
+    read 'jumps at 2411 rpm' at 1200 rpm: the grid's samples miss the impulse. No
+    spring holds the follower there and it leaves the cam at any speed; a jump up
+    (the cam pushing) is not a jump."""
+    from camcore import machine, motion
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+    from camcore.report import report_text, summary
+
+    data = load_preset("paper_example").model_dump()
+    data["motion"]["segments"][0]["law"] = "constant_velocity"
+    d = Design.model_validate(data)
+    assert machine.velocity_drop(motion.segments(d)) == pytest.approx(math.radians(100.0))
+    s = summary(analyze(d, verify=False))
+    assert s["jump_speed_rpm"] == 0.0 and s["spring_rate_min_N_per_m"] is None
+    text = report_text(s)
+    assert "jump speed                           at any speed" in text
+    assert "none: the follower leaves the cam at any speed" in text
+    assert machine.velocity_drop(motion.segments(load_preset("paper_example"))) is None
