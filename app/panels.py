@@ -19,7 +19,7 @@ import numpy as np
 
 from camcore.model import Design, design_to_json
 from camcore.motion import segment_word
-from camcore.report import jam_note, machine_rows
+from camcore.report import cusp_note, jam_note, machine_rows
 from camcore.units import to_mm
 
 from .controls import LABEL_OF_LAW
@@ -310,6 +310,8 @@ def headline_html(s: dict) -> str:
         sigma = "σ<sub>H</sub> –"
     elif jam_note(s) is not None:  # toward a jam the stress has no bound
         sigma = "σ<sub>H</sub> unbounded: the guide jams"
+    elif cusp_note(s) is not None:  # nor toward a cusp (rho -> 0)
+        sigma = "σ<sub>H</sub> unbounded: the cam has a cusp"
     else:
         sigma = f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa"
     items = (
@@ -390,8 +392,9 @@ def summary_markdown(s: dict) -> str:
             ("Hub wall (thinnest, bore to profile)", f"{f(s['profile']['hub_wall_mm'], 2)} mm")
         )
     table = "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
-    jam = jam_note(s)  # (numbers and our words only: nothing a user typed)
-    return table if jam is None else f"**⚠ {jam[0].upper()}{jam[1:]}.**\n\n{table}"
+    notes = [n for n in (jam_note(s), cusp_note(s)) if n is not None]  # (our words only)
+    head = "".join(f"**⚠ {n[0].upper()}{n[1:]}.**\n\n" for n in notes)
+    return head + table
 
 
 # --- where the cam is ----------------------------------------------------------------

@@ -500,6 +500,26 @@ def jam_note(s: dict) -> str | None:
     )
 
 
+CUSPED = ("roller_undercut", "curvature_convex")  # the profile's rho reaches 0: a cusp
+
+
+def cusp_note(s: dict) -> str | None:
+    """Where the profile has a cusp or folds back (its radius of curvature reaches 0),
+    what that makes of the stress figure, or None: the Hertz stress grows without bound
+    toward rho = 0, so the cycle's largest is the samples' (a teacher's review read
+    'sigma_H <= 1957662.6 / 800 MPa')."""
+    bad = [v for v in s["violations"] if v["code"] in CUSPED]
+    if not bad:
+        return None
+    ranges = [r for v in bad for r in v["ranges_deg"]][:4]
+    where = ", ".join(f"{lo:g}" if lo == hi else f"{lo:g}-{hi:g}" for lo, hi in ranges)
+    return (
+        f"the profile has a cusp or folds back at theta = {where} deg: toward it the "
+        "contact stress grows without bound, so its maximum is the samples' largest, "
+        "not the cam's"
+    )
+
+
 def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
     rows = [
@@ -597,8 +617,9 @@ def report_text(s: dict, design: Design | None = None) -> str:
     if design is not None:
         lines += [f"  {line}" for line in inputs_text(design).splitlines()] + [""]
     lines += [f"  {k:<{w}}  {_NO_VALUE.sub('-', v)}" for k, v in rows]
-    if (jam := jam_note(s)) is not None:
-        lines.insert(lines.index(f"  {'valid':<{w}}  NO") + 1, f"  !! {jam}")
+    for note in (cusp_note(s), jam_note(s)):
+        if note is not None:
+            lines.insert(lines.index(f"  {'valid':<{w}}  NO") + 1, f"  !! {note}")
     for v in s["violations"]:
         lines.append(f"  ! {v['equation']}: {v['message']}")
     if design is not None and (accepted := checks.accepted_jumps(design)) is not None:

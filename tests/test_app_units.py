@@ -563,6 +563,25 @@ def test_a_jammed_guide_says_its_force_figures_are_unbounded():
     assert jam_note(ok) is None and "jams" not in panels.summary_markdown(ok)
 
 
+def test_a_cusped_cam_says_its_stress_has_no_bound():
+    """A teacher's review: r_b = 15 mm folds the paper's cam back and the headline read
+    'σH ≤ 1957662.6 / 800 MPa'. Toward a cusp the stress has no bound: said in the
+    report, the key numbers and the headline."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.report import cusp_note, report_text, summary
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 15.0
+    s = summary(analyze(type(load_preset("paper_example")).model_validate(data), verify=False))
+    note = cusp_note(s)
+    assert note is not None and "theta = 64.6-83.8 deg" in note
+    assert f"  !! {note}" in report_text(s) and "cusp or folds back" in panels.summary_markdown(s)
+    line = panels.headline_html(s).replace("\u00a0", " ")
+    assert "σ<sub>H</sub> unbounded: the cam has a cusp" in line and "MPa" not in line
+    assert cusp_note(summary(analyze(load_preset("paper_example"), verify=False))) is None
+
+
 def test_a_full_table_is_a_program_the_browser_keeps():
     """The kept program's size bound holds a full table written with full-precision
     numbers (the Explore setup's 4,096 characters had refused 48 segments)."""
