@@ -347,7 +347,7 @@ def curve_specs(a) -> list[dict]:
             codes={"velocity_jump", "acceleration_jump"},
         ),
         _spec(
-            "Pressure angle φ",
+            "Pressure angle φ (signed; the paper's φ is its size)",
             [("deg", "φ [°]")],
             [
                 {"label": "φ [°]", "scale": "deg", "stroke": COLORS[0], "fn": _primary_deg},

@@ -562,7 +562,10 @@ class SceneView:
         # arc (above it too) and of the normals to Q (they run inward, down to the axis)
         side = -1.0 if p[0] <= 0 else 1.0  # (its top edge a label's height lower still)
         lab.position = (p[0] + side * 0.3 * L, p[1] - 0.2 * L - self.label_h, z)
-        lab.text = f"φ = {math.degrees(phi):.1f}°"
+        # its size, as the paper gives it (Eqs. 5, 13: "phi remains positive" in the
+        # fall; a teacher's review: students read "-7.3°" against the paper); the curve
+        # keeps the sign, which says the side the normal leans to
+        lab.text = f"φ = {abs(math.degrees(phi)):.1f}°"
         lab.visible = self.show["pressure_angle"] and touching
 
     def _highlight_faces(self, on: np.ndarray) -> None:

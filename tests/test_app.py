@@ -1938,3 +1938,14 @@ def test_acceleration_jumps_can_be_accepted_from_the_app_and_say_so(tab):
     assert "<i>Require continuous acceleration</i> is off (Material &amp; limits)" in status
     s.ui.controls["limits.require_continuous_acceleration"].value = True
     assert "accepted at theta" not in s.ui.status.content
+
+
+def test_the_pressure_angle_label_gives_its_size_as_the_paper(tab):
+    """A teacher's review: the 3D label read 'φ = -7.3°' in the fall, where the paper
+    says phi remains positive (Eq. 13); the label gives the size, the curve the sign."""
+    s = tab
+    s.ui.angle_slider.value = 235.0  # the fall: S2 drives, the signed angle is negative
+    k = s._index()
+    assert s.analysis.pressure_angle[:, k][s.analysis.in_contact[:, k]][0] < 0
+    text = s.view.nodes["phi_label"].text
+    assert text.startswith("φ = ") and "-" not in text and "−" not in text
