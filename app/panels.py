@@ -400,6 +400,11 @@ def summary_markdown(s: dict) -> str:
 # --- where the cam is ----------------------------------------------------------------
 
 
+def _contact_word(a) -> str:
+    """What touches the cam: a roller or a face (a review read 'per face' of rollers)."""
+    return "roller" if a.design.follower.kind.is_roller else "face"
+
+
 def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
     """Index of the grid angle (rad, increasing over one turn) nearest theta_deg."""
     x = math.radians(theta_deg % 360.0)
@@ -433,7 +438,7 @@ def where_markdown(
     at = [i for i, s in enumerate(st) if abs(th - s) <= step / 2 + 1e-9]
     said = ""
     if at:
-        where = "at station " + " and ".join(str(i) for i in at)
+        where = f"at station{'s' if len(at) > 1 else ''} " + " and ".join(str(i) for i in at)
         # (HTML-escaped only: the block is HTML, where Markdown's backslashes would show)
         said = "<br>".join(f"<i>{html.escape(events[i])}</i>" for i in at if i < len(events))
     else:
@@ -468,7 +473,7 @@ def where_markdown(
         f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N"
         # two faces touching share the load (Eqs. 36-38): a teacher read station 0's
         # 17.5 N beside "from here S1 carries the load alone" as S1's whole load
-        + (" per face" if int(a.in_contact[:, k].sum()) > 1 else "")
+        + (f" per {_contact_word(a)}" if int(a.in_contact[:, k].sum()) > 1 else "")
         + (f"<br>{said}" if said else "")
     )
     # in room kept for the longest of these lines (they wrap by their lengths, the

@@ -86,6 +86,15 @@ BACKGROUND = threading.BoundedSemaphore(1)
 FOREGROUND = threading.RLock()
 
 
+# for a class holding the paper (a teacher's review: "the paper says 177.4°")
+STATION_3_NOTE = (
+    " Where the rise face leaves the high-dwell arc (the paper's station 3) we use "
+    "θ₃ = β_r + β_h − 2ψ_h: the paper prints + 2ψ_h, which would put station 3 after "
+    "station 4 (β_r + β_h); its own geometry (A₃ = B₄, Eq. 24) gives − 2ψ_h (README, "
+    "*Station 3*)."
+)
+
+
 class Session:
     """Everything one client sees. ``client`` is a viser ClientHandle; ``animate``
     False starts no background loops (tests and the bench drive them by hand)."""
@@ -882,6 +891,7 @@ class Session:
                 say.content = (
                     f"The stations of *{esc(self.design.name)}* are below "
                     "(the image's ⤢ shows it full size)."
+                    + (STATION_3_NOTE if self.design.follower.kind.is_double else "")
                 )
                 if self.ui.stations_img is not None:
                     self.ui.stations_img.image = image

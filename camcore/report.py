@@ -175,7 +175,8 @@ def _station_list(a: Analysis) -> list[dict]:
             "theta_deg": float(t * R2D),
             "contacts": [names[i] for i in range(len(names)) if after_in[i, k]],
             "event": (
-                f"station {k}: the same angle as station {k - 1} (one face: nothing to hand over)"
+                f"station {k}: the same angle as station {k - 1} (one contact: nothing to "
+                "hand over)"
                 if k > 0 and abs(t - st[k - 1]) < 1e-12
                 else _event(
                     k,

@@ -888,6 +888,7 @@ def test_stations_diagram_in_the_view_tab(tab):
     img = s.ui.stations_img
     assert img is not None and img.image.ndim == 3 and img.image.shape[1] == 700
     assert "are below" in s.ui.stations_fig_md.content  # where to look (it can be off screen)
+    assert "θ₃ = β_r + β_h − 2ψ_h: the paper prints + 2ψ_h" in s.ui.stations_fig_md.content
     assert img.image.std() > 10  # something is drawn
     s.ui.stations_fig_btn.value = True
     assert s.ui.stations_img is img  # the same element, a new picture
@@ -898,6 +899,7 @@ def test_stations_diagram_in_the_view_tab(tab):
     assert s.ui.stations_fig_md.content == ""
     s.ui.stations_fig_btn.value = True  # drawn again for the design on screen
     assert s.ui.stations_img is not None and s.ui.stations_img is not img
+    assert "θ₃" not in s.ui.stations_fig_md.content  # a single follower: no such station
 
 
 def test_the_touching_face_is_highlighted_and_the_idle_one_dimmed(tab):
@@ -1949,3 +1951,17 @@ def test_the_pressure_angle_label_gives_its_size_as_the_paper(tab):
     assert s.analysis.pressure_angle[:, k][s.analysis.in_contact[:, k]][0] < 0
     text = s.view.nodes["phi_label"].text
     assert text.startswith("φ = ") and "-" not in text and "−" not in text
+
+
+def test_words_fit_the_follower_and_the_stations(tab):
+    """A teacher's review: 'at station 1 and 2', 'F_N = 17.6 N per face' of rollers
+    and '(one face: nothing to hand over)' of a single roller."""
+    s = tab
+    s.ui.controls["follower.kind"].value = "double roller"
+    s.ui.stations_btn.value = "2"
+    assert "N per roller" in s.ui.where_md.content and "per face" not in s.ui.where_md.content
+    s.ui.controls["follower.kind"].value = "single roller"
+    s.ui.stations_btn.value = "1"
+    where = s.ui.where_md.content
+    assert "at stations 1 and 2" in where and "at station 1 and" not in where
+    assert "one contact: nothing to hand over" in where and "one face" not in where
