@@ -41,6 +41,9 @@ DOWNLOADS = (
     ("pdf", "Report PDF"),
 )
 STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session adapts them
+# steps of the cam angle a teacher clicks through (a review: only the slider's 0.1 deg
+# arrow keys, the stations or typing an angle moved it by hand)
+STEP_DEG = {"−5°": -5.0, "−1°": -1.0, "+1°": 1.0, "+5°": 5.0}
 # The wide panel (Curves tab): viser's widest theme panel is 24 em = 384 px; the wide
 # one takes 62 % of the 3D view's drawing width, at most 1000 px (it stays at the right
 # edge and its charts follow). The drawing width is in device pixels (CSS pixels times
@@ -71,6 +74,7 @@ class Layout:
     angle_slider: Any
     pause_box: Any
     stations_btn: Any
+    step_btns: Any
     where_md: Any
     # Design tab
     controls: dict[str, Any]  # by design path, see app.controls.SPECS
@@ -114,6 +118,7 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
         h["play_btn"] = gui.add_button("▶ Play", color="green")
         h["speed_slider"] = gui.add_slider("Play speed [°/s]", 5, 360, 5, speed_deg_s)
         h["angle_slider"] = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
+        h["step_btns"] = gui.add_button_group("Step θ", tuple(STEP_DEG))
         h["pause_box"] = gui.add_checkbox(
             "Pause at stations",
             False,

@@ -40,6 +40,7 @@ from .layout import (
     DEFAULT_PRESET,
     NARROW_PANEL_PX,
     PAUSE_AT_STATION_S,
+    STEP_DEG,
     Layout,
     build_layout,
     wide_panel_px,
@@ -173,6 +174,7 @@ class Session:
         ui.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
         ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
+        ui.step_btns.on_click(lambda e: self.step(e.target.value))
         for h in ui.controls.values():
             h.on_update(lambda _e: self.on_control())
         ui.segments.on_change, ui.segments.lock = self.on_segments, self.lock
@@ -771,6 +773,17 @@ class Session:
             if not self._syncing:
                 self._held = 0.0  # the user's own angle: no pause left to wait out
                 self._goto(float(value), slider=False)
+
+    def step(self, label: str) -> None:
+        """Pause and turn the cam by one of layout.STEP_DEG's steps; anything else (a
+        hostile client's value) is ignored."""
+        delta = STEP_DEG.get(label) if isinstance(label, str) else None
+        if delta is None:
+            return
+        with self.lock:
+            self._set_playing(False)
+            self._held = 0.0
+            self._goto(round(self.theta_deg + delta, 6))
 
     def goto_station(self, i: int | str) -> None:
         """Jump to station i; anything else (a hostile client's value) is ignored."""

@@ -1965,3 +1965,24 @@ def test_words_fit_the_follower_and_the_stations(tab):
     where = s.ui.where_md.content
     assert "at stations 1 and 2" in where and "at station 1 and" not in where
     assert "one contact: nothing to hand over" in where and "one face" not in where
+
+
+def test_step_buttons_turn_the_cam_by_hand(tab):
+    """A teacher's review: no way to step the animation but the slider's 0.1 deg arrow
+    keys. The step buttons pause and turn the cam; round the turn too; a value that is
+    not one of them is ignored."""
+    s = tab
+    s.toggle_play()
+    fire = lambda label: s.step(label)  # noqa: E731  (what the button group's click calls)
+    s.ui.angle_slider.value = 100.0
+    fire("+5°")
+    assert s.theta_deg == pytest.approx(105.0) and not s.playing
+    assert s.ui.angle_slider.value == pytest.approx(105.0) and "θ = 105.0°" in s.ui.where_md.content
+    fire("−1°")
+    assert s.theta_deg == pytest.approx(104.0)
+    s.ui.angle_slider.value = 358.0
+    fire("+5°")
+    assert s.theta_deg == pytest.approx(3.0)
+    for junk in ("+90°", None, 5, "../x"):
+        fire(junk)
+        assert s.theta_deg == pytest.approx(3.0)
