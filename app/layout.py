@@ -17,7 +17,7 @@ from camcore.model import Design, preset_names
 
 from . import compare, controls, plots
 from .explore import ExplorePanel
-from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS
+from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS, legend_html
 from .segments import SegmentTable
 
 DEFAULT_PRESET = "paper_example"
@@ -188,6 +188,7 @@ def _view_tab(gui, h: dict) -> None:
         name: gui.add_checkbox(OVERLAY_LABELS[name], name not in OFF_BY_DEFAULT)
         for name in OVERLAYS
     }
+    gui.add_html(legend_html())
     h["view_btns"] = gui.add_button_group("Camera", CAMERA_VIEWS)
     h["camera_btn"] = gui.add_button("Reset camera")
     h["stations_fig_btn"] = gui.add_button("Stations diagram (the paper's Fig. 4)")

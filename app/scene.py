@@ -31,6 +31,7 @@ LOW_RGB = (40, 100, 220)
 FORCE_RGB = (20, 160, 40)
 Q_RGB = (200, 0, 200)
 PHI_RGB = (0, 0, 0)
+CONTACT_RGB = (255, 200, 0)  # not BAD_RGB: a red ball hid a broken stretch's red
 PAD_T = 0.006  # concave pad thickness [m]
 YOKE_T = 0.006
 
@@ -193,6 +194,33 @@ def _flat(p2: np.ndarray, z: float) -> np.ndarray:
 def _circle(r: float, n: int = 180) -> np.ndarray:
     t = np.linspace(0, 2 * math.pi, n, endpoint=False)
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
+
+
+def legend_html() -> str:
+    """What the 3D view's colours mean, as swatches (a teacher's review: nothing said
+    what the green and blue arcs, the magenta lines or the pale pad were)."""
+    items = (
+        (CAM_RGB, "the cam"),
+        (FOLLOWER_RGB, "follower face or roller touching the cam"),
+        (IDLE_FACE_RGB, "a double follower's face not touching"),
+        (BAD_RGB, "on the cam: where a limit is broken"),
+        (CONTACT_RGB, "contact points"),
+        (FORCE_RGB, "contact normals, the force arrows"),
+        (Q_RGB, "instant centre I23 = Q and the normals through it"),
+        (PHI_RGB, "pressure angle φ: the normal and the stroke"),
+        (HIGH_RGB, "high-dwell arc (Eq. 20)"),
+        (LOW_RGB, "low-dwell arc"),
+        (GUIDE_RGB, "base circle (dashed), guide"),
+    )
+
+    def swatch(rgb) -> str:
+        return (
+            "<span style='display:inline-block;width:0.9em;height:0.9em;margin-right:0.4em;"
+            f"vertical-align:-0.1em;border:1px solid #666;background:rgb{tuple(rgb)}'></span>"
+        )
+
+    rows = "".join(f"<div>{swatch(c)}{text}</div>" for c, text in items)
+    return f"<div style='font-size:0.85em;line-height:1.5'><b>Colours</b>{rows}</div>"
 
 
 def _display_points(a) -> np.ndarray:
@@ -456,7 +484,7 @@ class SceneView:
             key = f"contact{i}"
             if i < len(a.geo.faces):
                 self.nodes[key] = s.add_icosphere(
-                    f"/ov/{key}", radius=r, color=BAD_RGB, position=(0, 0, zt + r)
+                    f"/ov/{key}", radius=r, color=CONTACT_RGB, position=(0, 0, zt + r)
                 )
             elif key in self.nodes:
                 self.nodes.pop(key).remove()

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from conftest import wait_for
 
-from app import controls, panels
+from app import controls, panels, scene
 from app.segments import Row, moved
 from app.ticker import Debouncer, Ticker
 
@@ -594,3 +594,15 @@ def test_a_full_table_is_a_program_the_browser_keeps():
     text = json.dumps([seg] * MAX_SEGMENTS)
     assert len(text) > 4096 and storage.parse_program(text) == [seg] * MAX_SEGMENTS
     assert storage.parse_program(json.dumps([seg] * (MAX_SEGMENTS + 1))) is None
+
+
+def test_the_view_tab_says_what_the_colours_mean():
+    """A teacher's review: nothing said what the 3D view's colours meant, and the red
+    contact balls hid a broken stretch's red. Every colour the scene draws with is in
+    the legend, and the contact points are not the broken-limit red."""
+    html = scene.legend_html()
+    for name in ("CAM", "FOLLOWER", "IDLE_FACE", "BAD", "CONTACT", "FORCE", "Q", "PHI"):
+        assert f"rgb{tuple(getattr(scene, f'{name}_RGB'))}" in html, name
+    for name in ("HIGH", "LOW", "GUIDE"):
+        assert f"rgb{tuple(getattr(scene, f'{name}_RGB'))}" in html, name
+    assert scene.CONTACT_RGB != scene.BAD_RGB
