@@ -815,7 +815,8 @@ class Session:
 
     def _set_playing(self, on: bool) -> None:
         self.ticker.run(on)
-        self.ui.play_btn.label = "⏸ Pause" if on else "▶ Play"
+        # (‖, not ⏸: a font without U+23F8, common, showed an empty box)
+        self.ui.play_btn.label = "‖ Pause" if on else "▶ Play"
         self.ui.play_btn.color = "orange" if on else "green"
 
     def toggle_play(self) -> None:
