@@ -733,9 +733,15 @@ class Design(_Part):
             )
         reach = abs(r + rb)
         if e >= reach * (1.0 - 1e-9):  # margin: e == |r + r_b| to round-off puts C on O's level
+            # (a teacher's review read "|r + r_b|" blamed on the offset for r_f = -90 mm)
+            what, fix = (
+                ("|r_f| - r_b", "a smaller offset, or a flatter face (a larger |r_f|)")
+                if f.kind.is_concave
+                else ("r_c + r_b" if r > 0 else "r_b", "a smaller offset, or a larger r_b")
+            )
             raise ValueError(
-                f"follower.{field}: e = {e:g} mm must be below |r + r_b| = {reach:g} mm "
-                f"(the square root in Eq. 3 needs (r + r_b)^2 - e^2 > 0)"
+                f"follower.{field}: e = {e:g} mm must be below {what} = {reach:g} mm "
+                f"(the square root in Eq. 3 needs (r + r_b)^2 - e^2 > 0): {fix}"
             )
         if f.kind.is_concave:
             l0 = math.sqrt(reach**2 - e**2)
@@ -925,9 +931,18 @@ def format_validation_error(exc) -> str:
         if loc and sep and head.replace(".", "").replace("_", "").isalnum():
             loc, msg = f"{loc}.{head}", tail  # a validator naming a field inside loc
         elif loc and _scalar(err.get("input")):  # the value refused, as the user wrote it
+            if loc in BOUND_MEANS and err["type"] in ("less_than", "greater_than"):
+                msg = f"{msg}: {BOUND_MEANS[loc]}"
             loc = f"{loc} = {json.dumps(err['input'])[:40]}"
         parts.append(f"{loc}: {msg}" if loc else msg)
     return "; ".join(parts)
+
+
+# what a bound on a field means, said after pydantic's own words (a teacher's review:
+# "Input should be less than 0" for a positive face radius)
+BOUND_MEANS = {
+    "follower.face_radius_mm": "a concave face's radius is negative, r_f < 0 (Eq. 3)",
+}
 
 
 def _scalar(x) -> bool:

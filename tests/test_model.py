@@ -134,3 +134,25 @@ def test_true_or_false_is_not_a_number(path):
     data = Design().model_dump(mode="json")
     data["limits"]["require_continuous_acceleration"] = False
     assert Design.model_validate(data).limits.require_continuous_acceleration is False
+
+
+def test_geometry_errors_name_the_quantities_and_the_fix():
+    """A teacher's review: r_f = -90 mm was refused as "e = 10 mm must be below
+    |r + r_b|", and r_f = +90 as "Input should be less than 0"."""
+    import json
+
+    from camcore.model import DesignError, design_from_json
+
+    def error(**follower) -> str:
+        data = json.loads(load_preset("paper_example").model_dump_json())
+        data["follower"].update(follower)
+        with pytest.raises(DesignError) as err:
+            design_from_json(json.dumps(data))
+        return str(err.value)
+
+    text = error(face_radius_mm=-90.0)
+    assert "below |r_f| - r_b = 10 mm" in text and "a flatter face (a larger |r_f|)" in text
+    text = error(kind="double_roller", offset_mm=100.0)
+    assert "below r_c + r_b = 88 mm" in text and "a larger r_b" in text
+    text = error(face_radius_mm=90.0)
+    assert "face_radius_mm = 90.0: Input should be less than 0: a concave face's radius" in text
