@@ -277,11 +277,18 @@ def _cutter_box(note: str | None) -> str:
     )
 
 
-_ASCII_UNITS = ((" um ", " µm "), (" N m", " N·m"), (" kg m2", " kg·m²"))
+_ASCII_UNITS = (
+    (" um ", " µm "),
+    (" N m", " N·m"),
+    (" kg m2", " kg·m²"),
+    # a field as its control names it (a teacher's review read the design path)
+    ("(dynamics.train_stiffness_N_per_m not set)", "(Train stiffness k₁ not set)"),
+)
 
 
 def _typeset_units(text: str) -> str:
-    """The text report's ASCII units (a terminal's) as the curves and Compare write them."""
+    """The text report's ASCII units (a terminal's) as the curves and Compare write
+    them, and a field's path as its control's label."""
     for a, b in _ASCII_UNITS:
         text = text.replace(a, b)
     return text

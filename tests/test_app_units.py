@@ -606,3 +606,13 @@ def test_the_view_tab_says_what_the_colours_mean():
     for name in ("HIGH", "LOW", "GUIDE"):
         assert f"rgb{tuple(getattr(scene, f'{name}_RGB'))}" in html, name
     assert scene.CONTACT_RGB != scene.BAD_RGB
+
+
+def test_key_numbers_name_a_field_by_its_control():
+    """A teacher's review read 'rigid (dynamics.train_stiffness_N_per_m not set)'."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.report import summary
+
+    md = panels.summary_markdown(summary(analyze(load_preset("paper_example"), verify=False)))
+    assert "rigid (Train stiffness k₁ not set)" in md and "dynamics.train" not in md
