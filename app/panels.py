@@ -419,6 +419,9 @@ def nearest_index(theta: np.ndarray, theta_deg: float) -> int:
     return j - 1 if x - theta[j - 1] < theta[j] - x else j
 
 
+# no face touches: the follower is drawn where its program puts it, unsupported (a
+# teacher's review read the picture of a broken dwell as resting on the cam)
+UNSUPPORTED = "none: the follower is unsupported here (see the status)"
 WHERE_LINES = 8  # the line under the slider wraps to 8 lines at most in the narrow panel
 WIDE_WHERE_LINES = 4  # and 4 in the wide one
 
@@ -476,7 +479,7 @@ def where_markdown(
         seg = f"{seg} ends, {neighbour(1)} begins"
     body = (
         f"<b>θ = {th:.1f}°</b> · {seg} · <b>{where}</b><br>"
-        f"In contact: <b>{', '.join(faces) if faces else 'none'}</b> · "
+        f"In contact: <b>{', '.join(faces) if faces else UNSUPPORTED}</b> · "
         f"S = {to_mm(a.prog.S[k]):.3f} mm · F_N = {a.guide.FN[k]:.1f} N"
         # two faces touching share the load (Eqs. 36-38): a teacher read station 0's
         # 17.5 N beside "from here S1 carries the load alone" as S1's whole load

@@ -824,7 +824,7 @@ def test_no_pressure_angle_construction_where_nothing_touches(tab):
     s.set_design(Design.model_validate(data))
     assert "contact_lost" in {v.code for v in s.analysis.violations}
     s.ui.angle_slider.value = 101.0
-    assert "In contact: <b>none</b>" in s.ui.where_md.content
+    assert f"In contact: <b>{panels.UNSUPPORTED}</b>" in s.ui.where_md.content
     assert not s.view.nodes["phi"].visible and not s.view.nodes["phi_label"].visible
     s.ui.angle_slider.value = 50.0
     assert s.view.nodes["phi"].visible
