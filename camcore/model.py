@@ -930,10 +930,10 @@ def format_validation_error(exc) -> str:
         head, sep, tail = msg.partition(": ")
         if loc and sep and head.replace(".", "").replace("_", "").isalnum():
             loc, msg = f"{loc}.{head}", tail  # a validator naming a field inside loc
-        elif loc and _scalar(err.get("input")):  # the value refused, as the user wrote it
+        elif loc and (shown := _shown_value(err.get("input"))) is not None:
             if loc in BOUND_MEANS and err["type"] in ("less_than", "greater_than"):
-                msg = f"{msg}: {BOUND_MEANS[loc]}"
-            loc = f"{loc} = {json.dumps(err['input'])[:40]}"
+                msg = f"{msg}, {BOUND_MEANS[loc]}"
+            msg = f"{msg} (got {shown})"  # the value refused, as the user wrote it
         parts.append(f"{loc}: {msg}" if loc else msg)
     return "; ".join(parts)
 
@@ -945,8 +945,14 @@ BOUND_MEANS = {
 }
 
 
-def _scalar(x) -> bool:
-    return isinstance(x, str | int | float | bool)
+def _shown_value(x) -> str | None:
+    """A refused value as the error quotes it: a number or a short plain word; None for
+    anything else (the app splits the errors at '; ' and the field at ': ')."""
+    if isinstance(x, bool | int | float):
+        return json.dumps(x)[:40]
+    if isinstance(x, str) and re.fullmatch(r"[A-Za-z0-9_. +-]{1,40}", x):
+        return json.dumps(x)
+    return None
 
 
 def defaulted_fields(text: str | bytes, design: Design) -> list[str]:

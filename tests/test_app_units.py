@@ -89,6 +89,14 @@ def test_status_panel_states():
     assert "Invalid input" in bad and "<script>" not in bad and "All design" not in bad
     # the field as the panel labels it, its path beside it; the path alone otherwise
     assert "<b>Base radius r_b [mm]</b> <code>cam.base_radius_mm</code>" in bad
+    # a real refusal, with the value it quotes: the field still named as its control
+    from camcore.model import DesignError, design_from_json
+
+    with pytest.raises(DesignError) as err:
+        design_from_json('{"cam": {"base_radius_mm": -5, "width_mm": "wide; x: y"}}')
+    real = panels.status_html(str(err.value), [], None, False)
+    assert "<b>Base radius r_b [mm]</b> <code>cam.base_radius_mm</code>: " in real
+    assert "(got -5)" in real and "wide" not in real  # (a string with ';' is not quoted)
     odd = panels.status_html("<i>x</i>.y: no", [], None, False)
     assert "<code>&lt;i&gt;x&lt;/i&gt;.y</code>: no" in odd
     assert "No solid" in panels.status_html(None, [], None, True, "self-intersecting")

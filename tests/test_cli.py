@@ -207,7 +207,8 @@ def test_invalid_value_names_field(tmp_path):
     proc = subprocess.run(
         [sys.executable, "-m", "camcore.cli", "report", str(p)], capture_output=True, text=True
     )
-    assert proc.returncode == 2 and "cam.base_radius_mm = -5:" in proc.stderr  # the value too
+    assert proc.returncode == 2 and "cam.base_radius_mm: " in proc.stderr
+    assert "(got -5)" in proc.stderr  # the value refused, too
     assert "Traceback" not in proc.stderr
 
 

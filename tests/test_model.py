@@ -155,4 +155,5 @@ def test_geometry_errors_name_the_quantities_and_the_fix():
     text = error(kind="double_roller", offset_mm=100.0)
     assert "below r_c + r_b = 88 mm" in text and "a larger r_b" in text
     text = error(face_radius_mm=90.0)
-    assert "face_radius_mm = 90.0: Input should be less than 0: a concave face's radius" in text
+    assert "face_radius_mm: Input should be less than 0, a concave face's radius" in text
+    assert text.endswith("(got 90.0)")
