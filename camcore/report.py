@@ -388,8 +388,6 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
     )
     if s["spring_rate_min_N_per_m"] is None:  # (inf: see machine.spring_rate_min)
         spring = "no spring rate keeps contact at this preload"
-        if s["jump_speed_rpm"] == 0.0:
-            spring += " (the velocity drops instantly: an infinite deceleration)"
     elif s["spring_rate_min_N_per_m"] == 0.0:  # (a review read "0.0 / 0.0" as an omission)
         spring = (
             "none needed: nothing pulls the follower off the cam"
@@ -403,7 +401,8 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
             "jump speed",
             "never (nothing pulls the follower off)"
             if s["jump_speed_rpm"] is None
-            else "at any speed (the velocity drops instantly: see the continuity check)"
+            # (an instant drop in V, machine.velocity_drop, or nothing holding it on)
+            else "at any speed"
             if s["jump_speed_rpm"] == 0.0
             else f"{_fmt(s['jump_speed_rpm'], 1)} rpm",
         ),
@@ -726,7 +725,7 @@ def compare_text(rows: list[dict]) -> str:
             _fmt(r["wear_depth_max_um_per_Mcycle"], 4),
             _life_text(r["follower"]) if life is None else f"{life:.3g}",
             _fmt(r["spring_rate_min_N_per_m"], 1),
-            _fmt(r["jump_speed_rpm"], 1),
+            "any" if r["jump_speed_rpm"] == 0.0 else _fmt(r["jump_speed_rpm"], 1),
             _fmt(r["cam_torque_drive_max_Nm"], 3),
         )
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in cells))
