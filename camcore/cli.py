@@ -27,6 +27,7 @@ from .model import (
     Design,
     DesignError,
     FollowerKind,
+    defaulted_fields,
     defaults_note,
     load_preset,
     name_follows_kind,
@@ -64,9 +65,7 @@ def _design(args, unused_note: bool = True) -> Design:
     if args.preset:
         design = load_preset(args.preset)
     elif args.design:
-        design, left_out = read_design(args.design)
-        if left_out:
-            print(f"note: {args.design}: {defaults_note(left_out)}", file=sys.stderr)
+        design, text = read_design(args.design)
     else:
         raise DesignError(f"give a design file or --preset NAME ({', '.join(preset_names())})")
     if getattr(args, "follower", None):
@@ -87,7 +86,17 @@ def _design(args, unused_note: bool = True) -> Design:
         design = name_follows_kind(design, before.follower.kind, before.name)
         if unused_note:
             _note_unused(design, sets)
+    if args.design:  # said of the design analysed: after --follower and --set
+        given = {a.partition("=")[0].strip() for a in sets}
+        left_out = [f for f in defaulted_fields(text, design) if _path(f) not in given]
+        if left_out:
+            print(f"note: {args.design}: {defaults_note(left_out, len(left_out))}", file=sys.stderr)
     return design
+
+
+def _path(left_out: str) -> str:
+    """The field path of a defaulted_fields entry ("cam.base_radius_mm = 80.0")."""
+    return left_out.partition(" = ")[0].partition(" (")[0]
 
 
 def _note_unused(design: Design, sets: list[str]) -> None:

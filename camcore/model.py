@@ -957,13 +957,14 @@ def _shown_value(x) -> str | None:
 
 def defaulted_fields(text: str | bytes, design: Design) -> list[str]:
     """The inputs a design document leaves out, which took their default values (the
-    paper example's), as "path = value" ("dynamics (the whole group)" for a group left
-    out): a hand-written file without a base radius is analysed at 80 mm, and the CLI
-    and the app say so (a review: ``{}`` reported the paper example, "valid yes",
-    without a word). ``design``: the document's design (design_from_json). Not listed:
-    the name, fields whose default is "unset" (None), follower fields the design's
-    kind does not use (FollowerKind.uses), and the motion's own fields (its forms,
-    classic or segments, have their own rules: only a motion left out is named)."""
+    paper example's where the paper gives one), as "path = value" ("dynamics (the
+    whole group)" for a group left out). A hand-written file without a base radius is
+    analysed at 80 mm, and the CLI and the app say so (a review: ``{}`` reported the
+    paper example, "valid yes", without a word). ``design``: the design analysed.
+    Not listed: the name, fields whose default is "unset" (None), follower fields the
+    design's kind does not use (FollowerKind.uses), and the motion's own fields (its
+    forms, classic or segments, have their own rules: only a motion left out is
+    named)."""
     data = json.loads(text)
     out = []
     for group in type(design).model_fields:
@@ -985,17 +986,16 @@ def defaulted_fields(text: str | bytes, design: Design) -> list[str]:
     return out
 
 
-def read_design(path: str | Path) -> tuple[Design, list[str]]:
+def read_design(path: str | Path) -> tuple[Design, str | bytes]:
     """A design file (a regular file of at most MAX_DESIGN_BYTES) read strictly, and
-    the inputs it left out (defaulted_fields)."""
+    its text (for defaulted_fields)."""
     from .files import FileError, read_capped
 
     try:
         text = read_capped(path, MAX_DESIGN_BYTES)
     except FileError as exc:
         raise DesignError(str(exc)) from None
-    design = design_from_json(text)
-    return design, defaulted_fields(text, design)
+    return design_from_json(text), text
 
 
 def load_design(path: str | Path) -> Design:
@@ -1008,10 +1008,7 @@ def defaults_note(left_out: list[str], shown: int = 8) -> str:
     if not left_out:
         return ""
     more = f" (+{len(left_out) - shown} more)" if len(left_out) > shown else ""
-    return (
-        f"not in the file, so the defaults (the paper example's): "
-        f"{'; '.join(left_out[:shown])}{more}"
-    )
+    return f"not in the file, so their defaults: {'; '.join(left_out[:shown])}{more}"
 
 
 def design_to_json(design: Design) -> str:

@@ -85,6 +85,13 @@ def test_a_file_leaving_inputs_out_says_which_took_defaults(tmp_path, capsys):
     path.write_text("{}")
     assert main(["report", str(path)]) == 0
     assert "motion (the whole group)" in capsys.readouterr().err
+    # said of the design analysed: a --set value is not a default, and a follower
+    # --follower brings in says the roller radius it took (a review of the note)
+    path.write_text(json.dumps(data))
+    args = ["report", str(path), "--set", "cam.base_radius_mm=90", "--follower", "double_roller"]
+    assert main(args) == 0
+    err = capsys.readouterr().err
+    assert "base_radius_mm" not in err and "follower.roller_radius_mm = 8.0" in err
 
 
 def test_violations_are_reported_with_equation(capsys):
