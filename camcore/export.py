@@ -228,9 +228,10 @@ def file_label(a) -> str:
     from . import package_version
 
     tol = a.design.limits.export_tolerance_mm
+    # the fixed part first: a reader that cuts it short (the STL's 80 bytes) cuts the name
     return (
-        f"camdesigner {package_version()}: cam {plain(a.design.name, 60)}, mm, "
-        f"profile within {tol:g} mm"
+        f"camdesigner {package_version()}, mm, profile within {tol:g} mm: "
+        f"cam {plain(a.design.name, 60)}"
     )
 
 
@@ -321,6 +322,7 @@ def dxf_bytes(a, reference: bool = True) -> bytes:
     cam = a.design.cam
     doc = ezdxf.new("R2010", setup=True)  # setup: the standard linetypes (CENTER)
     doc.units = ezdxf.units.MM
+    doc.header.custom_vars.append("camdesigner", file_label(a))  # (a drawing property)
     doc.layers.add("PROFILE", color=7)
     msp = doc.modelspace()
     msp.add_lwpolyline(p.tolist(), close=True, dxfattribs={"layer": "PROFILE"})

@@ -61,8 +61,14 @@ def test_cut_only_dxf_and_what_the_files_say_they_are():
         assert list(f.get_points()) == list(c.get_points())
     notes = [e.dxf.text for e in full.modelspace().query("TEXT")]
     assert any("cam evil_  0_SECTION_(x)" in t and "within 0.001 mm" in t for t in notes)
+    for doc in (full, cut):  # the cut-only file too, as a drawing property
+        assert doc.header.custom_vars.get("camdesigner").startswith("camdesigner ")
     stl = export.stl_bytes(a)
     assert stl[:80].startswith(b"camdesigner ") and b"cam evil_" in stl[:80]
+    # the tolerance and unit come first: a long name is what the 80 bytes cut
+    long = analyze(with_bore(0.0).model_copy(update={"name": "n" * 200}), verify=False)
+    head = export.stl_bytes(long)[:80]
+    assert b", mm, profile within 0.001 mm: cam nnn" in head and head.endswith(b"n")
     mesh = trimesh.load(io.BytesIO(stl), file_type="stl")
     assert mesh.is_watertight
 
