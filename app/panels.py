@@ -19,7 +19,7 @@ import numpy as np
 
 from camcore.model import Design, design_to_json
 from camcore.motion import segment_word
-from camcore.report import cusp_note, jam_note, machine_rows
+from camcore.report import machine_rows, unbounded_notes
 from camcore.units import to_mm
 
 from .controls import LABEL_OF_LAW
@@ -315,10 +315,8 @@ def headline_html(s: dict) -> str:
     jump, stress = s["jump_speed_rpm"], s["contact_stress_max_MPa"]["cycle"]
     if stress is None:  # (a knife edge: no Hertz stress)
         sigma = "σ<sub>H</sub> –"
-    elif jam_note(s) is not None:  # toward a jam the stress has no bound
-        sigma = "σ<sub>H</sub> unbounded: the guide jams"
-    elif cusp_note(s) is not None:  # nor toward a cusp (rho -> 0)
-        sigma = "σ<sub>H</sub> unbounded: the cam has a cusp"
+    elif unbounded := unbounded_notes(s):  # an impulse, a cusp, a jam (report.py)
+        sigma = f"σ<sub>H</sub> unbounded: {unbounded[0][0]}"
     else:
         sigma = f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa"
     items = (
@@ -399,7 +397,7 @@ def summary_markdown(s: dict) -> str:
             ("Hub wall (thinnest, bore to profile)", f"{f(s['profile']['hub_wall_mm'], 2)} mm")
         )
     table = "| Quantity | Value |\n|---|---|\n" + "\n".join(f"| {k} | {v} |" for k, v in rows)
-    notes = [n for n in (jam_note(s), cusp_note(s)) if n is not None]  # (our words only)
+    notes = [n for _, n in unbounded_notes(s)]  # (our words only: nothing a user typed)
     head = "".join(f"**⚠ {n[0].upper()}{n[1:]}.**\n\n" for n in notes)
     return head + table
 

@@ -28,7 +28,7 @@ BAD_RGB = (220, 20, 30)
 EDGE_RGB = (40, 50, 70)
 HIGH_RGB = (30, 150, 60)
 LOW_RGB = (40, 100, 220)
-FORCE_RGB = (20, 160, 40)
+FORCE_RGB = (0, 150, 170)  # teal: the high-dwell arc is the green
 Q_RGB = (200, 0, 200)
 PHI_RGB = (0, 0, 0)
 CONTACT_RGB = (255, 200, 0)  # not BAD_RGB: a red ball hid a broken stretch's red
@@ -210,16 +210,23 @@ def legend_html() -> str:
         (PHI_RGB, "pressure angle φ: the normal and the stroke"),
         (HIGH_RGB, "high-dwell arc (Eq. 20)"),
         (LOW_RGB, "low-dwell arc"),
-        (GUIDE_RGB, "base circle (dashed), guide"),
+        (GUIDE_RGB, "base circle (dashed), guide, roller pins"),
+        (STEM_RGB, "stem, yoke and plates"),
+        (EDGE_RGB, "the cam's outline"),
     )
 
     def swatch(rgb) -> str:
         return (
             "<span style='display:inline-block;width:0.9em;height:0.9em;margin-right:0.4em;"
-            f"vertical-align:-0.1em;border:1px solid #666;background:rgb{tuple(rgb)}'></span>"
+            f"vertical-align:-0.1em;border:1px solid #666;background:rgb{tuple(map(int, rgb))}'>"
+            "</span>"
         )
 
     rows = "".join(f"<div>{swatch(c)}{text}</div>" for c, text in items)
+    rows += (
+        f"<div>{swatch(WEAR_LOW_RGB)}{swatch(WEAR_HIGH_RGB)}wear along the profile, "
+        "none to the most</div>"
+    )
     return f"<div style='font-size:0.85em;line-height:1.5'><b>Colours</b>{rows}</div>"
 
 

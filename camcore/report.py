@@ -520,6 +520,33 @@ def cusp_note(s: dict) -> str | None:
     )
 
 
+def impulse_note(s: dict) -> str | None:
+    """Where the velocity jumps (an infinite acceleration), what that makes of the
+    force and stress figures, or None: there the cam strikes the follower (a jump up:
+    an infinite force) or drops it (down: it leaves the cam), and no grid sample sees
+    it (a review: the figures of a constant-velocity rise read as bounds)."""
+    at = [lo for v in s["violations"] if v["code"] == "velocity_jump" for lo, _ in v["ranges_deg"]]
+    if not at:
+        return None
+    where = ", ".join(f"{x:g}" for x in sorted(at)[:4])
+    return (
+        f"the velocity jumps at theta = {where} deg (an infinite acceleration): there "
+        "the contact force and stress have no bound, so their maxima are the samples' "
+        "largest, not the cam's"
+    )
+
+
+def unbounded_notes(s: dict) -> list[tuple[str, str]]:
+    """(why, note) for each reason the cycle's force or stress maxima have no bound:
+    an impulse (impulse_note), a cusp (cusp_note), a jammed guide (jam_note)."""
+    found = (
+        ("the velocity jumps", impulse_note(s)),
+        ("the cam has a cusp", cusp_note(s)),
+        ("the guide jams", jam_note(s)),
+    )
+    return [(why, note) for why, note in found if note is not None]
+
+
 def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
     rows = [
@@ -617,9 +644,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
     if design is not None:
         lines += [f"  {line}" for line in inputs_text(design).splitlines()] + [""]
     lines += [f"  {k:<{w}}  {_NO_VALUE.sub('-', v)}" for k, v in rows]
-    for note in (cusp_note(s), jam_note(s)):
-        if note is not None:
-            lines.insert(lines.index(f"  {'valid':<{w}}  NO") + 1, f"  !! {note}")
+    for _, note in reversed(unbounded_notes(s)):
+        lines.insert(lines.index(f"  {'valid':<{w}}  NO") + 1, f"  !! {note}")
     for v in s["violations"]:
         lines.append(f"  ! {v['equation']}: {v['message']}")
     if design is not None and (accepted := checks.accepted_jumps(design)) is not None:

@@ -590,6 +590,24 @@ def test_a_cusped_cam_says_its_stress_has_no_bound():
     assert cusp_note(summary(analyze(load_preset("paper_example"), verify=False))) is None
 
 
+def test_a_velocity_jump_says_its_force_figures_are_unbounded():
+    """A review: a constant-velocity rise's force and stress maxima read as bounds,
+    although the cam strikes the follower there (an infinite acceleration)."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.report import impulse_note, report_text, summary
+
+    data = load_preset("paper_example").model_dump()
+    data["motion"]["segments"][0]["law"] = "constant_velocity"
+    s = summary(analyze(type(load_preset("paper_example")).model_validate(data), verify=False))
+    note = impulse_note(s)
+    assert note is not None and "theta = 0, 100 deg" in note
+    assert f"  !! {note}" in report_text(
+        s
+    ) and "velocity jumps at theta" in panels.summary_markdown(s)
+    assert "unbounded: the velocity jumps" in panels.headline_html(s).replace("\u00a0", " ")
+
+
 def test_a_full_table_is_a_program_the_browser_keeps():
     """The kept program's size bound holds a full table written with full-precision
     numbers (the Explore setup's 4,096 characters had refused 48 segments)."""
@@ -609,11 +627,19 @@ def test_the_view_tab_says_what_the_colours_mean():
     contact balls hid a broken stretch's red. Every colour the scene draws with is in
     the legend, and the contact points are not the broken-limit red."""
     html = scene.legend_html()
-    for name in ("CAM", "FOLLOWER", "IDLE_FACE", "BAD", "CONTACT", "FORCE", "Q", "PHI"):
-        assert f"rgb{tuple(getattr(scene, f'{name}_RGB'))}" in html, name
-    for name in ("HIGH", "LOW", "GUIDE"):
-        assert f"rgb{tuple(getattr(scene, f'{name}_RGB'))}" in html, name
-    assert scene.CONTACT_RGB != scene.BAD_RGB
+    colours = {n: v for n, v in vars(scene).items() if n.endswith("_RGB") and "WEAR" not in n}
+    assert len(colours) >= 13
+    for name, rgb in colours.items():  # every colour the scene module defines
+        assert f"rgb{tuple(rgb)}" in html, name
+    for end in (scene.WEAR_LOW_RGB, scene.WEAR_HIGH_RGB):  # the wear band's two ends
+        assert f"rgb{tuple(int(x) for x in end)}" in html
+    assert "np." not in html
+    # no two of them so close that their swatches cannot be told apart
+    names = list(colours)
+    for i, a in enumerate(names):
+        for b in names[i + 1 :]:
+            gap = max(abs(x - y) for x, y in zip(colours[a], colours[b], strict=True))
+            assert gap > 40, (a, b)
 
 
 def test_key_numbers_name_a_field_by_its_control():
