@@ -16,6 +16,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .analysis import Analysis
+from .checks import accepted_jumps
 from .report import inputs_text, report_text, summary
 from .units import to_deg, to_mm
 
@@ -217,6 +218,8 @@ def html_report(a: Analysis) -> str:
         )
         + "</ul>"
     )
+    if (accepted := accepted_jumps(a.design)) is not None:  # said, not passed over
+        verdict += f"<p>{esc(accepted)}</p>"
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>Cam design report: {esc(s["design"])}</title>

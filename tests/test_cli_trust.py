@@ -357,3 +357,14 @@ def test_html_and_pdf_report(tmp_path):
         assert sorted((float(w), float(h))) == pytest.approx([595.44, 841.68], abs=0.5)
     proc = run("report", str(src), "--html", str(src))
     assert proc.returncode == 2 and "input design file" in proc.stderr
+
+
+def test_the_html_report_says_what_a_valid_design_accepts(tmp_path):
+    """A review: the page said 'All limits met.' of a design whose limits accept its
+    acceleration jumps, without a word about them."""
+    page = tmp_path / "r.html"
+    proc = run("report", "--preset", "classroom_harmonic", "--html", str(page))
+    assert proc.returncode == 0, proc.stderr
+    text = page.read_text()
+    assert "All limits met." in text
+    assert "acceleration jumps accepted at theta = 0.000, 150.000" in text
