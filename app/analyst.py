@@ -81,9 +81,13 @@ def refined(design: Design) -> Refined:
 
 
 def _cutter_gouges(a: Analysis) -> str | None:
-    """The G-code download's refusal of the design's cutter, said before the download
-    (~10-20 ms: the geometric gouge test of camcore.toolpath); None if it fits or the
-    profile has no part at all (the panel's 'No solid' says that)."""
+    """The G-code download's refusal of the design's cutter or pass depth, said before
+    the download (~10-20 ms: the geometric gouge test of camcore.toolpath); None if
+    they fit or the profile has no part at all (the panel's 'No solid' says that)."""
+    try:
+        toolpath.check_passes(a.design.cam)  # a rule of the export: said before it too
+    except toolpath.ExportError as exc:
+        return str(exc)
     try:
         toolpath.cutter_path(a)
     except toolpath.GougeError as exc:

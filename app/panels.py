@@ -266,14 +266,16 @@ def _accepted_line(note: str | None) -> str:
 
 
 def _cutter_box(note: str | None) -> str:
-    """The cutter does not fit the cam (found when the tab is still, with the check)."""
+    """The G-code would be refused: the cutter does not fit the cam, or too many passes
+    (found when the tab is still, with the check)."""
     if not note:
         return ""
     return _BOX.format(
         bg="#fff3d6",
         fg="#e08a00",
-        body=f"<b>⚠ Cutter:</b> {html.escape(note)}. The G-code download refuses it: "
-        "change <i>Cutter diameter [mm]</i> (Cam) or the design.",
+        body=f"<b>⚠ G-code:</b> {html.escape(note)}. The G-code download refuses it: "
+        "change <i>Cutter diameter [mm]</i> or <i>Depth per pass [mm]</i> (Cam), or the "
+        "design.",
     )
 
 

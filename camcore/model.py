@@ -435,9 +435,6 @@ class Follower(_Part):
         return self.offset_mm if self.kind.is_double else 0.0
 
 
-MAX_PASSES = 100  # of the toolpath export (camcore.toolpath): its file grows with them
-
-
 class Cam(_Part):
     """The disk cam. It turns clockwise, as in the paper."""
 

@@ -32,7 +32,6 @@ from scipy.spatial import cKDTree
 
 from . import profile
 from .export import ExportError, require_star_shaped, warning
-from .model import MAX_PASSES
 from .units import MM, to_deg, to_mm
 
 SAFE_Z_MM = 5.0  # rapid height above the blank's top face
@@ -157,7 +156,10 @@ def _round_up(x: float, digits: int = 3) -> float:
     return math.ceil(x * scale) / scale
 
 
-def _check_passes(cam) -> None:
+MAX_PASSES = 100  # of one file: it grows with them
+
+
+def check_passes(cam) -> None:
     """ExportError if cam.pass_depth_mm asks for more than MAX_PASSES passes. (A rule
     of this export, not of the design: it had refused the whole design, and a report
     of its analysis, for a machining value; a designer's review.)"""
@@ -230,7 +232,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     the cam and off a blank up to the cam's largest radius + D), a straight feed in
     onto the path, the contour, and back out the same way."""
     cam = a.design.cam
-    _check_passes(cam)
+    check_passes(cam)
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
     _check_size(cam, path.shape[0] + 2)

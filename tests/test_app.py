@@ -1349,17 +1349,23 @@ def test_a_cutter_that_gouges_is_said_before_the_download(tab, downloads):
     data["limits"]["max_pressure_angle_deg"] = 45.0
     s.set_design(Design.model_validate(data))
     assert not s.analysis.violations  # a valid design: only its cutter is wrong
-    assert "Cutter" not in s.ui.status.content  # the fast path does not know yet
+    assert "⚠ G-code" not in s.ui.status.content  # the fast path does not know yet
     s.refine()
     status = s.ui.status.content
-    assert "⚠ Cutter:" in status and "a 190 mm cutter would gouge" in status
+    assert "⚠ G-code:" in status and "a 190 mm cutter would gouge" in status
     s.ui.download_btns["toolpath"].value = True
     refusal = s.ui.files_md.content
     assert "gouge" in refusal and "use a cutter of at most" in refusal
     s.ui.controls["cam.cutter_diameter_mm"].value = 20.0
-    assert "Cutter" not in s.ui.status.content  # the next design: not said before checked
+    assert "⚠ G-code" not in s.ui.status.content  # the next design: not said before checked
     s.refine()
-    assert "Cutter" not in s.ui.status.content and s.verified
+    assert "⚠ G-code" not in s.ui.status.content and s.verified
+    # a pass depth the G-code cannot take is said too (a rule of that export only: the
+    # design stays valid and its other files download)
+    s.ui.controls["cam.pass_depth_mm"].value = 0.01
+    s.refine()
+    assert not s.analysis.violations
+    assert "⚠ G-code:" in s.ui.status.content and "more than 100 passes" in s.ui.status.content
 
 
 def test_a_new_follower_kind_renames_the_follower_the_name_mentions(tab, downloads):

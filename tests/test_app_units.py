@@ -437,7 +437,7 @@ def test_plot_columns_go_as_float32_and_the_flags_as_int8():
 
 def test_status_panel_says_a_cutter_that_gouges_escaped():
     html = panels.status_html(None, [], 1e-7, True, cutter_note="a <b>190</b> mm cutter")
-    assert "⚠ Cutter:" in html and "All design limits met" in html
+    assert "⚠ G-code:" in html and "All design limits met" in html
     assert "<b>190</b>" not in html and "&lt;b&gt;190" in html
     assert "Cutter" not in panels.status_html(None, [], 1e-7, True)
 
