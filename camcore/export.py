@@ -34,11 +34,19 @@ class ExportError(ValueError):
     """The design cannot be exported as a solid; the message says why."""
 
 
+# the limits whose breach can make a profile cross itself (checks.py)
+FOLDING = frozenset(
+    {"roller_undercut", "curvature_convex", "curvature_face", "velocity_jump", "profile_crossing"}
+)
+
+
 def require_star_shaped(a) -> None:
     """ExportError unless the profile is star-shaped about the axis: no part, solid or
     cutter path, can be made of a profile that crosses itself."""
     if not a.profile.is_star_shaped():
-        named = dict.fromkeys(f"{v.code} ({v.equation})" for v in a.violations)  # once each
+        # the limits that fold a profile over itself, once each (all, if none of them)
+        folding = [v for v in a.violations if v.code in FOLDING] or list(a.violations)
+        named = dict.fromkeys(f"{v.code} ({v.equation})" for v in folding)
         broken = ", ".join(named) or "none found"
         raise ExportError(
             "the profile is not star-shaped about the cam axis (it crosses itself): no "

@@ -261,6 +261,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
+        _comment("the cutter centre path, no cutter compensation G41/G42: G40"),
         _comment(f"{passes}, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"),
         _comment(bottom),
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),

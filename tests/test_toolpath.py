@@ -128,6 +128,7 @@ def test_gcode_header_says_what_the_operator_must_set():
     head = [line for line in text.splitlines() if line.startswith("(")]
     assert "(one pass, full depth, feed 200 plunge 50 mm/min)" in head
     assert "(feeds are defaults: check them, and set the spindle speed: M3 has no S word)" in head
+    assert "(the cutter centre path, no cutter compensation G41/G42: G40)" in head
 
 
 @pytest.mark.parametrize("tol_mm", [1e-3, 1e-4])
