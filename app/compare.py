@@ -17,55 +17,70 @@ KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
 
 
 def table_markdown(results: dict, design: Design) -> str:
-    """The table of ``results`` (app.analyst.Refined.compare) for ``design``: the paper's
-    Table 1 column only where the design is the paper's example (report.paper_table1_N)."""
+    """The table of ``results`` (app.analyst.Refined.compare) for ``design``: a row per
+    figure, a column per follower (a review: a column per figure ran out of the side
+    panel); the paper's Table 1 row only where the design is the paper's example
+    (report.paper_table1_N)."""
 
     def f(x, nd=2):
         return "–" if x is None else f"{x:.{nd}f}"
 
-    table1 = {k: paper_table1_N(design, k) for k in results}
-
-    lines = [
-        "| Follower | F_N high dwell [N] (a double: while both faces touch) | paper's Table 1 [N] "
-        "| F_N max cycle [N] | σ_H max [MPa] | φ max [°] | ρ convex min [mm] "
-        "| wear max [µm/10⁶ cycles] | limits |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
-    notes = []
-    for k, a in results.items():
-        if isinstance(a, str):
-            lines.append(
-                f"| {k.label} | – | {f(table1[k], 3)} | – | – | – | – | – | not computable |"
-            )
-            notes.append(f"- *{k.label}*: {esc(a)}")
-            continue
-        s = a["summary"]
-        ok = "✔" if s["valid"] else f"⚠ {len(s['violations'])}"
-        fn = s["contact_force_max_N"]
-        dwell = fn["high_dwell_two_contact"] if k.is_double else fn["high_dwell"]
+    def phi_max(s: dict) -> float | None:
         phis = [v for v in s["pressure_angle_max_deg"].values() if v is not None]
-        phi = max(phis) if phis else None
-        lines.append(
-            f"| {k.label} | {f(dwell, 3)} | "
-            f"{f(table1[k], 3)} | {f(s['contact_force_max_N']['cycle'], 2)} | "
-            f"{f(s['contact_stress_max_MPa']['cycle'], 1)} | {f(phi, 2)} | "
-            f"{f(s['radius_of_curvature_mm']['convex_min'], 1)} | "
-            f"{f(s['wear_depth_max_um_per_Mcycle'], 4)} | {ok} |"
-        )
+        return max(phis) if phis else None
+
+    def dwell(k, s: dict) -> float | None:
+        fn = s["contact_force_max_N"]
+        return fn["high_dwell_two_contact"] if k.is_double else fn["high_dwell"]
+
+    table1 = {k: paper_table1_N(design, k) for k in results}
+    rows = [  # (label, figure of a follower's summary)
+        ("F_N high dwell [N]¹", lambda k, s: f(dwell(k, s), 3)),
+        *(
+            [("paper's Table 1 [N]", lambda k, s: f(table1[k], 3))]
+            if any(v is not None for v in table1.values())
+            else []
+        ),
+        ("F_N max cycle [N]", lambda k, s: f(s["contact_force_max_N"]["cycle"], 2)),
+        ("σ_H max [MPa]", lambda k, s: f(s["contact_stress_max_MPa"]["cycle"], 1)),
+        ("φ max [°]", lambda k, s: f(phi_max(s), 2)),
+        ("ρ convex min [mm]", lambda k, s: f(s["radius_of_curvature_mm"]["convex_min"], 1)),
+        ("wear max [µm/10⁶ cycles]", lambda k, s: f(s["wear_depth_max_um_per_Mcycle"], 4)),
+        ("limits", lambda k, s: "✔" if s["valid"] else f"⚠ {len(s['violations'])}"),
+    ]
+    kinds = list(results)
+    lines = [
+        "| | " + " | ".join(k.label for k in kinds) + " |",
+        "|---|" + "---|" * len(kinds),
+    ]
+    for label, fig in rows:
+        cells = [
+            ("not computable" if label == "limits" else "–")
+            if isinstance(results[k], str)
+            else fig(k, results[k]["summary"])
+            for k in kinds
+        ]
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
+    notes = [f"- *{k.label}*: {esc(a)}" for k, a in results.items() if isinstance(a, str)]
     text = "\n".join(lines)
     text += (
-        "\n\n**F_N high dwell**: the largest contact force per face in the high dwell; "
-        "for double followers while both faces touch (the load is shared; in the first "
-        "and last 2ψ_h one face carries it all, see Key numbers). **Table 1** is the "
+        "\n\n¹ The largest contact force per face in the high dwell; for double "
+        "followers while both faces touch (the load is shared; in the first and last 2ψ_h "
+        "one face carries it all, see Key numbers). Wear: Archard's law along the profile "
+        "(rollers roll and do not slide; README for the model). **Table 1** is the "
         "paper's value for its own example (the `paper_example` preset), shown for that "
-        "design only (its motion, follower, dynamics, r_b and speed), and ours "
-        "differs from it: in the dwell Eqs. 29-38 give F_N = F_t = Mg + k(h + s_p) = "
-        "136.509 N for a single follower and F_t / (2 cos ψ_h) for a double one "
-        "(68.397 N concave, 68.579 N rollers); the paper's 133.5 / 129.2 N lie below "
-        "F_t and its 67.297 N for both doubles ignores cos ψ_h (README, *Reproducing "
-        "the paper*). Wear: Archard's law along the profile (rollers roll and do not "
-        "slide; README for the model)."
+        "design only (its motion, follower, dynamics, r_b and speed)"
     )
+    if any(v is not None for v in table1.values()):
+        text += (
+            ", and ours differs from it: in the dwell Eqs. 29-38 give F_N = F_t = "
+            "Mg + k(h + s_p) = 136.509 N for a single follower and F_t / (2 cos ψ_h) for a "
+            "double one (68.397 N concave, 68.579 N rollers); the paper's 133.5 / 129.2 N "
+            "lie below F_t and its 67.297 N for both doubles ignores cos ψ_h (README, "
+            "*Reproducing the paper*)."
+        )
+    else:
+        text += ": this design is not it."
     if notes:
         text += "\n\n" + "\n".join(notes)
     return text

@@ -113,7 +113,7 @@ def status_html(
 ) -> str:
     """The always-visible panel (STATUS_CSS): input errors (red), limit violations
     (amber), or OK; a file that could not be opened (``file_error``) above them, the
-    design's headline figures (``headline``, see headline_html) below them.
+    design's headline figures (``headline``, see headline_html) above all.
 
     With an input error the panel says so and nothing green: the limits shown below it
     are those of the last valid design, which stays on screen (and in the downloads'
@@ -134,9 +134,11 @@ def status_html(
         else ""
     )
     boxes = _status_boxes(error, violations, lift_error, verified, mesh_error)
+    # the headline first: the box scrolls inside its 32vh, and below four violations
+    # it had been out of view (a review)
     return (
-        f"{STATUS_CSS}<div id='cam-status'>{file_box}{boxes}{_cutter_box(cutter_note)}"
-        f"{_accepted_line(accepted)}{headline}</div>"
+        f"{STATUS_CSS}<div id='cam-status'>{headline}{file_box}{boxes}"
+        f"{_cutter_box(cutter_note)}{_accepted_line(accepted)}</div>"
     )
 
 
@@ -209,7 +211,7 @@ def _status_boxes(error, violations, lift_error, verified, mesh_error) -> str:
     if violations:
         items = "".join(
             f"<li><b>{html.escape(v.equation)}</b> <code>{html.escape(v.code)}</code>: "
-            f"{html.escape(v.message)}</li>"
+            f"{html.escape(_typeset_units(v.message))}</li>"
             for v in violations
         )
         parts.append(
@@ -285,6 +287,10 @@ _ASCII_UNITS = (
     (" kg m2", " kg·m²"),
     # a field as its control names it (a teacher's review read the design path)
     ("(dynamics.train_stiffness_N_per_m not set)", "(Train stiffness k₁ not set)"),
+    (
+        "limits.require_continuous_acceleration = false to accept it",
+        "untick Require continuous acceleration (Material & limits) to accept it",
+    ),
 )
 
 
@@ -334,7 +340,7 @@ def headline_html(s: dict) -> str:
     # an item breaks only between items (a review: "rpm" alone on a second line)
     kept = [item.replace(" ", "\u00a0") for item in items]
     return (
-        "<div id='cam-headline' style='font-size:0.8em;color:#444;margin:2px 12px 0 2px' "
+        "<div id='cam-headline' style='font-size:0.9em;color:#333;margin:0 12px 3px 2px' "
         "title='the design on screen: largest pressure angle, smallest radius of "
         "curvature, largest contact stress / its limit, the speed where the follower "
         "leaves the cam; all figures in Design › Key numbers'>" + " · ".join(kept) + "</div>"

@@ -196,6 +196,16 @@ def _circle(r: float, n: int = 180) -> np.ndarray:
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
 
 
+def vertex_colors(rgb) -> np.ndarray:
+    """sRGB colours [0-255] as line segments' per-vertex colours must be sent: three.js
+    takes vertex colours as linear and brightens them on screen (a review measured the
+    dwell arcs drawn pastel and the base circle near-white beside the legend's
+    swatches; a single colour for a whole node is converted by viser and is right)."""
+    c = np.asarray(rgb, dtype=float) / 255.0
+    linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    return np.rint(linear * 255.0).astype(np.uint8)
+
+
 def legend_html() -> str:
     """What the 3D view's colours mean, as swatches (a teacher's review: nothing said
     what the green and blue arcs, the magenta lines or the pale pad were)."""
@@ -227,7 +237,10 @@ def legend_html() -> str:
         f"<div>{swatch(WEAR_LOW_RGB)}{swatch(WEAR_HIGH_RGB)}wear along the profile, "
         "none to the most</div>"
     )
-    return f"<div style='font-size:0.85em;line-height:1.5'><b>Colours</b>{rows}</div>"
+    return (  # (indented and spaced as the controls around it)
+        "<div style='font-size:0.85em;line-height:1.5;padding:0 0 10px 9px'>"
+        f"<b>Colours</b>{rows}</div>"
+    )
 
 
 def _display_points(a) -> np.ndarray:
@@ -421,7 +434,7 @@ class SceneView:
         top = float(depth.max())
         level = np.interp(polar, phi, depth, period=2 * np.pi) / top if top > 0 else 0 * polar
         rgb = WEAR_LOW_RGB + np.clip(level, 0, 1)[:, None] * (WEAR_HIGH_RGB - WEAR_LOW_RGB)
-        colors = np.stack([rgb, np.roll(rgb, -1, axis=0)], axis=1).astype(np.uint8)
+        colors = vertex_colors(np.stack([rgb, np.roll(rgb, -1, axis=0)], axis=1))
         self.nodes["wear"] = self.scene.add_line_segments(
             "/cam/wear",
             _polyline_segments(_flat(pts, z), closed=True),
@@ -439,7 +452,7 @@ class SceneView:
         same = part == np.roll(part, -1)
         high, low = segs[same & (part == HIGH)], segs[same & (part == LOW)]
         cols = [
-            np.broadcast_to(np.array(c, np.uint8), (len(x), 2, 3))
+            np.broadcast_to(vertex_colors(c), (len(x), 2, 3))
             for c, x in ((GUIDE_RGB, base), (HIGH_RGB, high), (LOW_RGB, low))
         ]
         self.nodes["arcs"] = self.scene.add_line_segments(

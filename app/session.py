@@ -90,8 +90,8 @@ FOREGROUND = threading.RLock()
 # for a class holding the paper (a teacher's review: "the paper says 177.4°")
 STATION_3_NOTE = (
     " Where the rise face leaves the high-dwell arc (the paper's station 3) we use "
-    "θ₃ = β_r + β_h − 2ψ_h: the paper prints + 2ψ_h, which would put station 3 after "
-    "station 4 (β_r + β_h); its own geometry (A₃ = B₄, Eq. 24) gives − 2ψ_h (README, "
+    "θ₃ = βᵣ + βₕ − 2ψₕ: the paper prints + 2ψₕ, which would put station 3 after "
+    "station 4 (βᵣ + βₕ); its own geometry (A₃ = B₄, Eq. 24) gives − 2ψₕ (README, "
     "*Station 3*)."
 )
 

@@ -20,6 +20,7 @@ from .checks import accepted_jumps
 from .report import inputs_text, report_text, summary
 from .units import to_deg, to_mm
 
+CONTACT = "#ffc800"  # a contact point (app.scene.CONTACT_RGB)
 MAX_POINTS = 1500  # per curve in the embedded plots: the page stays a few hundred kB
 
 
@@ -116,7 +117,10 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     n = len(a.stations)
     cols = min(n, cols)
     rows = -(-n // cols)
-    fig = Figure(figsize=(width_in, 0.78 * rows * width_in / cols), layout="constrained")
+    fig = Figure(figsize=(width_in, 0.8 * rows * width_in / cols), layout="constrained")
+    # room below the last captions: the app's full-size icon sits on the bottom-right
+    # corner of the image and had covered station 5's words (a review)
+    fig.supxlabel(" ", fontsize=22)  # (an empty line the layout keeps room for)
     axes = np.atleast_1d(fig.subplots(rows, cols)).ravel()
     P = a.profile.points
     rb = a.geo.r_b
@@ -152,8 +156,8 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                     lw=2,
                 )
             on = bool(touching[i, k])
-            ax.plot(
-                to_mm(p[0]), to_mm(p[1]), "o", ms=7, mfc="#d62728" if on else "white", mec="#d62728"
+            ax.plot(  # gold, as the app's 3D view: there red marks a broken limit
+                to_mm(p[0]), to_mm(p[1]), "o", ms=7, mfc=CONTACT if on else "white", mec="#7a5c00"
             )
             ax.annotate(
                 f.name.split(" ")[0],  # "S1", "S2": the names the app and the report use
@@ -162,7 +166,7 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                 textcoords="offset points",
                 ha="center",
                 fontsize=9,
-                color="#d62728" if on else "#888888",
+                color="#5a4400" if on else "#888888",
                 fontweight="bold" if on else "normal",
             )
         y = to_mm(rb + S)

@@ -428,6 +428,10 @@ def test_compare_tab(tab):
     s.ui.controls["cam.base_radius_mm"].value = 80.0
     s.refine()
     assert "| 67.297 |" in view.md.content
+    # a row per figure, a column per follower (columns per figure overflowed the panel)
+    assert "| | single roller | double roller | single concave | double concave |" in (
+        view.md.content
+    )
     data = view.fn.handle.data  # θ, the four followers, the stations, θ now
     assert len(data) == 7 and data[0].size > 100
     # one grid for the four followers: their curves are drawn at the same angles
@@ -888,7 +892,7 @@ def test_stations_diagram_in_the_view_tab(tab):
     img = s.ui.stations_img
     assert img is not None and img.image.ndim == 3 and img.image.shape[1] == 700
     assert "are below" in s.ui.stations_fig_md.content  # where to look (it can be off screen)
-    assert "θ₃ = β_r + β_h − 2ψ_h: the paper prints + 2ψ_h" in s.ui.stations_fig_md.content
+    assert "θ₃ = βᵣ + βₕ − 2ψₕ: the paper prints + 2ψₕ" in s.ui.stations_fig_md.content
     assert img.image.std() > 10  # something is drawn
     s.ui.stations_fig_btn.value = True
     assert s.ui.stations_img is img  # the same element, a new picture
@@ -1938,6 +1942,9 @@ def test_acceleration_jumps_can_be_accepted_from_the_app_and_say_so(tab):
     s = tab
     s.ui.controls["motion.rise_law"].value = LABEL_OF_LAW["simple_harmonic"]
     assert "acceleration_jump" in {v.code for v in s.analysis.violations}
+    assert "untick Require continuous acceleration (Material &amp; limits)" in (
+        s.ui.status.content
+    )  # the control's name, not the design path
     assert "accepted at theta" not in s.ui.status.content
     s.ui.controls["limits.require_continuous_acceleration"].value = False
     assert not s.analysis.violations and "All design limits met" in s.ui.status.content

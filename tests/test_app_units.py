@@ -544,7 +544,7 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     line = panels.headline_html(dict(s, jump_speed_rpm=0.0)).replace("\u00a0", " ")
     assert "jumps at any speed" in line  # (machine.velocity_drop), not "jumps at 0 rpm"
     status = panels.status_html(None, [], 1e-7, True, headline=line)
-    assert status.index("All design limits met") < status.index("cam-headline")
+    assert status.index("cam-headline") < status.index("All design limits met")
 
 
 def test_a_jammed_guide_says_its_force_figures_are_unbounded():
@@ -634,6 +634,9 @@ def test_the_view_tab_says_what_the_colours_mean():
     for end in (scene.WEAR_LOW_RGB, scene.WEAR_HIGH_RGB):  # the wear band's two ends
         assert f"rgb{tuple(int(x) for x in end)}" in html
     assert "np." not in html
+    # per-vertex colours go as linear values (three.js brightens them otherwise: the
+    # dwell arcs were drawn pastel beside their swatches)
+    assert scene.vertex_colors(np.array([0, 255, 128, 30])).tolist() == [0, 255, 55, 3]
     # no two of them so close that their swatches cannot be told apart
     names = list(colours)
     for i, a in enumerate(names):
