@@ -15,7 +15,7 @@ from typing import Any
 
 from camcore.model import Design, preset_names
 
-from . import compare, controls, plots
+from . import compare, controls, plots, storage
 from .explore import ExplorePanel
 from .scene import CAMERA_VIEWS, OFF_BY_DEFAULT, OVERLAYS, legend_html
 from .segments import SegmentTable
@@ -145,7 +145,7 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     with tabs.add_tab("View") as h["view_folder"]:
         _view_tab(gui, h)
     with tabs.add_tab("Files"):
-        _files_tab(gui, h)
+        _files_tab(gui, h, base)
     return Layout(**h)
 
 
@@ -195,7 +195,7 @@ def _view_tab(gui, h: dict) -> None:
     h["stations_fig_md"] = gui.add_markdown("")
 
 
-def _files_tab(gui, h: dict) -> None:
+def _files_tab(gui, h: dict, base: Design) -> None:
     names = preset_names()
     h["preset_dd"] = gui.add_dropdown(
         "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names else names[0]
@@ -203,7 +203,7 @@ def _files_tab(gui, h: dict) -> None:
     h["preset_btn"] = gui.add_button("Load preset")
     h["upload_btn"] = gui.add_upload_button("Open design JSON…", mime_type="application/json")
     gui.add_markdown("**Kept in this browser** (only you see them)")
-    h["save_name"] = gui.add_text("Name", "my cam")
+    h["save_name"] = gui.add_text("Name", base.name[: storage.MAX_NAME].strip() or "my cam")
     h["save_btn"] = gui.add_button("Save in this browser")
     h["saved_dd"] = gui.add_dropdown("Saved designs", ("–",), initial_value="–")
     h["open_saved_btn"] = gui.add_button("Open saved")

@@ -292,6 +292,8 @@ class Session:
             self._keep_typed(None)
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
+            # the name to keep it under, proposed from the design (it read "my cam")
+            self.ui.save_name.value = design.name[: storage.MAX_NAME].strip() or "my cam"
 
     def _widen_sliders(self) -> None:
         """A value typed into a slider's box beyond its range widens the range: the

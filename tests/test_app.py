@@ -2002,3 +2002,12 @@ def test_step_buttons_turn_the_cam_by_hand(tab):
     for junk in ("+90°", None, 5, "../x"):
         fire(junk)
         assert s.theta_deg == pytest.approx(3.0)
+
+
+def test_the_name_to_keep_a_design_under_is_the_designs(tab):
+    """A teacher's review: the 'Kept in this browser' name read 'my cam' whatever the
+    design; it proposes the design's own name (cut to the saved names' 60)."""
+    s = tab
+    assert s.ui.save_name.value == s.design.name[:60].strip()
+    s.load_preset("valve_lift_roller")
+    assert s.ui.save_name.value == load_preset("valve_lift_roller").name[:60].strip()

@@ -282,12 +282,14 @@ def test_trust_in_the_browser(tmp_path):
             assert session.design.cam.base_radius_mm == 91.0
 
             # a named save, then a reload: the working design and the save come back
+            # (under the name proposed from the design's own, markup and all: as text)
             page.get_by_role("button", name="Save in this browser").click()
             page.get_by_text("Saved ").first.wait_for()
+            assert page.locator("#inj").count() == 0
             # the storage write is its own message: wait until the browser applied it
             page.wait_for_function(
                 "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.saved')"
-                " && localStorage.getItem(k).includes('my cam'))"
+                " && localStorage.getItem(k).includes('x</b> & co'))"
             )
             # the Explore tab's setup is kept too
             session.ui.explore.steps.value = 5
@@ -302,7 +304,7 @@ def test_trust_in_the_browser(tmp_path):
             page.get_by_text("Restored the design last edited").first.wait_for()
             (session,) = [s for s in app.sessions.values() if not s.closed.is_set()]
             assert session.design == design_from_json(json.dumps(design))
-            assert "my cam" in session.saved
+            assert "<b id=inj>x</b> & co" in session.saved
             setup = session.ui.explore.setup()
             assert setup["steps"] == 5 and setup["figures"][2] == "max pressure angle"
 
