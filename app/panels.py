@@ -281,7 +281,7 @@ def _cutter_box(note: str | None) -> str:
     )
 
 
-_ASCII_UNITS = (
+_APP_WORDS = (
     (" um ", " µm "),
     (" N m", " N·m"),
     (" kg m2", " kg·m²"),
@@ -297,7 +297,7 @@ _ASCII_UNITS = (
 def _typeset_units(text: str) -> str:
     """The text report's ASCII units (a terminal's) as the curves and Compare write
     them, and a field's path as its control's label."""
-    for a, b in _ASCII_UNITS:
+    for a, b in _APP_WORDS:
         text = text.replace(a, b)
     return text
 

@@ -81,6 +81,12 @@ class Violation:
         }
 
 
+# the limits whose breach gives the profile a cusp or a fold (its rho reaches 0): a
+# sharp corner on the part (export.warning) and an unbounded contact stress
+# (report.cusp_note)
+CUSPED = frozenset({"roller_undercut", "curvature_convex"})
+
+
 def runs_deg(
     theta: np.ndarray, mask: np.ndarray, extra: tuple[tuple[float, float], ...] = ()
 ) -> tuple[tuple[float, float], ...]:

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from .checks import CUSPED
 from .model import Design, design_to_json, omega_rad_s
 from .motion import RISE, SEGMENT_NAMES, per_second
 from .train import on_grid
@@ -35,9 +36,7 @@ class ExportError(ValueError):
 
 
 # the limits whose breach can make a profile cross itself (checks.py)
-FOLDING = frozenset(
-    {"roller_undercut", "curvature_convex", "curvature_face", "velocity_jump", "profile_crossing"}
-)
+FOLDING = CUSPED | {"curvature_face", "velocity_jump", "profile_crossing"}
 
 
 def require_star_shaped(a) -> None:
@@ -253,10 +252,6 @@ def stl_bytes(a) -> bytes:
     return header + blob[80:]
 
 
-# the limits whose breach leaves a sharp corner in an exported profile (checks.py)
-CORNERED = frozenset({"roller_undercut", "curvature_convex"})
-
-
 def warning(a) -> str | None:
     """What a maker must read before making the part of ``a`` (an Analysis): the limits
     it breaks, and for an undercut or cusp that the part must not be made as it is;
@@ -267,7 +262,7 @@ def warning(a) -> str | None:
     text = (
         f"the design breaks {'these limits' if len(codes) > 1 else 'a limit'}: {', '.join(codes)}"
     )
-    if CORNERED & set(codes):
+    if CUSPED & set(codes):
         text += (
             ". The profile is undercut or cusped: the part has a sharp corner where the "
             "cam cannot follow the motion, and wears fast. Do not make it as it is"

@@ -500,15 +500,12 @@ def jam_note(s: dict) -> str | None:
     )
 
 
-CUSPED = ("roller_undercut", "curvature_convex")  # the profile's rho reaches 0: a cusp
-
-
 def cusp_note(s: dict) -> str | None:
     """Where the profile has a cusp or folds back (its radius of curvature reaches 0),
     what that makes of the stress figure, or None: the Hertz stress grows without bound
     toward rho = 0, so the cycle's largest is the samples' (a teacher's review read
     'sigma_H <= 1957662.6 / 800 MPa')."""
-    bad = [v for v in s["violations"] if v["code"] in CUSPED]
+    bad = [v for v in s["violations"] if v["code"] in checks.CUSPED]
     if not bad:
         return None
     ranges = [r for v in bad for r in v["ranges_deg"]][:4]
