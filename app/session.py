@@ -285,15 +285,20 @@ class Session:
             if path.startswith("motion."):
                 h.disabled = segs is not None or not classic
 
-    def set_design(self, design: Design, reset_camera: bool = True) -> None:
-        """Replace the whole design (preset, upload, program table): controls follow."""
+    def set_design(
+        self, design: Design, reset_camera: bool = True, save_as: str | None = None
+    ) -> None:
+        """Replace the whole design (preset, upload, program table): controls follow.
+        ``save_as``: the name to propose for keeping it in this browser (a design
+        opened from a file, a preset, a save), in place of what the box holds; None
+        keeps what the user typed there (an edit, a design loaded from Explore)."""
         with self.lock:
             self.base, self.error, self.file_error = design, None, None
             self._keep_typed(None)
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
-            # the name to keep it under, proposed from the design (it read "my cam")
-            self.ui.save_name.value = design.name[: storage.MAX_NAME].strip() or "my cam"
+            if save_as is not None:  # (the box had read "my cam" whatever the design)
+                self.ui.save_name.value = save_as[: storage.MAX_NAME].strip() or "my cam"
 
     def _widen_sliders(self) -> None:
         """A value typed into a slider's box beyond its range widens the range: the
@@ -464,7 +469,7 @@ class Session:
         except DesignError as exc:
             with self.lock:
                 return self._show_file_error(f"preset {name}: {exc}")
-        self.set_design(d)
+        self.set_design(d, save_as=d.name)
         self._say(f"Loaded preset **{esc(name)}**.")
 
     def upload(self, name: str, content: bytes) -> None:
@@ -477,7 +482,7 @@ class Session:
                     f"file {name or 'upload'}: {exc} (the current design is kept)"
                 )
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
-        self.set_design(d)
+        self.set_design(d, save_as=d.name)
         left_out = defaulted_fields(content, d)
         note = f" ⚠ {esc(defaults_note(left_out))}." if left_out else ""
         self._say(f"Opened **{esc(name)}** ({esc(d.name)}).{note}")
@@ -593,7 +598,7 @@ class Session:
             if not restore:
                 self._save_working()
         if working is not None and restore:
-            self.set_design(working)
+            self.set_design(working, save_as=working.name)
             note = (  # where the user looks (above the tabs) and in Files
                 f"Restored the design last edited in this browser: *{esc(working.name)}* "
                 "(its tabs share one working design: the browser keeps it per site)."
@@ -725,7 +730,7 @@ class Session:
         if design is None:  # kept, but not a design this version opens: say why
             why = storage.working_error(text) or "not a design"
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(_short(why))}.")
-        self.set_design(design)
+        self.set_design(design, save_as=name)
         self._say(f"Opened **{esc(name)}** from this browser.")
 
     def delete_saved(self, name: str) -> None:

@@ -87,16 +87,24 @@ def _design(args, unused_note: bool = True) -> Design:
         if unused_note:
             _note_unused(design, sets)
     if args.design:  # said of the design analysed: after --follower and --set
-        given = {a.partition("=")[0].strip() for a in sets}
-        left_out = [f for f in defaulted_fields(text, design) if _path(f) not in given]
+        given = [a.partition("=")[0].strip() for a in sets]
+        given += ["follower.kind"] if getattr(args, "follower", None) else []
+        left_out = defaulted_fields(_with_given(text, given), design)
         if left_out:
             print(f"note: {args.design}: {defaults_note(left_out, len(left_out))}", file=sys.stderr)
     return design
 
 
-def _path(left_out: str) -> str:
-    """The field path of a defaulted_fields entry ("cam.base_radius_mm = 80.0")."""
-    return left_out.partition(" = ")[0].partition(" (")[0]
+def _with_given(text: str | bytes, paths: list[str]) -> str:
+    """The design document with the fields the command line gave marked present (their
+    values do not matter to defaulted_fields): none of them is a default."""
+    data = json.loads(text)
+    for path in paths:
+        group, _, name = path.partition(".")
+        node = data.setdefault(group, {})
+        if isinstance(node, dict) and name and "." not in name:
+            node.setdefault(name, None)
+    return json.dumps(data)
 
 
 def _note_unused(design: Design, sets: list[str]) -> None:

@@ -2011,3 +2011,22 @@ def test_the_name_to_keep_a_design_under_is_the_designs(tab):
     assert s.ui.save_name.value == s.design.name[:60].strip()
     s.load_preset("valve_lift_roller")
     assert s.ui.save_name.value == load_preset("valve_lift_roller").name[:60].strip()
+    # what the user typed stays through edits, a program-table edit too (a review:
+    # it was replaced, and a save went under another name, over an earlier save)
+    s.ui.save_name.value = "my version 2"
+    s.ui.controls["cam.base_radius_mm"].value = 70.0
+    s.ui.segments.act(0, "+")
+    assert s.ui.save_name.value == "my version 2"
+
+
+def test_a_kept_design_opens_under_its_own_name(app, monkeypatch):
+    """A review: opening the kept 'variant A' proposed the design's inner name."""
+    import json
+
+    from app import storage
+
+    kept = {"variant A": design_to_json(load_preset("valve_lift_roller"))}
+    with restored_tab(app, monkeypatch, {storage.SAVED_KEY: json.dumps(kept)}) as s:
+        s.open_saved("variant A")
+        assert s.design == load_preset("valve_lift_roller")
+        assert s.ui.save_name.value == "variant A"

@@ -92,6 +92,12 @@ def test_a_file_leaving_inputs_out_says_which_took_defaults(tmp_path, capsys):
     assert main(args) == 0
     err = capsys.readouterr().err
     assert "base_radius_mm" not in err and "follower.roller_radius_mm = 8.0" in err
+    assert "follower.kind" not in err  # --follower gave it
+    # a group left out but partly given on the command line: its other fields named
+    assert main(["report", str(path), "--set", "dynamics.mass_g=200"]) == 0
+    err = capsys.readouterr().err
+    assert "dynamics (the whole group)" not in err and "dynamics.mass_g" not in err
+    assert "dynamics.spring_rate_N_per_m = 6772.5" in err
 
 
 def test_violations_are_reported_with_equation(capsys):
