@@ -81,7 +81,7 @@ def refined(design: Design) -> Refined:
 
 
 def _cutter_gouges(a: Analysis) -> str | None:
-    """The G-code download's refusal of the design's cutter or pass depth, said before
+    """The G-code download's refusal of the design's cutter, pass depth or file size, said before
     the download (~10-20 ms: the geometric gouge test of camcore.toolpath); None if
     they fit or the profile has no part at all (the panel's 'No solid' says that)."""
     try:
@@ -89,11 +89,15 @@ def _cutter_gouges(a: Analysis) -> str | None:
     except toolpath.ExportError as exc:
         return str(exc)
     try:
-        toolpath.cutter_path(a)
+        path, _ = toolpath.cutter_path(a)
     except toolpath.GougeError as exc:
         return str(exc)
     except Exception:  # noqa: BLE001  (not a part: said elsewhere, not by the cutter)
         return None
+    try:
+        toolpath.check_size(a.design.cam, path.shape[0] + 2)  # the file's moves, as gcode
+    except toolpath.ExportError as exc:
+        return str(exc)
     return None
 
 

@@ -173,7 +173,7 @@ def check_passes(cam) -> None:
     )
 
 
-def _check_size(cam, moves_per_pass: int) -> None:
+def check_size(cam, moves_per_pass: int) -> None:
     """ExportError if the passes would write more than MAX_MOVES cutting moves (the
     contour once per pass: 100 passes of a fine profile made a 100 MB file), naming
     the least pass depth that fits."""
@@ -235,7 +235,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     check_passes(cam)
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
-    _check_size(cam, path.shape[0] + 2)
+    check_size(cam, path.shape[0] + 2)
     stated = _round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
     # start at the path's outermost point and plunge D further out along its ray: the

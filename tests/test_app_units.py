@@ -653,3 +653,21 @@ def test_key_numbers_name_a_field_by_its_control():
 
     md = panels.summary_markdown(summary(analyze(load_preset("paper_example"), verify=False)))
     assert "rigid (Train stiffness k₁ not set)" in md and "dynamics.train" not in md
+
+
+def test_a_gcode_too_long_for_one_file_is_said_before_the_download():
+    """A review: the million-move cap of the G-code was found only at the download."""
+    from app import analyst
+    from camcore import toolpath
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+
+    data = load_preset("paper_example").model_dump()
+    data["limits"]["export_tolerance_mm"] = 1e-5
+    data["cam"]["pass_depth_mm"] = 0.15  # 100 passes of a fine profile
+    a = analyze(type(load_preset("paper_example")).model_validate(data), verify=False)
+    note = analyst._cutter_gouges(a)
+    assert note is not None and "more than 1,000,000 in one file" in note
+    with pytest.raises(toolpath.ExportError, match="in one file"):
+        toolpath.gcode(a)
+    assert analyst._cutter_gouges(analyze(load_preset("paper_example"), verify=False)) is None
