@@ -161,8 +161,9 @@ def in_words(text: str) -> str:
     the controls, not the file format). Whole names only (dotted paths first; a name
     without "_" is an ordinary word)."""
     words, pattern = _field_words()
+    text, got, value = text.partition(" (got ")  # the value the user wrote: as written
     text = re.sub(SEGMENT_FIELD, _segment_words, text)
-    return pattern.sub(lambda m: words[m.group(1)], text)
+    return pattern.sub(lambda m: words[m.group(1)], text) + got + value
 
 
 @functools.cache

@@ -945,8 +945,10 @@ BOUND_MEANS = {
 def _shown_value(x) -> str | None:
     """A refused value as the error quotes it: a number or a short plain word; None for
     anything else (the app splits the errors at '; ' and the field at ': ')."""
-    if isinstance(x, bool | int | float):
-        return json.dumps(x)[:40]
+    if isinstance(x, bool):
+        return json.dumps(x)
+    if isinstance(x, int | float):  # (a 50-digit integer as a number, not cut short)
+        return json.dumps(x) if len(json.dumps(x)) <= 24 else f"{float(x):.6g}"
     if isinstance(x, str) and re.fullmatch(r"[A-Za-z0-9_. +-]{1,40}", x):
         return json.dumps(x)
     return None

@@ -97,6 +97,12 @@ def test_status_panel_states():
     real = panels.status_html(str(err.value), [], None, False)
     assert "<b>Base radius r_b [mm]</b> <code>cam.base_radius_mm</code>: " in real
     assert "(got -5)" in real and "wide" not in real  # (a string with ';' is not quoted)
+    with pytest.raises(DesignError) as err:  # a quoted word stays as the user wrote it
+        design_from_json(
+            '{"follower": {"kind": "offset_mm"}, "cam": {"width_mm": %s}}' % ("9" * 50)
+        )
+    real = panels.status_html(str(err.value), [], None, False)
+    assert '(got "offset_mm")' in real.replace("&quot;", '"') and "(got 1e+50)" in real
     odd = panels.status_html("<i>x</i>.y: no", [], None, False)
     assert "<code>&lt;i&gt;x&lt;/i&gt;.y</code>: no" in odd
     assert "No solid" in panels.status_html(None, [], None, True, "self-intersecting")
