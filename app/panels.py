@@ -136,9 +136,11 @@ def status_html(
     boxes = _status_boxes(error, violations, lift_error, verified, mesh_error)
     # the headline first: the box scrolls inside its 32vh, and below four violations
     # it had been out of view (a review)
+    # (after an input error, below it: its figures are the last valid design's)
+    first, last = ("", headline) if error else (headline, "")
     return (
-        f"{STATUS_CSS}<div id='cam-status'>{headline}{file_box}{boxes}"
-        f"{_cutter_box(cutter_note)}{_accepted_line(accepted)}</div>"
+        f"{STATUS_CSS}<div id='cam-status'>{first}{file_box}{boxes}"
+        f"{_cutter_box(cutter_note)}{_accepted_line(accepted)}{last}</div>"
     )
 
 

@@ -525,7 +525,7 @@ def impulse_note(s: dict) -> str | None:
     at = [lo for v in s["violations"] if v["code"] == "velocity_jump" for lo, _ in v["ranges_deg"]]
     if not at:
         return None
-    where = ", ".join(f"{x:g}" for x in sorted(at)[:4])
+    where = ", ".join(f"{x:g}" for x in sorted(at)[:4]) + (" ..." if len(at) > 4 else "")
     return (
         f"the velocity jumps at theta = {where} deg (an infinite acceleration): there "
         "the contact force and stress have no bound, so their maxima are the samples' "

@@ -551,6 +551,9 @@ def test_headline_figures_are_the_summarys_and_stay_with_the_status(paper_analys
     assert "jumps at any speed" in line  # (machine.velocity_drop), not "jumps at 0 rpm"
     status = panels.status_html(None, [], 1e-7, True, headline=line)
     assert status.index("cam-headline") < status.index("All design limits met")
+    # after an input error the figures are the last valid design's: below the error
+    bad = panels.status_html("cam.width_mm: no", [], 1e-7, True, headline=line)
+    assert bad.index("Invalid input") < bad.index("cam-headline")
 
 
 def test_a_jammed_guide_says_its_force_figures_are_unbounded():
@@ -677,3 +680,20 @@ def test_a_gcode_too_long_for_one_file_is_said_before_the_download():
     with pytest.raises(toolpath.ExportError, match="in one file"):
         toolpath.gcode(a)
     assert analyst._cutter_gouges(analyze(load_preset("paper_example"), verify=False)) is None
+
+
+def test_the_papers_table_1_stays_for_a_follower_we_cannot_compute():
+    """A review: in the transposed Compare table a follower without a result lost the
+    paper's own Table 1 figure, which needs no result of ours."""
+    from app.compare import table_markdown
+    from camcore.analysis import analyze
+    from camcore.model import PAPER_FOLLOWERS, load_preset
+    from camcore.report import summary
+
+    d = load_preset("paper_example")
+    ok = {"summary": summary(analyze(d, verify=False))}
+    results = {k: ok for k in PAPER_FOLLOWERS}
+    results[PAPER_FOLLOWERS[0]] = "cannot be computed"
+    md = table_markdown(results, d)
+    row = next(line for line in md.splitlines() if line.startswith("| paper's Table 1"))
+    assert "| 133.496 |" in row and "not computable" in md
