@@ -667,6 +667,9 @@ def hostile(draw) -> tuple[dict, list[tuple[tuple[str, ...], str]]]:
             b = _bounds(LEAVES[part, name])
             data[part][name] = draw(beyond(*b))
             if not _out_of_range(data[part][name], *b):
+                # a value in range replaced whatever an earlier step broke there (the
+                # slow suite found a 'nan' step undone by -1e-300 and still counted)
+                done = [(t, h) for t, h in done if t != (part, name)]
                 continue
         elif how == "missing":  # every field has a default: this must still analyse
             data[part].pop(name, None)
