@@ -115,7 +115,8 @@ def runs_deg(
     return tuple((round(float(to_deg(lo)), 3), round(float(to_deg(hi)), 3)) for lo, hi in merged)
 
 
-def _where(ranges: tuple[tuple[float, float], ...]) -> str:
+def where_text(ranges: tuple[tuple[float, float], ...]) -> str:
+    """Cam-angle ranges [deg] in words: "theta = 10-20, 35 deg (+2 more)"."""
     shown = ", ".join(f"{s:g}" if f"{s:g}" == f"{e:g}" else f"{s:g}-{e:g}" for s, e in ranges[:4])
     more = f" (+{len(ranges) - 4} more)" if len(ranges) > 4 else ""
     return f"theta = {shown} deg{more}"
@@ -157,7 +158,7 @@ def _curvature_rules(a) -> list[Violation]:
                     "flat face: rho = r_b + S + S'' > 0",
                     f"cam not convex under the flat face: rho = r_b + S + S'' falls to "
                     f"{to_mm(low):.4g} mm (a cusp; raise r_b or soften the law) at "
-                    f"{_where(ranges)}",
+                    f"{where_text(ranges)}",
                     ranges,
                     -to_mm(low),
                 )
@@ -178,7 +179,7 @@ def _curvature_rules(a) -> list[Violation]:
                     "undercut: pitch radius > r_c",
                     f"the pitch curve's radius falls to {to_mm(1.0 / kmax):.4g} mm, inside "
                     f"(0, r_c = {to_mm(rc):g} mm] (by {short:.3g} mm): the profile undercuts "
-                    f"(folds back) at {_where(ranges)}",
+                    f"(folds back) at {where_text(ranges)}",
                     ranges,
                     short,
                 )
@@ -198,7 +199,7 @@ def _curvature_rules(a) -> list[Violation]:
                 "curvature_convex",
                 "Eq. 22",
                 f"cam not convex: the profile folds back (rho down to {to_mm(min(rho)):.4g} mm "
-                f"<= 0; the pitch radius passes |r_f| = {to_mm(rf):g} mm) at {_where(ranges)}",
+                f"<= 0; the pitch radius passes |r_f| = {to_mm(rf):g} mm) at {where_text(ranges)}",
                 ranges,
                 -to_mm(min(rho)),
             )
@@ -220,7 +221,7 @@ def _curvature_rules(a) -> list[Violation]:
                 "Eq. 22",
                 f"the cam is flatter than the concave face: {how}, where it must stay "
                 f"below |r_f| = {to_mm(rf):g} mm (else the face bears on its edges, not on "
-                f"one line of contact) at {_where(ranges)}",
+                f"one line of contact) at {where_text(ranges)}",
                 ranges,
                 to_mm(worst_rho - rf) if math.isfinite(worst_rho) else to_mm(rf),
             )
@@ -243,7 +244,7 @@ def _pressure_angle(a) -> list[Violation]:
             "pressure_angle",
             "Eqs. 5, 13",
             f"pressure angle {top:.2f} deg exceeds the limit {limit:g} deg "
-            f"by {top - limit:.2f} deg at {_where(ranges)}",
+            f"by {top - limit:.2f} deg at {where_text(ranges)}",
             ranges,
             top - limit,
         )
@@ -272,7 +273,7 @@ def _contact_stress(a) -> list[Violation]:
             "Eq. 42",
             f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = {top * sf / 1e6:.1f} MPa "
             f"exceeds the allowable {allow / 1e6:g} MPa by {(top * sf - allow) / 1e6:.1f} MPa "
-            f"at {_where(ranges)}{_near_cusp(a, stress, top, allow)}",
+            f"at {where_text(ranges)}{_near_cusp(a, stress, top, allow)}",
             ranges,
             (top * sf - allow) / 1e6,
         )
@@ -430,7 +431,7 @@ def _forces(a) -> list[Violation]:
             Violation(
                 "jump",
                 "Eqs. 29-41",
-                f"follower jump: contact force F_N = {low:.3g} N <= 0 at {_where(ranges)} "
+                f"follower jump: contact force F_N = {low:.3g} N <= 0 at {where_text(ranges)} "
                 f"(raise the spring rate or preload, or lower the speed)",
                 ranges,
                 -low,
@@ -443,7 +444,7 @@ def _forces(a) -> list[Violation]:
             Violation(
                 "contact_lost",
                 "Eqs. 24, 26",  # the dwell's arc, beta - 2 psi, is shorter than nothing
-                f"no face rests on the dwell arc at {_where(ranges)}",
+                f"no face rests on the dwell arc at {where_text(ranges)}",
                 ranges,
                 float(lost.sum()),
             )
@@ -456,7 +457,7 @@ def _forces(a) -> list[Violation]:
                 "guide_jam",
                 "Eqs. 33-41",
                 f"no guide-contact mode of Fig. 6 balances the follower with friction "
-                f"mu = {a.design.dynamics.guide_friction:g} (self-locking) at {_where(ranges)}",
+                f"mu = {a.design.dynamics.guide_friction:g} (self-locking) at {where_text(ranges)}",
                 ranges,
                 float(bad.sum()),
             )
@@ -483,7 +484,8 @@ def _train(a) -> list[Violation]:
             "dynamic_jump",
             "Eqs. 29-41, elastic train",
             f"the elastic follower train leaves the cam: F_c = {low:.3g} N <= 0 at "
-            f"{_where(ranges)} (natural frequency {r.natural_frequency / (2 * math.pi):.4g} Hz; "
+            f"{where_text(ranges)} (natural frequency "
+            f"{r.natural_frequency / (2 * math.pi):.4g} Hz; "
             "stiffen the train, raise the spring, or slow down)",
             ranges,
             -low,

@@ -361,14 +361,14 @@ def _down(x: float) -> str:
 def _margin_text(s: dict) -> str:
     """k / k_min and jump speed / running speed, flagged below the safety factor n."""
     m, n = s["jump_margin"], s["spring_proposal"]["safety_factor"]
+    if m["jump_speed"] == 0.0:  # a jump speed of 0 (machine.velocity_drop, or no hold)
+        return "none: the follower leaves the cam at any speed"
     parts = []
     if m["spring_rate"] is not None:
         parts.append(f"k = {_down(m['spring_rate'])} k_min")
     if m["jump_speed"] is not None:
         parts.append(f"jumps at {_down(m['jump_speed'])} x this speed")
     text = ", ".join(parts) or "-"
-    if m["jump_speed"] == 0.0:  # machine.velocity_drop: a jump speed of 0
-        return "none: the follower leaves the cam at any speed"
     rate = m["spring_rate"]
     if rate is not None and rate < 1.0 - machine.ROUND_OFF:
         text += " (below k_min: the follower jumps)"
@@ -483,53 +483,52 @@ def inputs_text(design) -> str:
     return "\n".join(f"{k.ljust(width)}  {v}" for k, v in lines)
 
 
-def jam_note(s: dict) -> str | None:
-    """Where the guide jams (self-locking, Eqs. 33-41 have no mode with F1, F2 >= 0),
-    what that makes of the force figures, or None. Toward a jam the forces grow
-    without bound, so the cycle's largest F_N, F1, F2, stress, torque and power are the
-    samples' largest, set by the grid, not by the cam (a review read '8690819489.753 N'
-    as a figure)."""
-    jam = next((v for v in s["violations"] if v["code"] == "guide_jam"), None)
-    if jam is None:
+def _unbounded(s: dict, codes, what: str, grows: str) -> str | None:
+    """The note of unbounded_notes for the violations ``codes`` of summary ``s``, or
+    None: ``what`` happens where they are, and ``grows`` without bound toward it, so the
+    cycle's maxima are the samples' largest, set by the grid, not by the cam."""
+    ranges = sorted(
+        tuple(r) for v in s["violations"] if v["code"] in codes for r in v["ranges_deg"]
+    )
+    if not ranges:
         return None
-    where = ", ".join(f"{lo:g}-{hi:g}" for lo, hi in jam["ranges_deg"][:4])
     return (
-        f"the guide jams (self-locking) at theta = {where} deg: toward it the forces grow "
-        "without bound, so the cycle's force, stress, torque and power maxima are the "
-        "samples' largest, not the cam's"
+        f"{what} at {checks.where_text(tuple(ranges))}: toward it {grows} without bound, "
+        "so their maxima are the samples' largest, not the cam's"
+    )
+
+
+def jam_note(s: dict) -> str | None:
+    """Where the guide jams (self-locking: Eqs. 33-41 have no mode with F1, F2 >= 0):
+    toward it the forces grow without bound (a review read '8690819489.753 N' as a
+    figure)."""
+    return _unbounded(
+        s,
+        {"guide_jam"},
+        "the guide jams (self-locking)",
+        "the force, stress, torque and power grow",
     )
 
 
 def cusp_note(s: dict) -> str | None:
-    """Where the profile has a cusp or folds back (its radius of curvature reaches 0),
-    what that makes of the stress figure, or None: the Hertz stress grows without bound
-    toward rho = 0, so the cycle's largest is the samples' (a teacher's review read
-    'sigma_H <= 1957662.6 / 800 MPa')."""
-    bad = [v for v in s["violations"] if v["code"] in checks.CUSPED]
-    if not bad:
-        return None
-    ranges = [r for v in bad for r in v["ranges_deg"]][:4]
-    where = ", ".join(f"{lo:g}" if lo == hi else f"{lo:g}-{hi:g}" for lo, hi in ranges)
-    return (
-        f"the profile has a cusp or folds back at theta = {where} deg: toward it the "
-        "contact stress grows without bound, so its maximum is the samples' largest, "
-        "not the cam's"
+    """Where the profile has a cusp or folds back (its radius of curvature reaches 0):
+    the Hertz stress (Eq. 42) grows without bound toward rho = 0 (a teacher's review
+    read 'sigma_H <= 1957662.6 / 800 MPa')."""
+    return _unbounded(
+        s, checks.CUSPED, "the profile has a cusp or folds back", "the contact stress grows"
     )
 
 
 def impulse_note(s: dict) -> str | None:
-    """Where the velocity jumps (an infinite acceleration), what that makes of the
-    force and stress figures, or None: there the cam strikes the follower (a jump up:
-    an infinite force) or drops it (down: it leaves the cam), and no grid sample sees
-    it (a review: the figures of a constant-velocity rise read as bounds)."""
-    at = [lo for v in s["violations"] if v["code"] == "velocity_jump" for lo, _ in v["ranges_deg"]]
-    if not at:
-        return None
-    where = ", ".join(f"{x:g}" for x in sorted(at)[:4]) + (" ..." if len(at) > 4 else "")
-    return (
-        f"the velocity jumps at theta = {where} deg (an infinite acceleration): there "
-        "the contact force and stress have no bound, so their maxima are the samples' "
-        "largest, not the cam's"
+    """Where the velocity jumps (an infinite acceleration): the cam strikes the
+    follower (a jump up: an infinite force) or drops it (down: it leaves the cam), and
+    no grid sample sees it (a review: a constant-velocity rise's figures read as
+    bounds)."""
+    return _unbounded(
+        s,
+        {"velocity_jump"},
+        "the velocity jumps (an infinite acceleration)",
+        "the contact force and stress grow",
     )
 
 

@@ -617,11 +617,13 @@ def test_a_velocity_jump_says_its_force_figures_are_unbounded():
     data = load_preset("paper_example").model_dump()
     data["motion"]["segments"][0]["law"] = "constant_velocity"
     s = summary(analyze(type(load_preset("paper_example")).model_validate(data), verify=False))
+    md = panels.summary_markdown(s)
     note = impulse_note(s)
     assert note is not None and "theta = 0, 100 deg" in note  # the rise's two ends
-    assert f"  !! {note}" in report_text(
-        s
-    ) and "velocity jumps at theta" in panels.summary_markdown(s)
+    assert (
+        f"  !! {note}" in report_text(s)
+        and "velocity jumps (an infinite acceleration) at theta = 0, 100 deg" in md
+    )
     assert "unbounded: the velocity jumps" in panels.headline_html(s).replace("\u00a0", " ")
 
 

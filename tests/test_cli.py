@@ -295,7 +295,7 @@ def test_a_knife_edge_has_no_pitting_life_in_the_endurance_region(capsys):
 def test_round_off_does_not_show_in_the_text_report(capsys):
     """A designer's review: 'power mean -0.00 W' (a frictionless cam's mean power is 0
     to round-off) and a jump 'at theta = 0-0 deg' (one sample)."""
-    from camcore.checks import _where
+    from camcore.checks import where_text as _where
 
     args = ["report", "--preset", "paper_example", "--set", "dynamics.guide_friction=0"]
     assert main(args) == 0
