@@ -263,10 +263,7 @@ def _accepted_line(note: str | None) -> str:
     control that says so."""
     if not note:
         return ""
-    text = html.escape(note).replace(
-        "limits.require_continuous_acceleration is off",
-        "<i>Require continuous acceleration</i> is off (Material &amp; limits)",
-    )
+    text = html.escape(_typeset_units(note))
     return f"<div style='font-size:0.8em;color:#555;margin:2px 12px 0 2px'>ℹ {text}</div>"
 
 
@@ -293,6 +290,10 @@ _APP_WORDS = (
     (
         "limits.require_continuous_acceleration = false to accept it",
         "untick Require continuous acceleration (Material & limits) to accept it",
+    ),
+    (
+        "limits.require_continuous_acceleration is off",
+        "Require continuous acceleration is off (Material & limits)",
     ),
 )
 
