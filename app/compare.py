@@ -10,7 +10,7 @@ import numpy as np
 from camcore.model import PAPER_FOLLOWERS, Design
 from camcore.report import paper_table1_N
 
-from .panels import esc
+from .panels import esc, largest_pressure_angle
 from .plots import COLORS, Curve
 
 KINDS = PAPER_FOLLOWERS  # the compare tab is the paper's Table 1
@@ -24,10 +24,6 @@ def table_markdown(results: dict, design: Design) -> str:
 
     def f(x, nd=2):
         return "–" if x is None else f"{x:.{nd}f}"
-
-    def phi_max(s: dict) -> float | None:
-        phis = [v for v in s["pressure_angle_max_deg"].values() if v is not None]
-        return max(phis) if phis else None
 
     def dwell(k, s: dict) -> float | None:
         fn = s["contact_force_max_N"]
@@ -43,7 +39,7 @@ def table_markdown(results: dict, design: Design) -> str:
         ),
         ("F_N max cycle [N]", lambda k, s: f(s["contact_force_max_N"]["cycle"], 2)),
         ("σ_H max [MPa]", lambda k, s: f(s["contact_stress_max_MPa"]["cycle"], 1)),
-        ("φ max [°]", lambda k, s: f(phi_max(s), 2)),
+        ("φ max [°]", lambda k, s: f(largest_pressure_angle(s), 2)),
         ("ρ convex min [mm]", lambda k, s: f(s["radius_of_curvature_mm"]["convex_min"], 1)),
         ("wear max [µm/10⁶ cycles]", lambda k, s: f(s["wear_depth_max_um_per_Mcycle"], 4)),
         ("limits", lambda k, s: "✔" if s["valid"] else f"⚠ {len(s['violations'])}"),

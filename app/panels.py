@@ -311,6 +311,12 @@ def _stress_limit_MPa(s: dict) -> float:
     return s["contact_stress_allowable_MPa"] / s["contact_stress_safety_factor"]
 
 
+def largest_pressure_angle(s: dict) -> float | None:
+    """The summary's largest pressure angle of the rise and fall [deg], None if neither."""
+    angles = [v for v in s["pressure_angle_max_deg"].values() if v is not None]
+    return max(angles) if angles else None
+
+
 def headline_html(s: dict) -> str:
     """The figures a designer watches while moving a slider, in one line that stays in
     view with the status (the key numbers' table sits below the Design tab's controls):
@@ -321,7 +327,7 @@ def headline_html(s: dict) -> str:
     def mm(x: float | None) -> str:
         return "–" if x is None else f"{x:.1f}"
 
-    angles = [v for v in s["pressure_angle_max_deg"].values() if v is not None]
+    phi = largest_pressure_angle(s)
     rho = s["radius_of_curvature_mm"]
     concave = "" if rho["concave_min"] is None else f", concave ≥ {mm(rho['concave_min'])}"
     jump, stress = s["jump_speed_rpm"], s["contact_stress_max_MPa"]["cycle"]
@@ -332,7 +338,7 @@ def headline_html(s: dict) -> str:
     else:
         sigma = f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa"
     items = (
-        f"φ ≤ {max(angles):.1f}°" if angles else "φ –",
+        "φ –" if phi is None else f"φ ≤ {phi:.1f}°",
         f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
         sigma,
         "no jump"
