@@ -200,7 +200,9 @@ def vertex_colors(rgb) -> np.ndarray:
     """sRGB colours [0-255] as line segments' per-vertex colours must be sent: three.js
     takes vertex colours as linear and brightens them on screen (a review measured the
     dwell arcs drawn pastel and the base circle near-white beside the legend's
-    swatches; a single colour for a whole node is converted by viser and is right)."""
+    swatches; a single colour for a whole node is converted by viser and is right).
+    The sRGB decoding curve of IEC 61966-2-1: c / 12.92 up to 0.04045, else
+    ((c + 0.055) / 1.055)^2.4."""
     c = np.asarray(rgb, dtype=float) / 255.0
     linear = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
     return np.rint(linear * 255.0).astype(np.uint8)
