@@ -170,6 +170,27 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 step=0.01,
                 hint="G-code: how far the last pass goes below the blank",
             ),
+            Spec(
+                "cam.feed_mm_per_min",
+                "Feed [mm/min]",
+                "number",
+                step=1,
+                hint="G-code: cutting feed along the contour, for your machine and material",
+            ),
+            Spec(
+                "cam.plunge_mm_per_min",
+                "Plunge feed [mm/min]",
+                "number",
+                step=1,
+                hint="G-code: feed down into the blank",
+            ),
+            Spec(
+                "cam.spindle_rpm",
+                "Spindle speed [rpm]",
+                "number",
+                step=10,
+                hint="G-code: S on M3; 0 = none written (set it at the machine)",
+            ),
         ),
     ),
     (

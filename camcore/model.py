@@ -485,6 +485,26 @@ class Cam(_Part):
         description="how far the toolpath's last pass goes below the blank's bottom face "
         "[mm]; 0 = to the cam width exactly (a thin skin may stay)",
     )
+    feed_mm_per_min: float = Field(
+        200.0,
+        gt=0,
+        le=100000,
+        description="the toolpath's cutting feed F along the contour [mm/min] (set it for "
+        "your machine, cutter and material)",
+    )
+    plunge_mm_per_min: float = Field(
+        50.0,
+        gt=0,
+        le=100000,
+        description="the toolpath's plunge feed F down into the blank [mm/min]",
+    )
+    spindle_rpm: float = Field(
+        0.0,
+        ge=0,
+        le=200000,
+        description="the toolpath's spindle speed S [rpm]; 0 = none written (M3 without "
+        "S: the operator sets it, and the G-code's header says so)",
+    )
 
     @property
     def cut_depth_mm(self) -> float:

@@ -35,8 +35,6 @@ from .export import ExportError, require_star_shaped, warning
 from .units import MM, to_deg, to_mm
 
 SAFE_Z_MM = 5.0  # rapid height above the blank's top face
-FEED_MM_PER_MIN = 200.0
-PLUNGE_MM_PER_MIN = 50.0
 DECIMALS = 4  # of the X, Y words [mm]: 0.1 um, what controllers take
 ROUNDING_MM = 0.5 * 10.0**-DECIMALS * math.sqrt(2)  # the most a rounded vertex moves
 MAX_MOVES = 1_000_000  # lines of cutting moves in one file (~20 MB)
@@ -210,6 +208,21 @@ def _bore_comments(cam) -> list[str]:
     return [_comment(f"not cut here: the {cam.bore_diameter_mm:g} mm bore{key}")]
 
 
+def _feed_comments(cam) -> list[str]:
+    """What the operator must still check or set: the feeds while they are the
+    program's defaults, the spindle speed while the design gives none (M3 without S)."""
+    defaults = type(cam)()
+    out = []
+    if (cam.feed_mm_per_min, cam.plunge_mm_per_min) == (
+        defaults.feed_mm_per_min,
+        defaults.plunge_mm_per_min,
+    ):
+        out.append(_comment("feeds are defaults: check them for your machine and material"))
+    if cam.spindle_rpm == 0:
+        out.append(_comment("no spindle speed given: M3 has no S word, set it before the run"))
+    return out
+
+
 def _warning_comments(a) -> list[str]:
     """export.warning in comments of at most 80 characters (none for a valid design)."""
     text = warning(a)
@@ -230,8 +243,10 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     Climb milling with a clockwise spindle: the path runs clockwise around the cam.
     Each pass: a plunge at a point D beyond the path's outermost point on its ray (off
     the cam and off a blank up to the cam's largest radius + D), a straight feed in
-    onto the path, the contour, and back out the same way."""
+    onto the path, the contour, and back out the same way. Feeds and spindle speed:
+    cam.feed_mm_per_min, cam.plunge_mm_per_min, cam.spindle_rpm (0: M3 without S)."""
     cam = a.design.cam
+    feed, plunge = cam.feed_mm_per_min, cam.plunge_mm_per_min
     check_passes(cam)
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
@@ -262,21 +277,21 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
         _comment("the cutter centre path, no cutter compensation G41/G42: G40"),
-        _comment(f"{passes}, feed {FEED_MM_PER_MIN:g} plunge {PLUNGE_MM_PER_MIN:g} mm/min"),
+        _comment(f"{passes}, feed {feed:g} plunge {plunge:g} mm/min"),
         _comment(bottom),
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
         *_bore_comments(cam),
         *_deep_pass_comments(depths[0], to_mm(D)),
-        _comment("feeds are defaults: check them, and set the spindle speed: M3 has no S word"),
+        *_feed_comments(cam),
         *_warning_comments(a),
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
         f"G0 {_xy(lead)}",
-        "M3",
+        f"M3 S{cam.spindle_rpm:g}" if cam.spindle_rpm > 0 else "M3",
     ]
     contour = [_xy(p) for p in path[1:]] + [_xy(start), _xy(lead)]
     for z in depths:  # each pass starts and ends at the lead point, off the part
-        lines += [f"G1 Z{-z:.4f} F{PLUNGE_MM_PER_MIN:g}", f"G1 {_xy(start)} F{FEED_MM_PER_MIN:g}"]
+        lines += [f"G1 Z{-z:.4f} F{plunge:g}", f"G1 {_xy(start)} F{feed:g}"]
         lines += contour
     lines += [f"G0 Z{SAFE_Z_MM:.3f}", "M5", "M30", "%"]
     return "\n".join(lines) + "\n"

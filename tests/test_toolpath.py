@@ -127,8 +127,42 @@ def test_gcode_header_says_what_the_operator_must_set():
     text = gcode(analyze(load_preset("paper_example"), verify=False))
     head = [line for line in text.splitlines() if line.startswith("(")]
     assert "(one pass, full depth, feed 200 plunge 50 mm/min)" in head
-    assert "(feeds are defaults: check them, and set the spindle speed: M3 has no S word)" in head
+    assert "(feeds are defaults: check them for your machine and material)" in head
+    assert "(no spindle speed given: M3 has no S word, set it before the run)" in head
     assert "(the cutter centre path, no cutter compensation G41/G42: G40)" in head
+    assert "M3" in text.splitlines()
+
+
+def test_gcode_uses_the_designs_feeds_and_spindle_speed():
+    """A maker's review: feeds and spindle speed were fixed. The design's own are
+    written on every plunge and feed-in, S on M3, and the header no longer asks the
+    operator to set what the design gives."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.toolpath import gcode
+
+    d = load_preset("paper_example")
+    d = d.model_copy(
+        update={
+            "cam": d.cam.model_copy(
+                update={
+                    "feed_mm_per_min": 640.0,
+                    "plunge_mm_per_min": 90.0,
+                    "spindle_rpm": 4800.0,
+                    "pass_depth_mm": 5.0,
+                }
+            )
+        }
+    )
+    lines = gcode(analyze(d, verify=False)).splitlines()
+    assert "M3 S4800" in lines and "M3" not in lines
+    plunges = [x for x in lines if x.startswith("G1 Z-")]
+    feeds_in = [x for x in lines if x.startswith("G1 X") and " F" in x]
+    assert len(plunges) == 3 and all(x.endswith(" F90") for x in plunges)
+    assert len(feeds_in) == 3 and all(x.endswith(" F640") for x in feeds_in)
+    head = [x for x in lines if x.startswith("(")]
+    assert "(3 passes of 5 mm, feed 640 plunge 90 mm/min)" in head
+    assert not any("defaults" in x or "S word" in x for x in head)
 
 
 @pytest.mark.parametrize("tol_mm", [1e-3, 1e-4])
