@@ -138,6 +138,7 @@ class Session:
         self.store = storage.BrowserStore(client)
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
         self._persist = False  # on once the browser's stored design has been read
+        self._view_edits = 0  # the user's view changes (a kept view never overrides one)
         self._syncing = False  # True while the session writes into its own widgets
         self._syncer: int | None = None  # the thread that does (_quiet)
         self._busy = threading.Lock()  # a download being made (one at a time)
@@ -573,6 +574,7 @@ class Session:
         setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
         typed_text = self.store.read(storage.PROGRAM_KEY)
         typed = storage.parse_program(typed_text)
+        view = storage.parse_view(self.store.read(storage.VIEW_KEY))
         aside = self.store.read(storage.UNREADABLE_KEY)  # set aside by an earlier visit?
         if self.closed.is_set():
             return
@@ -606,6 +608,7 @@ class Session:
             self._say(note)
             self._say_quick(note)
         self._restore_program(typed_text, typed if working is not None else None, gen0 + restore)
+        self._restore_view(view)
         if why is not None:  # what the browser kept is not lost without a word
             where = (
                 f"it is set aside in this browser's storage as it was "
@@ -655,6 +658,47 @@ class Session:
                         "visit is back; with the other controls it makes a valid design."
                     )
             self._keep_typed(self._typed_program)
+
+    def _restore_view(self, view: dict) -> None:
+        """Look at the design as the tab last did (storage.parse_view's entries): the
+        cam angle, play speed, pause at stations, wide panel, overlays and camera
+        preset. Not if the user has changed any of them since the tab opened."""
+        with self.lock:
+            if self.closed.is_set():
+                return
+            if self._view_edits or not view:  # the tab's own view, now the copy was read
+                return self._keep_view()
+            ui = self.ui
+            for name, on in view.get("overlays", {}).items():
+                ui.overlay_boxes[name].value = on  # (each box's callback applies it)
+            if "speed_deg_s" in view:
+                ui.speed_slider.value = view["speed_deg_s"]
+            if "pause_at_stations" in view:
+                ui.pause_box.value = view["pause_at_stations"]
+            if view.get("wide_panel"):
+                ui.wide_box.value = True
+            if "camera_view" in view:
+                self.set_camera_view(view["camera_view"])
+            if "theta_deg" in view:
+                self._goto(view["theta_deg"])
+            self._keep_view()
+
+    def _keep_view(self) -> None:
+        """Write how the tab looks at the design (storage.VIEW_KEY) once the restore
+        has read the browser's copy; counted as the user's view change. Lock held."""
+        self._view_edits += 1
+        if not self._persist:
+            return
+        ui = self.ui
+        view = {
+            "theta_deg": round(self.theta_deg, 3),
+            "speed_deg_s": self.speed,
+            "pause_at_stations": bool(ui.pause_box.value),
+            "wide_panel": bool(ui.wide_box.value),
+            "camera_view": self.camera_view,
+            "overlays": {name: bool(box.value) for name, box in ui.overlay_boxes.items()},
+        }
+        self.store.write(storage.VIEW_KEY, json.dumps(view))
 
     def download_set_aside(self) -> None:
         """Send the working design this version could not open, as the browser kept it
@@ -780,6 +824,7 @@ class Session:
             if not self._syncing:
                 self._held = 0.0  # the user's own angle: no pause left to wait out
                 self._goto(float(value), slider=False)
+                self._keep_view()
 
     def step(self, label: str) -> None:
         """Pause and turn the cam by one of layout.STEP_DEG's steps; anything else (a
@@ -791,6 +836,7 @@ class Session:
             self._set_playing(False)
             self._held = 0.0
             self._goto(round(self.theta_deg + delta, 6))
+            self._keep_view()
 
     def goto_station(self, i: int | str) -> None:
         """Jump to station i; anything else (a hostile client's value) is ignored."""
@@ -801,6 +847,7 @@ class Session:
             self._set_playing(False)
             self._held = 0.0
             self._goto(math.degrees(float(self.analysis.stations[int(i)])))
+            self._keep_view()
 
     def _set_speed(self, value) -> None:
         """The animation speed [deg/s]; a value that is not a finite number in the
@@ -810,11 +857,14 @@ class Session:
         except (TypeError, ValueError):
             return
         if math.isfinite(v) and 0.0 <= v <= 360.0:
-            self.speed = v
+            with self.lock:
+                self.speed = v
+                self._keep_view()
 
     def _set_overlay(self, name: str, on: bool) -> None:
         with self.lock:
             self.view.set_overlay(name, bool(on))
+            self._keep_view()
 
     @property
     def playing(self) -> bool:
@@ -831,6 +881,7 @@ class Session:
             self._set_playing(not self.playing)
             if not self.playing:
                 self._goto(self.theta_deg)
+                self._keep_view()  # (not while playing: 30 writes a second)
 
     def _tick(self, dt: float, n: int) -> None:
         """The ticker's step: a frame, unless paused meanwhile (a step that waited for
@@ -876,6 +927,7 @@ class Session:
         """Pause at stations ticked or unticked: a pause under way ends."""
         with self.lock:
             self._held = 0.0
+            self._keep_view()
 
     def _station_within(self, step_deg: float) -> float | None:
         """The first station angle [deg] after the current angle and at most
@@ -936,6 +988,7 @@ class Session:
             self.ui.where_md.content = self._where(self.view.k)  # its room follows
             if self.camera_view != "3D":  # the mechanism beside the panel's new width
                 self.reset_camera()
+            self._keep_view()
 
     def _on_camera(self, cam) -> None:
         """A camera message from the browser. One that keeps the pose and changes the
@@ -989,6 +1042,7 @@ class Session:
         with self.lock:
             self.camera_view = view
             self.reset_camera()
+            self._keep_view()
 
     def reset_camera(self) -> None:
         """The preset view's camera and label size (also the Reset button's, which

@@ -13,6 +13,7 @@ strict, size-capped parser as an uploaded file, and the saved list is bounded.
 from __future__ import annotations
 
 import json
+import math
 import warnings
 
 from camcore.model import (
@@ -24,6 +25,7 @@ from camcore.model import (
     design_to_json,
 )
 
+from .scene import CAMERA_VIEWS, OVERLAYS
 from .segments import ANGLE_RANGE, LIFT_RANGE
 
 WORKING_KEY = "camdesigner.working"
@@ -35,6 +37,9 @@ UNREADABLE_KEY = "camdesigner.unreadable"
 # the segment table's program while it does not make a valid design (the working design
 # is the last valid one): a reload brings the unfinished program back; "" once valid
 PROGRAM_KEY = "camdesigner.program"
+# how the tab was looking at the design: cam angle, play speed, pause at stations, wide
+# panel, overlays, camera preset (a teacher's review: a reload kept the design only)
+VIEW_KEY = "camdesigner.view"
 MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
@@ -110,6 +115,40 @@ def parse_setup(text: str | None) -> dict | None:
     except (ValueError, RecursionError):  # (deep nesting fits in 4,096 characters)
         return None
     return raw if isinstance(raw, dict) else None
+
+
+# entry -> what a stored view may hold there (anything else is left out, entry by entry)
+_VIEW_CHECKS = {
+    "theta_deg": lambda v: _number(v) and 0.0 <= v < 360.0,
+    "speed_deg_s": lambda v: _number(v) and 5.0 <= v <= 360.0,  # the slider's range
+    "pause_at_stations": lambda v: isinstance(v, bool),
+    "wide_panel": lambda v: isinstance(v, bool),
+    "camera_view": lambda v: v in CAMERA_VIEWS,
+    "overlays": lambda v: (
+        isinstance(v, dict) and all(k in OVERLAYS and isinstance(on, bool) for k, on in v.items())
+    ),
+}
+
+
+def _number(v) -> bool:
+    return isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def parse_view(text: str | None) -> dict:
+    """The stored view (VIEW_KEY) as a dict of its well-formed entries only (a browser's
+    storage is untrusted: a wrong entry is dropped, the others still count); {} if
+    absent, too long or not a JSON object."""
+    raw = parse_setup(text)  # (the same bounds: at most MAX_SETUP_BYTES, an object)
+    if raw is None:
+        return {}
+    out = {}
+    for key, ok in _VIEW_CHECKS.items():
+        try:
+            if key in raw and ok(raw[key]):
+                out[key] = raw[key]
+        except TypeError:  # (an unhashable value tested for membership)
+            pass
+    return out
 
 
 _SEGMENT_FIELDS = {"kind": (str,), "angle_deg": (int, float), "lift_mm": (int, float, type(None))}

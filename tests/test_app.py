@@ -9,6 +9,7 @@ import io
 import itertools
 import json
 import math
+import threading
 import time
 
 import numpy as np
@@ -2030,3 +2031,76 @@ def test_a_kept_design_opens_under_its_own_name(app, monkeypatch):
         s.open_saved("variant A")
         assert s.design == load_preset("valve_lift_roller")
         assert s.ui.save_name.value == "variant A"
+
+
+def test_a_reload_keeps_how_the_tab_looked_at_the_design(app, monkeypatch):
+    """A teacher's review: a reload kept the design but not the cam angle, the pause at
+    stations, the wide panel, the overlays or the camera preset. The tab writes them
+    as they change and a new tab takes them back; a kept entry that is not one of the
+    controls' values (a tampered storage) is left out, the others still count."""
+    from app import storage
+
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {}, writes) as s:
+        assert storage.VIEW_KEY in writes  # the restore writes the tab's own at once
+        s.goto_station(2)
+        station_2 = s.theta_deg
+        s.ui.pause_box.value = True
+        s.ui.speed_slider.value = 90.0
+        s.ui.overlay_boxes["wear"].value = True
+        s.ui.overlay_boxes["forces"].value = False
+        s.set_camera_view("Contact close-up")
+        s.ui.wide_box.value = True
+    kept = writes[storage.VIEW_KEY]
+    with restored_tab(app, monkeypatch, {storage.VIEW_KEY: kept}) as s:
+        assert s.theta_deg == pytest.approx(station_2, abs=1e-3)
+        assert s.ui.angle_slider.value == pytest.approx(round(station_2, 1))
+        assert s.ui.pause_box.value and s.speed == 90.0 and s.ui.speed_slider.value == 90.0
+        assert s.view.show["wear"] and not s.view.show["forces"]
+        assert s.camera_view == "Contact close-up" and s.ui.wide_box.value
+        assert s.panel_px > __import__("app.layout").layout.NARROW_PANEL_PX
+    hostile = json.dumps(
+        {
+            "theta_deg": 400,
+            "speed_deg_s": float("nan"),
+            "pause_at_stations": "yes",
+            "camera_view": "../../etc",
+            "overlays": {"wear": True, "nonsense": True},
+            "wide_panel": True,
+        }
+    )
+    assert storage.parse_view(hostile) == {"wide_panel": True}
+    with restored_tab(app, monkeypatch, {storage.VIEW_KEY: hostile}) as s:
+        assert s.theta_deg == 0.0 and s.speed == 45.0 and not s.ui.pause_box.value
+        assert s.camera_view == "Front" and s.ui.wide_box.value
+    for junk in ("[1]", "{", "x" * 5000, '{"overlays": {"wear": [1]}}'):
+        assert storage.parse_view(junk) == {}
+
+
+def test_the_users_own_view_change_wins_over_the_kept_one(app, monkeypatch):
+    """A view change the user makes before the restore has read the browser's copy is
+    not undone by it."""
+    from app import storage
+
+    kept = json.dumps({"theta_deg": 200.0, "camera_view": "3D"})
+    gate = threading.Event()
+
+    def slow_read(self, key):
+        gate.wait(10)
+        return {storage.VIEW_KEY: kept}.get(key)
+
+    writes: dict[str, str] = {}
+    monkeypatch.setattr(storage.BrowserStore, "read", slow_read)
+    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, k, v: writes.__setitem__(k, v))
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    try:
+        assert wait_for(lambda: set(app.sessions) - before)
+        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+        s.step("+5°")
+        gate.set()
+        s._restorer.join(10)
+        assert s.theta_deg == pytest.approx(5.0) and s.camera_view == "Front"
+        assert json.loads(writes[storage.VIEW_KEY])["theta_deg"] == pytest.approx(5.0)
+    finally:
+        t.close()
