@@ -99,6 +99,9 @@ def _profile_figure(a: Analysis):
     return fig
 
 
+CAM_FILL, CAM_EDGE, FOLLOWER = "#c8d4e6", "#28508c", "#cd6e1e"  # the stations' colours
+
+
 def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     """The paper's Fig. 4 for this design: the mechanism at each station side by side,
     zoomed on the contact region, with the contact points of the faces touching at the
@@ -108,6 +111,12 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     A face touches at a station if it touches just before or just after it: at station
     0 of the paper's program S2 leaves as S1 takes over, and both touch (a teacher's
     review found S2 drawn open there, as the state just after the station was drawn).
+
+    Each panel has an inset of the whole cam at the station's angle, with its axis (+),
+    its theta = 0 datum (the cam frame's +Y ray), the follower's line of travel and the
+    panel's crop as a box: a teacher's review found that a crop alone does not show where
+    the cam is in its turn. It sits in a bottom corner, on the cam's fill, on the side
+    away from the contact points, where no face, contact point or label is drawn.
     """
     from matplotlib.figure import Figure
 
@@ -131,10 +140,19 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     n_st = a.stations.size
     near = a.local(np.mod(np.concatenate([a.stations - 1e-7, a.stations + 1e-7]), 2 * np.pi))
     touching = near.in_contact[:, :n_st] | near.in_contact[:, n_st:]
+    # the insets' Y range [mm], one for all panels: the whole cam below, the highest
+    # panel's crop above (the crop's top is r_b + S + 0.2 r_b, as set below)
+    r_max = to_mm(float(np.max(np.hypot(P[:, 0], P[:, 1]))))
+    top = max(r_max, to_mm(rb + float(np.max(at.prog.S)) + 0.2 * rb))
+    frame = (-1.05 * r_max, 1.12 * top)
+    # the inset's corner: the right one, unless the contact points lie right of the
+    # axis (a single follower's offset; a concave face's contact is on the side away
+    # from its stem)
+    left = bool(np.mean(at.point_world[..., 0]) > 0.05 * rb)
     for k, (ax, th) in enumerate(zip(axes, a.stations, strict=False)):
         c, s_ = np.cos(th), np.sin(th)
         X, Y = c * P[:, 0] + s_ * P[:, 1], -s_ * P[:, 0] + c * P[:, 1]  # R(-theta), Eq. 11
-        ax.fill(to_mm(X), to_mm(Y), color="#c8d4e6", ec="#28508c", lw=1)
+        ax.fill(to_mm(X), to_mm(Y), color=CAM_FILL, ec=CAM_EDGE, lw=1)
         S = float(at.prog.S[k])
         for i, f in enumerate(a.geo.faces):
             yc = a.geo.y0 + S
@@ -142,7 +160,7 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                 ax.plot(
                     to_mm(np.array([-0.6, 0.6]) * rb),
                     to_mm(np.array([yc, yc])),
-                    color="#cd6e1e",
+                    color=FOLLOWER,
                     lw=2,
                 )
             p = at.point_world[i, k]
@@ -152,7 +170,7 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                 ax.plot(
                     to_mm(f.x_c + abs(f.r) * np.cos(t) * arc),
                     to_mm(yc + abs(f.r) * np.sin(t) * arc),
-                    color="#cd6e1e",
+                    color=FOLLOWER,
                     lw=2,
                 )
             on = bool(touching[i, k])
@@ -178,7 +196,66 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
         ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°", fontsize=11)
         text = events[k].split(": ", 1)[-1]
         ax.set_xlabel(text, fontsize=8.5, wrap=True)
+        _whole_cam_inset(ax, a, float(th), frame, left=left)
     return fig
+
+
+def _whole_cam_inset(ax, a: Analysis, th: float, frame: tuple[float, float], left: bool) -> None:
+    """The whole cam at angle ``th`` in a bottom corner of a station panel ``ax``: its
+    outline turned as the panel's (Eq. 11), its axis (+), its theta = 0 datum (the cam
+    frame's +Y ray, a line from the axis to the rim), the follower's line of travel
+    (X = stem_x, upward from the crop's middle) and the panel's crop as a box.
+
+    ``frame`` = (bottom, top) of the inset's Y range [mm], the same for every station so
+    the cam keeps its size and place from panel to panel while it turns.
+    """
+    from matplotlib.patches import Rectangle
+
+    P = a.profile.points
+    c, s_ = np.cos(th), np.sin(th)
+    X, Y = to_mm(c * P[:, 0] + s_ * P[:, 1]), to_mm(-s_ * P[:, 0] + c * P[:, 1])
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    # the panel's box is (y1 - y0) : (x1 - x0) tall (equal aspect): a square inset is
+    # h tall and h * that ratio wide, in the panel's axes fraction; flush with the
+    # corner, so no sliver of the panel's cam shows beside it
+    h = 0.48
+    w = h * (y1 - y0) / (x1 - x0)
+    ins = ax.inset_axes([0.0 if left else 1.0 - w, 0.0, w, h])
+    ins.fill(X, Y, color=CAM_FILL, ec=CAM_EDGE, lw=0.8, label="cam")
+    ins.plot(0, 0, "+", ms=6, mew=1, color="#222222", label="cam axis")
+    # the datum: where the cam frame's +Y ray meets the profile, turned with the cam
+    r0 = float(np.hypot(*P[np.argmin(np.abs(np.arctan2(P[:, 0], P[:, 1])))]))
+    tip = to_mm(np.array([s_ * r0, c * r0]))
+    ins.plot([0, tip[0]], [0, tip[1]], color=CAM_EDGE, lw=1.3, label="θ = 0")
+    ins.plot(*tip, "o", ms=3, color=CAM_EDGE)
+    # the label beside the datum line, on its lower side (the crop's box and the
+    # follower's line are above the cam), its centre as far off the line as its half
+    # size that way and 3 points more (the label is about 13 x 7 points)
+    side = np.array([c, -s_] if -s_ <= 0 else [-c, s_])
+    off = (3 + 6.5 * abs(side[0]) + 3.5 * abs(side[1])) * side
+    ins.annotate(
+        "θ=0",
+        tuple(0.4 * tip),
+        xytext=tuple(off),
+        textcoords="offset points",
+        ha="center",
+        va="center",
+        fontsize=6.5,
+        color=CAM_EDGE,
+    )
+    stem = to_mm(a.geo.stem_x)
+    ins.plot([stem, stem], [0.5 * (y0 + y1), frame[1]], color=FOLLOWER, lw=1.2, label="travel")
+    ins.add_patch(
+        Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, ec="#222222", lw=0.8, label="crop")
+    )
+    half = 0.5 * (frame[1] - frame[0])
+    ins.set_xlim(-half, half)
+    ins.set_ylim(*frame)
+    ins.set_aspect("equal")
+    ins.set_xticks([])
+    ins.set_yticks([])
+    for spine in ins.spines.values():
+        spine.set_color("#888888")
 
 
 def stations_png(a: Analysis, width_px: int = 1100) -> bytes:

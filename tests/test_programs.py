@@ -288,6 +288,53 @@ def test_stations_figure_fills_the_faces_touching_at_each_station():
     assert filled == [2, 1, 2, 2, 1, 2]
 
 
+@pytest.mark.parametrize("offset_mm", [None, 30.0])
+def test_stations_figure_locates_each_crop_on_the_whole_cam(offset_mm):
+    """A teacher's review: a crop alone does not show where the cam is in its turn.
+    Each panel has an inset with the whole cam turned to the station's angle (its span
+    the cam's, not the crop's), its theta = 0 datum (the cam frame's +Y ray) at the
+    turned place, and the panel's crop as a box; the inset covers no contact point,
+    label, title or caption (for a single concave face set off 30 mm too, whose contact
+    lies on the right, away from its stem)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from camcore import document
+
+    d = PAPER
+    if offset_mm is not None:
+        data = PAPER.with_kind("single_concave").model_dump(mode="json")
+        data["follower"]["single_offset_mm"] = offset_mm
+        d = Design.model_validate(data)
+    a = analyze(d, verify=False)
+    fig = document.stations_figure(a, width_in=7.0, cols=2)  # the app's size
+    FigureCanvasAgg(fig).draw()
+    renderer = fig.canvas.get_renderer()
+    P = a.profile.points * 1e3
+    panels = [ax for ax in fig.axes if ax.axison]
+    assert len(panels) == len(a.stations)
+    for ax, th in zip(panels, a.stations, strict=True):
+        (inset,) = ax.child_axes
+        c, s = math.cos(th), math.sin(th)
+        X, Y = c * P[:, 0] + s * P[:, 1], -s * P[:, 0] + c * P[:, 1]
+        (cam,) = [p for p in inset.patches if p.get_label() == "cam"]
+        xy = cam.get_xy()
+        assert np.ptp(xy[:, 0]) == pytest.approx(np.ptp(X), abs=1e-6)
+        assert np.ptp(xy[:, 1]) == pytest.approx(np.ptp(Y), abs=1e-6)
+        assert np.ptp(xy[:, 0]) > 1.9 * a.geo.r_b * 1e3 > 2 * np.ptp(ax.get_xlim())
+        (datum,) = [ln for ln in inset.lines if ln.get_label() == "θ = 0"]
+        tip = np.array([datum.get_xdata()[-1], datum.get_ydata()[-1]])
+        # the cam frame's +Y ray meets the base circle (the low dwell ends at theta = 0)
+        assert tip == pytest.approx(a.geo.r_b * 1e3 * np.array([s, c]), abs=0.1)
+        (crop,) = [p for p in inset.patches if p.get_label() == "crop"]
+        (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+        assert crop.get_bbox().bounds == pytest.approx((x0, y0, x1 - x0, y1 - y0))
+        box = inset.get_window_extent(renderer)
+        drawn = [t.get_window_extent(renderer) for t in ax.texts]
+        drawn += [ax.title.get_window_extent(renderer), ax.xaxis.label.get_window_extent(renderer)]
+        drawn += [ln.get_window_extent(renderer) for ln in ax.lines if ln.get_marker() == "o"]
+        assert not any(b.overlaps(box) for b in drawn)
+
+
 def test_every_fall_into_a_rise_gets_its_empty_dwell():
     """A program that repeats (rise, fall) twice: both fall -> rise boundaries carry the
     empty dwell arc on which a double follower's faces meet (the second was skipped:
