@@ -90,12 +90,15 @@ def esc(text: object) -> str:
 # made sticky; viser nests it in a box with overflow: hidden, which would make that box
 # the one it sticks in, so every box around it clips instead: the same look, and
 # "clip" makes no scroll container), and scrolls inside itself past a third of the
-# window: a long list of violations never hides the controls. The panel itself stays
-# 80 px narrower than the window (the wide panel on a high-DPI screen: app.layout).
+# window (a fifth on a window 800 px high or less: at 1280x720 the status and the
+# Animation block had taken 530 px of the panel, a teacher's review): a long list of
+# violations never hides the controls. The panel itself stays 80 px narrower than the
+# window (the wide panel on a high-DPI screen: app.layout).
 STATUS_CSS = (
     "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important;min-width:0}"
     "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff}"
     "#cam-status{max-height:32vh;overflow-y:auto}"
+    "@media (max-height:800px){#cam-status{max-height:20vh}}"
     "[data-testid='floating-panel']{max-width:calc(100vw - 80px)}</style>"
 )
 

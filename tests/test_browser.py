@@ -298,12 +298,19 @@ def test_trust_in_the_browser(tmp_path):
                 "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.explore')"
                 " && localStorage.getItem(k).includes('max pressure angle'))"
             )
+            # and how the tab looked at the design: the angle a click on +5° left
+            page.get_by_role("button", name="+5°").click()
+            page.wait_for_function(
+                "() => Object.keys(localStorage).some(k => k.endsWith('camdesigner.view')"
+                " && JSON.parse(localStorage.getItem(k)).theta_deg === 5)"
+            )
             page.reload()
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("tab", name="Files").click()
             page.get_by_text("Restored the design last edited").first.wait_for()
             (session,) = [s for s in app.sessions.values() if not s.closed.is_set()]
             assert session.design == design_from_json(json.dumps(design))
+            _wait(lambda: session.theta_deg == 5.0)
             assert "<b id=inj>x</b> & co" in session.saved
             setup = session.ui.explore.setup()
             assert setup["steps"] == 5 and setup["figures"][2] == "max pressure angle"
@@ -338,6 +345,11 @@ def test_trust_in_the_browser(tmp_path):
             assert _field(page, "Lift h").bounding_box()["y"] < lift_y - 100  # it scrolled
             box = page.locator("#cam-status").bounding_box()
             assert box is not None and top is not None and 0 <= box["y"] <= top["y"] + 5
+            # a window 800 px high or less: the status scrolls past a fifth of it
+            assert (
+                page.evaluate("getComputedStyle(document.getElementById('cam-status')).maxHeight")
+                == f"{0.2 * 700:g}px"
+            )
             # typed decimals are kept (viser had rounded them to the step's: a 6.35 mm
             # cutter became 6, a 0.01 mm pass depth 0, a 12.34 mm lift 12.3)
             for label, typed, path in [
