@@ -148,7 +148,11 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     # the inset's corner: the right one, unless the contact points lie right of the
     # axis (a single follower's offset; a concave face's contact is on the side away
     # from its stem)
-    left = bool(np.mean(at.point_world[..., 0]) > 0.05 * rb)
+    # the crops' middle: the contact points' mean X over the stations, the same for all
+    # panels (the axis for a symmetric follower; a single follower set off 30 mm had
+    # its roller at the crop's edge, and one set off further would have left it)
+    mid = to_mm(float(np.mean(at.point_world[..., 0])))
+    left = bool(mid > to_mm(0.05 * rb))
     for k, (ax, th) in enumerate(zip(axes, a.stations, strict=False)):
         c, s_ = np.cos(th), np.sin(th)
         X, Y = c * P[:, 0] + s_ * P[:, 1], -s_ * P[:, 0] + c * P[:, 1]  # R(-theta), Eq. 11
@@ -188,7 +192,7 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
                 fontweight="bold" if on else "normal",
             )
         y = to_mm(rb + S)
-        ax.set_xlim(-0.45 * to_mm(rb), 0.45 * to_mm(rb))
+        ax.set_xlim(mid - 0.45 * to_mm(rb), mid + 0.45 * to_mm(rb))
         ax.set_ylim(y - 0.25 * to_mm(rb), y + 0.2 * to_mm(rb))
         ax.set_aspect("equal")
         ax.set_xticks([])

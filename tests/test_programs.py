@@ -15,7 +15,7 @@ from pydantic import ValidationError
 
 from camcore import checks, export, motion
 from camcore.analysis import analyze
-from camcore.model import Design, MotionLaw, load_preset
+from camcore.model import Design, FollowerKind, MotionLaw, load_preset
 from camcore.report import summary
 
 PAPER = load_preset("paper_example")
@@ -578,3 +578,23 @@ def test_theta_0_is_the_end_of_a_last_motion():
     d = with_program([_dwell(60), _R, _dwell(70), _F])
     p = motion.program(d, np.array([0.0, 2 * math.pi - 1e-9]))
     assert p.segment[0] == motion.FALL and p.S[0] == pytest.approx(0.0, abs=1e-15)
+
+
+@pytest.mark.parametrize("offset_mm", [-60.0, 45.0])
+def test_stations_crop_follows_an_offset_follower(offset_mm):
+    """A crop centred on the cam axis had an offset roller at its edge (30 mm) or out of
+    it (further): the crops are centred on the contact points, so each station's contact
+    lies in the middle half of its panel."""
+    from camcore import document
+
+    d = Design().with_kind(FollowerKind("single_roller"))
+    d = d.model_copy(
+        update={"follower": d.follower.model_copy(update={"single_offset_mm": offset_mm})}
+    )
+    a = analyze(d, verify=False)
+    fig = document.stations_figure(a)
+    for ax in [ax for ax in fig.axes if ax.axison]:
+        (dot,) = [ln for ln in ax.lines if ln.get_marker() == "o"]
+        x0, x1 = ax.get_xlim()
+        x = float(dot.get_xdata()[0])
+        assert x0 + 0.25 * (x1 - x0) < x < x1 - 0.25 * (x1 - x0)
