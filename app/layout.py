@@ -10,10 +10,11 @@ downloads).
 
 from __future__ import annotations
 
+import textwrap
 from dataclasses import dataclass, field
 from typing import Any
 
-from camcore.model import Design, preset_names
+from camcore.model import Design, load_preset, preset_names
 
 from . import compare, controls, plots, storage
 from .explore import ExplorePanel
@@ -52,6 +53,20 @@ STEP_DEG = {"−5°": -5.0, "−1°": -1.0, "+1°": 1.0, "+5°": 5.0}
 # narrower than the window.
 NARROW_PANEL_PX = 384
 PAUSE_AT_STATION_S = 3.0  # the animation's stop at each station, when asked
+
+
+def preset_labels() -> dict[str, str]:
+    """{label shown: shipped preset name}: each preset by its design's own name up to
+    any parenthesis (a teacher's review: the list showed "classroom_harmonic" and the
+    like, the CLI's names), shortened at a word to 64 characters; the default first; a
+    label two presets would share keeps the preset's name after it."""
+    out: dict[str, str] = {}
+    names = sorted(preset_names(), key=lambda n: n != DEFAULT_PRESET)
+    for name in names:
+        own = load_preset(name).name.split(" (")[0]
+        label = textwrap.shorten(own, 64, placeholder=" …") or name
+        out[label if label not in out else f"{label} [{name}]"] = name
+    return out
 
 
 def wide_panel_px(drawn_width_px: int) -> int:
@@ -196,9 +211,14 @@ def _view_tab(gui, h: dict) -> None:
 
 
 def _files_tab(gui, h: dict, base: Design) -> None:
-    names = preset_names()
+    labels = {name: label for label, name in preset_labels().items()}
     h["preset_dd"] = gui.add_dropdown(
-        "Preset", names, initial_value=DEFAULT_PRESET if DEFAULT_PRESET in names else names[0]
+        "Preset",
+        tuple(labels.values()),
+        initial_value=labels.get(DEFAULT_PRESET, next(iter(labels.values()))),
+        hint="the shipped designs (by the CLI's names: "
+        + ", ".join(labels)
+        + ", e.g. camcore report --preset paper_example)",
     )
     h["preset_btn"] = gui.add_button("Load preset")
     h["upload_btn"] = gui.add_upload_button("Open design JSON…", mime_type="application/json")

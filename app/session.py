@@ -43,6 +43,7 @@ from .layout import (
     STEP_DEG,
     Layout,
     build_layout,
+    preset_labels,
     wide_panel_px,
 )
 from .panels import (
@@ -186,7 +187,10 @@ class Session:
         ui.pause_box.on_update(lambda _: self._end_pause())
         ui.camera_btn.on_click(lambda _: self.reset_camera())
         ui.stations_fig_btn.on_click(lambda _: self.show_stations_diagram())
-        ui.preset_btn.on_click(lambda _: self.load_preset(ui.preset_dd.value))
+        presets = preset_labels()  # label shown -> shipped name (load_preset checks it)
+        ui.preset_btn.on_click(
+            lambda _: self.load_preset(presets.get(ui.preset_dd.value, str(ui.preset_dd.value)))
+        )
         ui.upload_btn.on_upload(lambda e: self.upload(e.target.value.name, e.target.value.content))
         ui.save_btn.on_click(lambda _: self.save_named(ui.save_name.value))
         ui.open_saved_btn.on_click(lambda _: self.open_saved(ui.saved_dd.value))

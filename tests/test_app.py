@@ -287,9 +287,12 @@ def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content,
 
 def test_preset_and_downloads(tab, downloads):
     s = tab
-    s.ui.preset_dd.value = "classroom_harmonic"
+    s.ui.preset_dd.value = "Classroom: simple harmonic rise/fall, single concave face"
     s.ui.preset_btn.value = True  # click
     assert s.design == load_preset("classroom_harmonic")
+    s.ui.preset_dd.value = "../../paper_example"  # a hostile client's value: not a label
+    s.ui.preset_btn.value = True
+    assert s.design == load_preset("classroom_harmonic") and "No preset" in s.ui.files_md.content
     s.ui.download_btns["stl"].value = True
     name, data = downloads[-1]
     assert name.endswith(".stl")
