@@ -47,6 +47,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from . import extremes
 from .units import MM, to_deg, to_mm
 
 LIFT_TOLERANCE_M = 1e-8  # 1e-5 mm: far above round-off, far below any real defect
@@ -91,13 +92,17 @@ def runs_deg(
     theta: np.ndarray, mask: np.ndarray, extra: tuple[tuple[float, float], ...] = ()
 ) -> tuple[tuple[float, float], ...]:
     """Contiguous runs of ``mask`` over the grid, with the brackets ``extra`` [rad] of
-    breaks found between the samples, merged, as (start, end) cam angles in degrees."""
+    breaks found between the samples, merged, as (start, end) cam angles in degrees.
+    A run through theta = 0 on the design's whole-turn grid is its two parts, the last
+    ending at 360 (where_text says it as one)."""
     m = mask.astype(np.int8)
     edges = np.flatnonzero(np.diff(np.concatenate([[0], m, [0]])))
     spans = [
         (float(theta[a]), float(theta[b - 1])) for a, b in zip(edges[::2], edges[1::2], strict=True)
     ]
     two_pi = 2 * np.pi
+    if spans and m[0] and m[-1] and spans[0][0] == 0.0 and extremes.whole_turn(theta):
+        spans[-1] = (spans[-1][0], two_pi)  # (the run goes on at the first sample)
     turn = []  # a bracket across theta = 0 (extremes.brackets) as its two parts in [0, 2 pi]
     for lo, hi in extra:
         if lo < 0.0:
@@ -116,8 +121,18 @@ def runs_deg(
 
 
 def where_text(ranges: tuple[tuple[float, float], ...]) -> str:
-    """Cam-angle ranges [deg] in words: "theta = 10-20, 35 deg (+2 more)"."""
-    shown = ", ".join(f"{s:g}" if f"{s:g}" == f"{e:g}" else f"{s:g}-{e:g}" for s, e in ranges[:4])
+    """Cam-angle ranges [deg] in words: "theta = 10-20, 35 deg (+2 more)"; a range
+    through theta = 0 (its two parts, one from 0, one to 360: runs_deg) as one,
+    "theta = 350-10 (through 0) deg"."""
+    if len(ranges) > 1 and ranges[0][0] == 0 and ranges[-1][1] == 360:
+        ranges = ((ranges[-1][0], ranges[0][1]), *ranges[1:-1])
+
+    def span(s: float, e: float) -> str:
+        if f"{s:g}" == f"{e:g}":
+            return f"{s:g}"
+        return f"{s:g}-{e:g}" + (" (through 0)" if s > e else "")
+
+    shown = ", ".join(span(s, e) for s, e in ranges[:4])
     more = f" (+{len(ranges) - 4} more)" if len(ranges) > 4 else ""
     return f"theta = {shown} deg{more}"
 

@@ -511,3 +511,26 @@ def test_convex_and_concave_radii_match_the_textbook_closed_form():
     assert paper["radius_of_curvature_mm"]["concave_min"] is None  # Eq. 22: convex
     lo = min(paper["curvature_radius_mm"]["rise"][0], paper["curvature_radius_mm"]["fall"][0])
     assert paper["radius_of_curvature_mm"]["convex_min"] <= lo  # dwells included
+
+
+def test_a_run_through_theta_0_is_said_as_one():
+    """A broken stretch that goes on through theta = 0 was said as two ("0-5, 355-359.9"):
+    on the whole-turn grid its last part now ends at 360 and the words make it one;
+    the data keeps its two parts in [0, 360]. A run that does not reach both ends, a
+    partial grid, and a whole turn stay as they were."""
+    from camcore.checks import runs_deg, where_text
+
+    theta = np.radians(np.arange(3600) * 0.1)
+    mask = (theta < np.radians(5.05)) | (theta > np.radians(354.95))
+    mask |= (theta > np.radians(99.95)) & (theta < np.radians(110.05))
+    ranges = runs_deg(theta, mask)
+    assert ranges == ((0.0, 5.0), (100.0, 110.0), (355.0, 360.0))
+    assert where_text(ranges) == "theta = 355-5 (through 0), 100-110 deg"
+    assert where_text(runs_deg(theta, theta < np.radians(5.05))) == "theta = 0-5 deg"
+    assert runs_deg(theta[:1800], mask[:1800]) == ((0.0, 5.0), (100.0, 110.0))
+    assert where_text(runs_deg(theta, np.ones(3600, bool))) == "theta = 0-360 deg"
+    # a bracket found between the samples across theta = 0 (extremes.brackets) alike
+    extra = ((np.radians(-0.1), np.radians(0.1)),)
+    assert where_text(runs_deg(theta, np.zeros(3600, bool), extra)) == (
+        "theta = 359.9-0.1 (through 0) deg"
+    )
