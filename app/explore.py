@@ -40,6 +40,7 @@ PARAMETERS = {
 }
 FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
 MAX_STEPS = 15  # per axis
+MAX_RANGE_ABS = 1e9  # of a range's ends: far beyond every field's own limits
 MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
 CHUNK = 12  # designs per background job: ~0.1 s, the cancel latency
 MAX_FRONT = OFFERED  # designs of the front offered for loading (spread along it)
@@ -224,7 +225,9 @@ class ExplorePanel:
             )
             steps = int(self.steps.value)
         except (TypeError, ValueError):
-            self.progress.content = "✖ Each range needs two finite numbers."
+            self.progress.content = (
+                f"✖ Each range needs two finite numbers within ±{MAX_RANGE_ABS:g}."
+            )
             return None
         points = grid_points((px, x0, x1), (py, y0, y1), steps, kinds)
         base = design.model_dump(mode="json")
@@ -369,9 +372,10 @@ def _range_label(axis: str, field_label: str) -> str:
 
 
 def _finite_pair(value) -> tuple[float, float]:
-    """(from, to) as two finite floats, else ValueError."""
+    """(from, to) as two floats within +-MAX_RANGE_ABS, else ValueError (a review:
+    -1e308 to 1e308 had made NaN points, and 1e308 to 1.7e308 a plot's ticks fail)."""
     lo, hi = (float(v) for v in value)
-    if not (np.isfinite(lo) and np.isfinite(hi)):
+    if not (abs(lo) <= MAX_RANGE_ABS and abs(hi) <= MAX_RANGE_ABS):  # (NaN: False)
         raise ValueError("not finite")
     return lo, hi
 

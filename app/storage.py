@@ -43,6 +43,10 @@ VIEW_KEY = "camdesigner.view"
 MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
+MAX_UNREAD_NAME = 1000  # ... of a name this version cannot show, kept as it is
+# the saved list's stored text: a browser's storage holds about 5 million characters a
+# site, so a longer text is not one a browser wrote
+MAX_SAVED_CHARS = 5_000_000
 READ_TIMEOUT_S = 5.0  # a tab that never answers (e.g. a test client) costs this, once
 
 
@@ -59,21 +63,32 @@ def parse_working(text: str | None) -> Design | None:
 def unread_entries(text: str | None, saved: dict[str, str]) -> dict:
     """The entries of a stored saved list that parse_saved left out (a later version's,
     a name too long): kept as they are when the list is written back, so saving a
-    design never drops what this version cannot show. {} unless ``text`` is a JSON
-    object."""
-    if not text or len(text) > MAX_SAVED * MAX_DESIGN_BYTES:
+    design never drops what this version cannot show. At most MAX_SAVED of them, each
+    a JSON value of at most MAX_DESIGN_BYTES written under a name of at most
+    MAX_UNREAD_NAME characters (a review: 1.75 million tiny entries had held 158 MB in
+    the tab and cost 12 s at every save). {} unless ``text`` is a JSON object."""
+    if not text or len(text) > MAX_SAVED_CHARS:
         return {}
     try:
         raw = json.loads(text)
     except (ValueError, RecursionError):
         return {}
-    return {k: v for k, v in raw.items() if k not in saved} if isinstance(raw, dict) else {}
+    if not isinstance(raw, dict):
+        return {}
+    out: dict[str, object] = {}
+    for k, v in raw.items():
+        if len(out) == MAX_SAVED:
+            break
+        if k not in saved and len(k) <= MAX_UNREAD_NAME:
+            if len(json.dumps(v)) <= MAX_DESIGN_BYTES:  # (the text is at most 5 M)
+                out[k] = v
+    return out
 
 
 def parse_saved(text: str | None) -> dict[str, str]:
     """{name: design JSON} from storage, keeping only well-formed entries, at most
     MAX_SAVED of them (a tampered value never grows the server's memory)."""
-    if not text or len(text) > MAX_SAVED * MAX_DESIGN_BYTES:
+    if not text or len(text) > MAX_SAVED_CHARS:
         return {}
     try:
         raw = json.loads(text)

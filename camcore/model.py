@@ -1110,11 +1110,14 @@ def set_field(data: dict, path: str, value, what: str = "") -> None:
 
 
 def _child(node, key: str, what: str = ""):
-    """node[key] for a dict, node[int(key)] for a list; None if there is none."""
+    """node[key] for a dict, node[int(key)] for a list; None if there is none. An
+    index is ASCII digits, at most 6 of them (str.isdigit took "²", which int() then
+    refused with a traceback, and 5,000 digits, which int() refuses too: a review)."""
     if isinstance(node, dict):
         return node.get(key)
-    if isinstance(node, list) and key.isdigit() and int(key) < len(node):
+    if isinstance(node, list) and re.fullmatch(r"[0-9]{1,6}", key) and int(key) < len(node):
         return node[int(key)]
     if isinstance(node, list):
-        raise DesignError(f"{what}{key!r} is not an index of a list of {len(node)}")
+        shown = key if len(key) <= 20 else key[:20] + "…"  # (a 5,000-digit one: a review)
+        raise DesignError(f"{what}{shown!r} is not an index of a list of {len(node)}")
     return None

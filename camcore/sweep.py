@@ -117,6 +117,17 @@ def _axis(path: str, raw) -> tuple:
     return _one_type(path, tuple(raw))
 
 
+def _axis_size(raw) -> int:
+    """How many values an axis as written would give (1 where it is malformed: _axis
+    then says what is wrong with it)."""
+    if isinstance(raw, list):
+        return max(len(raw), 1)
+    num = raw.get("num") if isinstance(raw, dict) else None
+    if not isinstance(num, int) or isinstance(num, bool) or num < 1:
+        return 1
+    return min(num, 10**15)  # (a 4,000-digit num: no 4,000-digit product to print)
+
+
 def _kind(value) -> str:
     """A grid value's column type in the table (a list or object becomes JSON text)."""
     if value is None:
@@ -173,6 +184,12 @@ def parse_spec(text: str | bytes) -> Spec:
     grid = data["grid"]
     if not isinstance(grid, dict) or not grid:
         raise DesignError("grid: an object of field paths to values")
+    # the grid's size before its values are made (30 ranges of 100,000 values each had
+    # built 3 million floats, 118 MB, before the size was refused: a review)
+    size = math.prod(_axis_size(raw) for raw in grid.values())
+    if size > MAX_DESIGNS:
+        many = f"{size}" if size < 10**15 else "over 10^15"
+        raise DesignError(f"grid: {many} designs; at most {MAX_DESIGNS} per sweep")
     axes = tuple((str(path), _axis(path, raw)) for path, raw in grid.items())
     for path, _ in axes:
         inner = [p for p, _ in axes if p.startswith(path + ".")]

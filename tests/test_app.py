@@ -605,6 +605,20 @@ def test_browser_storage_values_are_untrusted():
     saved = storage.parse_saved(__import__("json").dumps(many))
     assert len(saved) == storage.MAX_SAVED and all(0 < len(k) <= 60 for k in saved)
     assert storage.parse_saved("[1, 2]") == {} and storage.parse_saved("nonsense") == {}
+    # what this version cannot read is kept, bounded (a review: 1.75 million tiny
+    # entries had held 158 MB in the tab and cost 12 s at every save)
+    text = __import__("json").dumps(many)
+    unread = storage.unread_entries(text, storage.parse_saved(text))
+    assert list(unread) == [f"n{i}" for i in range(20, 40)]  # the first MAX_SAVED
+    flood = "{" + ",".join(f'"k{i}": "v"' for i in range(300_000)) + "}"
+    assert len(storage.unread_entries(flood, {})) == storage.MAX_SAVED
+    assert storage.unread_entries('{"x": {"format": 9}, "y": 5}', {}) == {
+        "x": {"format": 9},
+        "y": 5,
+    }
+    big = '{"x": "%s", "y": 1}' % ("z" * (storage.MAX_DESIGN_BYTES + 1))
+    assert storage.unread_entries(big, {}) == {"y": 1}
+    assert storage.parse_saved("{" + " " * storage.MAX_SAVED_CHARS + "}") == {}
     full = {f"n{i}": "{}" for i in range(storage.MAX_SAVED)}
     with pytest.raises(ValueError, match="delete one first"):
         storage.with_saved(full, "another", d)
@@ -1161,6 +1175,11 @@ def test_explore_refuses_hostile_ranges(tab):
     e.x_range._impl.value = (float("nan"), 3.0)
     e.run_btn.value = True
     assert "two finite numbers" in e.progress.content
+    for span in ((-1e308, 1e308), (1e308, 1.7e308), (0, 2e9)):  # finite, but absurd
+        e.progress.content = ""
+        e.x_range._impl.value = span
+        e.run_btn.value = True
+        assert "two finite numbers within ±1e+09" in e.progress.content, span
 
 
 def test_hostile_animation_speed_is_ignored(tab):

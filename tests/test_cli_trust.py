@@ -224,6 +224,9 @@ def test_set_overrides_fields(capsys):
         ('cam.base_radius_mm="90"', "cam.base_radius_mm"),
         ("cam.base_radius_mm.x=1", "not a group"),
         ("nonsense", "FIELD.PATH=VALUE"),
+        # an index is ASCII digits: "²" passed str.isdigit and crashed int() (a review)
+        ("motion.segments.².angle_deg=1", "is not an index of a list of 4"),
+        ("motion.segments." + "9" * 5000 + ".angle_deg=1", "'99999999999999999999…' is not"),
     ],
 )
 def test_set_errors_name_the_field(assignment, message):
