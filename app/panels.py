@@ -77,12 +77,18 @@ _MD_SPECIAL = re.compile(r"([\\`*_{}\[\]()#+\-!|~>])")
 _AUTOLINK = re.compile(r"(?<=:)(?=//)|(?<=www)(?=\.)|(?<=@)", re.IGNORECASE)  # ("_www." too)
 
 
+_BREAKS = re.compile(r"[\r\n\v\f\x85\u2028\u2029]+")
+
+
 def esc(text: object) -> str:
     """User-provided text (a design or file name, a message quoting input) made safe for
     viser's Markdown, which renders raw HTML: HTML-escaped, Markdown's special
     characters backslash-escaped so they show as typed, and no link made of a URL or
-    address in it. Every such string goes through here before it is shown."""
-    escaped = _MD_SPECIAL.sub(r"\\\1", html.escape(str(text), quote=False))
+    address in it, and on one line (Markdown reads a line break as a soft space, but
+    a name like "x\\n===" or "a\\n1. b" would have started a heading or a list: a
+    review). Every such string goes through here before it is shown."""
+    one_line = _BREAKS.sub(" ", str(text))
+    escaped = _MD_SPECIAL.sub(r"\\\1", html.escape(one_line, quote=False))
     return _AUTOLINK.sub("\u2060", escaped)
 
 

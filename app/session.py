@@ -71,6 +71,9 @@ from .scene import (
 from .ticker import Debouncer, Ticker
 
 FPS = 30.0
+# the design-changing actions that take turns (Session._take_ticket): the controls, the
+# program table, and the buttons that replace the whole design
+TICKETS = ("controls", "segments", "replace")
 _UNREAD = "(not read yet)"  # Session._kept_program before the restore (never a program's JSON)
 UNFINISHED_NOTE = (
     "The segment table's unfinished program is back as it was left (Design › Motion "
@@ -151,7 +154,7 @@ class Session:
         self._typed_program: list[dict] | None = None
         # the browser's copy of it (_keep_typed): _UNREAD until the restore has read it
         self._kept_program: str | None = _UNREAD
-        self._ticket_lock, self._ticket = threading.Lock(), 0
+        self._ticket_lock, self._tickets = threading.Lock(), dict.fromkeys(TICKETS, 0)
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
         with self.lock:
@@ -210,11 +213,9 @@ class Session:
         """
         if self._syncing and self._syncer == threading.get_ident():
             return  # our own write into a control (no ticket: a waiting edit stays newest)
-        with self._ticket_lock:
-            self._ticket += 1
-            mine = self._ticket
+        mine = self._take_ticket("controls")
         with self.lock:
-            if self._syncing or self.closed.is_set() or mine != self._ticket:
+            if self._syncing or self.closed.is_set() or self._superseded("controls", mine):
                 return  # (a newer change came while this one waited its turn)
             self._widen_sliders()
             values = self._values()
@@ -234,6 +235,19 @@ class Session:
                 # may already sit in one
                 self._sync_controls(design, prefix="motion.")
             self._apply(self._renamed_for_kind(design))
+
+    def _take_ticket(self, kind: str) -> int:
+        """A turn of the design-changing action ``kind`` (TICKETS); only the newest of a
+        kind redraws when the lock comes free: each one reads, or carries, everything
+        its older ones did. Taken before the lock is waited for."""
+        with self._ticket_lock:
+            self._tickets[kind] += 1
+            return self._tickets[kind]
+
+    def _superseded(self, kind: str, mine: int) -> bool:
+        """Whether a newer action of ``kind`` came while ticket ``mine`` waited."""
+        with self._ticket_lock:
+            return self._tickets[kind] != mine
 
     def _keep_edit_beside_program(self, values: dict[str, object]) -> None:
         """An edit of another control while the table's program is unfinished: the
@@ -259,9 +273,14 @@ class Session:
 
     def on_segments(self, segs: list[dict]) -> None:
         """The program table changed: the program is its segments, every other control
-        as it is. Invalid input keeps the last valid design and shows the user's edit."""
+        as it is. Invalid input keeps the last valid design and shows the user's edit.
+        The newest edit of a burst is the one made (each carries the whole table: a
+        review's 40 law changes had cost 37 analyses, and another tab its connection)."""
+        if self._syncing and self._syncer == threading.get_ident():
+            return
+        mine = self._take_ticket("segments")
         with self.lock:
-            if self._syncing or self.closed.is_set():
+            if self._syncing or self.closed.is_set() or self._superseded("segments", mine):
                 return
             design, err = controls.try_design(self.base, self._values(), segs)
             if design is None:
@@ -303,7 +322,11 @@ class Session:
             self._sync_controls(design)
             self._apply(design, reset_camera=reset_camera)
             if save_as is not None:  # (the box had read "my cam" whatever the design)
-                self.ui.save_name.value = save_as[: storage.MAX_NAME].strip() or "my cam"
+                self._propose_name(save_as)
+
+    def _propose_name(self, name: str) -> None:
+        """The name the Save box proposes for the design on screen. Lock held."""
+        self.ui.save_name.value = name[: storage.MAX_NAME].strip() or "my cam"
 
     def _widen_sliders(self) -> None:
         """A value typed into a slider's box beyond its range widens the range: the
@@ -474,8 +497,7 @@ class Session:
         except DesignError as exc:
             with self.lock:
                 return self._show_file_error(f"preset {name}: {exc}")
-        self.set_design(d, save_as=d.name)
-        self._say(f"Loaded preset **{esc(name)}**.")
+        self._replace(d, d.name, f"Loaded preset **{esc(name)}**.")
 
     def upload(self, name: str, content: bytes) -> None:
         name = _short(name)  # (a client's file name: shown, so bounded)
@@ -487,15 +509,37 @@ class Session:
                     f"file {name or 'upload'}: {exc} (the current design is kept)"
                 )
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
-        self.set_design(d, save_as=d.name)
         left_out = defaulted_fields(content, d)
         note = f" ⚠ {esc(defaults_note(left_out))}." if left_out else ""
-        self._say(f"Opened **{esc(name)}** ({esc(d.name)}).{note}")
+        self._replace(d, d.name, f"Opened **{esc(name)}** ({esc(d.name)}).{note}")
+
+    def _replace(self, design: Design, save_as: str, said: str) -> None:
+        """Replace the whole design from a button (a preset, a file, a saved design) and
+        say ``said``. The newest of a burst is the one made, and the design on screen
+        is not analysed again (viser runs a button's callback at every message: a
+        review's 30 clicks had cost 30 analyses, and another tab its connection)."""
+        mine = self._take_ticket("replace")
+        with self.lock:
+            if self.closed.is_set() or self._superseded("replace", mine):
+                return
+            unchanged = self.error is None and self._typed_program is None
+            if unchanged and design == self.design:
+                self.file_error = None
+                self._propose_name(save_as)
+                self._show_status()
+            else:
+                self.set_design(design, save_as=save_as)
+            self._say(said)
 
     def upload_refused(self, name: str, size: int, why: str) -> None:
         """The upload guard (app.uploads) dropped a transfer: too large, larger than it
-        said, or too many unfinished from this tab (``why``)."""
-        self._say(
+        said, or too many unfinished from this tab (``why``).
+
+        Called on viser's event loop, so it must not wait for the tab's lock (a review:
+        a refusal while the tab analysed a heavy design stalled the whole server, and
+        another tab's connection timed out): the line is written without it, as one
+        message that can only race with another line's, never with the design."""
+        self.ui.files_md.content = (
             f"✖ **{esc(_short(name))}** refused: {size:,} bytes, {esc(why)} (a design file "
             "is a few kB)."
         )
@@ -778,8 +822,7 @@ class Session:
         if design is None:  # kept, but not a design this version opens: say why
             why = storage.working_error(text) or "not a design"
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(_short(why))}.")
-        self.set_design(design, save_as=name)
-        self._say(f"Opened **{esc(name)}** from this browser.")
+        self._replace(design, name, f"Opened **{esc(name)}** from this browser.")
 
     def delete_saved(self, name: str) -> None:
         with self.lock:

@@ -117,4 +117,13 @@ class Debouncer:
                 continue  # poked again meanwhile: wait for quiet again
             with self.gate:
                 if not self._poked.is_set() and not self._closed.is_set():
-                    self.work()
+                    self._run()
+
+    def _run(self) -> None:
+        """One job; a defect of it is logged and the loop goes on (it had ended the
+        thread, and the tab's checks stayed "running" for good: a review)."""
+        try:
+            self.work()
+        except Exception:
+            if not self._closed.is_set():
+                logging.getLogger(__name__).exception("background job failed")

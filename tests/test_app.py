@@ -570,7 +570,24 @@ def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
         part_count=50,
         size_bytes=45_000_000,
     )
+    # the refusal runs on viser's event loop: it must not wait for a busy tab's lock
+    # (a review: a refusal during a heavy analysis stalled the server for all tabs)
+    held, release = threading.Event(), threading.Event()
+
+    def busy():
+        with s.lock:
+            held.set()
+            release.wait(10)
+
+    worker = threading.Thread(target=busy)
+    worker.start()
+    held.wait(5)
+    t0 = time.perf_counter()
     gui_api._handle_file_transfer_start(cid, big)
+    waited = time.perf_counter() - t0
+    release.set()
+    worker.join()
+    assert waited < 2.0  # (not the 10 s the lock is held)
     assert "t-big" not in gui_api._current_file_upload_states
     assert "refused" in s.ui.files_md.content and "<i>" not in s.ui.files_md.content
     liar = _messages.FileTransferStartUpload(
@@ -1457,13 +1474,13 @@ def test_an_edit_during_a_rename_is_not_lost(tab, monkeypatch):
     def rename_while_the_user_edits(*args):
         if other:  # (the user's own edit passes through here too: once is the race)
             return real(*args)
-        before = s._ticket
+        before = s._tickets["controls"]
         t = threading.Thread(
             target=lambda: s.ui.controls["cam.base_radius_mm"].__setattr__("value", 90.0)
         )
         t.start()
         other.append(t)
-        assert wait_for(lambda: s._ticket > before)  # the edit took its ticket, waits
+        assert wait_for(lambda: s._tickets["controls"] > before)  # the edit took its ticket, waits
         return real(*args)
 
     monkeypatch.setattr(session_module, "name_follows_kind", rename_while_the_user_edits)
@@ -1471,6 +1488,43 @@ def test_an_edit_during_a_rename_is_not_lost(tab, monkeypatch):
     other[0].join(10)
     assert s.design.follower.kind == "single_roller" and s.design.name.endswith("(single roller)")
     assert s.design.cam.base_radius_mm == 90.0
+
+
+def test_a_burst_of_table_edits_or_button_clicks_costs_one_analysis(tab, monkeypatch):
+    """A review: the program table's edits and the buttons that replace the design took
+    no turns, so 40 law changes cost 37 analyses and 30 preset clicks 30, and while they
+    queued on the tab's lock another tab waited 44 s for its connection. Now the newest
+    of a burst is the one made, and the design on screen is not analysed again."""
+    s = tab
+    analysed: list = []
+    real = s.analyst.fast
+    monkeypatch.setattr(s.analyst, "fast", lambda d: analysed.append(d) or real(d))
+
+    def burst(calls) -> None:
+        threads = [threading.Thread(target=c) for c in calls]
+        with s.lock:  # the tab is busy while the burst arrives
+            for t in threads:
+                t.start()
+            assert wait_for(lambda: len(threads) <= sum(s._tickets.values()) - start)
+        for t in threads:
+            t.join(10)
+
+    segs = [g.model_dump(mode="json") for g in s.design.motion.segments]
+    edits = []
+    for lift in np.linspace(10.0, 14.0, 20):
+        program = [dict(g) for g in segs]
+        program[0]["lift_mm"] = program[2]["lift_mm"] = float(lift)
+        edits.append(lambda p=program: s.on_segments(p))
+    start = sum(s._tickets.values())
+    burst(edits)
+    assert len(analysed) <= 2 and s.design.motion.segments[0].lift_mm == 14.0
+    analysed.clear()
+    start = sum(s._tickets.values())
+    burst([lambda: s.load_preset("double_index")] * 20)
+    assert len(analysed) == 1 and s.design == load_preset("double_index")
+    analysed.clear()
+    s.load_preset("double_index")  # the design on screen: said, not analysed again
+    assert not analysed and "Loaded preset" in s.ui.files_md.content
 
 
 def test_a_tab_cannot_keep_many_uploads_unfinished(app, tab):

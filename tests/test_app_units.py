@@ -212,6 +212,24 @@ def test_debouncer_runs_once_after_quiet_and_one_at_a_time():
         d.close()
 
 
+def test_a_failing_background_job_does_not_end_the_debouncer():
+    """A review: a job that raised ended the debouncer's thread, and the tab's checks
+    stayed "running" for good. It is logged; the next poke runs the job again."""
+    runs = []
+
+    def work():
+        runs.append(1)
+        if len(runs) == 1:
+            raise RuntimeError("a defect of one job")
+
+    d = Debouncer(work, 0.05, threading.BoundedSemaphore(1)).start()
+    d.poke()
+    assert wait_for(lambda: len(runs) == 1, 5.0)
+    d.poke()
+    assert wait_for(lambda: len(runs) == 2, 5.0) and d.thread.is_alive()
+    d.close()
+
+
 def test_analyst_workers_match_in_process_survive_a_killed_worker_and_close(paper):
     """app.analyst: a worker's result equals the in-process one; a worker killed (out
     of memory, by hand) is replaced on the next call; after close nothing starts again
@@ -504,6 +522,18 @@ def test_escaped_text_makes_no_links():
     for linkable in ("://", "www.", "@b"):  # (a second review: '_www.' had made a link)
         assert linkable not in out
     assert out.replace("\u2060", "").replace("\\_", "_") == text
+
+
+def test_escaped_text_starts_no_block():
+    """A review: a name with a line break could start a Markdown heading ("x\\n===") or
+    list ("a\\n1. b") in a message. esc() puts it on one line, as the soft break
+    Markdown would have shown anyway."""
+    from markdown_it import MarkdownIt
+
+    for name in ("x\n===", "a\n1. b", "a\r\n# b", "a\u2028- b", "a\n\n> b"):
+        html = MarkdownIt("commonmark").render(f"Opened **{panels.esc(name)}**.")
+        assert html.startswith("<p>") and html.count("<p>") == 1, html
+        assert not any(tag in html for tag in ("<h", "<ol", "<ul", "<blockquote")), html
 
 
 def test_a_silent_browser_costs_one_read_timeout_not_one_per_key():
