@@ -53,6 +53,7 @@ STEP_DEG = {"−5°": -5.0, "−1°": -1.0, "+1°": 1.0, "+5°": 5.0}
 # narrower than the window.
 NARROW_PANEL_PX = 384
 PAUSE_AT_STATION_S = 3.0  # the animation's stop at each station, when asked
+HISTORY_BUTTONS = ("↶ Undo", "↷ Redo")  # every change of the design, a preset's too
 
 
 def preset_labels() -> dict[str, str]:
@@ -92,6 +93,8 @@ class Layout:
     step_btns: Any
     where_md: Any
     # Design tab
+    history_btns: Any  # Undo, Redo (app.history)
+    history_md: Any  # how many steps each way
     controls: dict[str, Any]  # by design path, see app.controls.SPECS
     low_dwell_md: Any
     segments: SegmentTable
@@ -165,6 +168,8 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
 
 
 def _design_tab(gui, base: Design, h: dict) -> None:
+    h["history_btns"] = gui.add_button_group("Design", HISTORY_BUTTONS)
+    h["history_md"] = gui.add_markdown("")
     h["controls"] = {}
     for title, expand, specs in controls.FOLDERS:
         with gui.add_folder(title, expand_by_default=expand):

@@ -18,6 +18,7 @@ import json
 import logging
 import math
 import threading
+import time
 
 from camcore import checks, export
 from camcore.analysis import Analysis
@@ -36,8 +37,10 @@ from camcore.model import load_preset as load_preset_design
 
 from . import controls, plots, storage
 from .analyst import Analyst, Result
+from .history import History
 from .layout import (
     DEFAULT_PRESET,
+    HISTORY_BUTTONS,
     NARROW_PANEL_PX,
     PAUSE_AT_STATION_S,
     STEP_DEG,
@@ -143,6 +146,8 @@ class Session:
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
         self._persist = False  # on once the browser's stored design has been read
         self._view_edits = 0  # the user's view changes (a kept view never overrides one)
+        self.history = History()  # the designs before and after the one on screen
+        self._travelling = False  # True while undo or redo replaces the design
         self._syncing = False  # True while the session writes into its own widgets
         self._syncer: int | None = None  # the thread that does (_quiet)
         self._busy = threading.Lock()  # a download being made (one at a time)
@@ -180,6 +185,7 @@ class Session:
         ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
         ui.step_btns.on_click(lambda e: self.step(e.target.value))
+        ui.history_btns.on_click(lambda e: self.travel(e.target.value))
         for h in ui.controls.values():
             h.on_update(lambda _e: self.on_control())
         ui.segments.on_change, ui.segments.lock = self.on_segments, self.lock
@@ -235,6 +241,24 @@ class Session:
                 # may already sit in one
                 self._sync_controls(design, prefix="motion.")
             self._apply(self._renamed_for_kind(design))
+
+    def travel(self, label: str) -> None:
+        """Undo or redo (layout.HISTORY_BUTTONS) a change of the design: the whole
+        design as it was, controls and program table with it. Anything else (a hostile
+        client's value) and a step with nothing to go to do nothing."""
+        if label not in HISTORY_BUTTONS:
+            return
+        with self.lock:
+            step = self.history.undo if label == HISTORY_BUTTONS[0] else self.history.redo
+            design = step(self.design)
+            if design is None:
+                return
+            self._travelling = True
+            try:
+                self.set_design(design, reset_camera=False)
+            finally:
+                self._travelling = False
+            self.ui.history_md.content = self.history.text()
 
     def _take_ticket(self, kind: str) -> int:
         """A turn of the design-changing action ``kind`` (TICKETS); only the newest of a
@@ -387,6 +411,8 @@ class Session:
 
     def _redraw(self, design: Design, r: Result, reset_camera: bool) -> None:
         a, s = r.analysis, r.summary
+        if design != self.design and not self._travelling:
+            self.history.record(self.design, time.monotonic())
         self.design, self.analysis = design, a
         self.gen += 1
         self.verified, self.cutter_note = False, None
@@ -409,6 +435,7 @@ class Session:
                 ui.quick_md.content = ""
             self._show_summary(s)
             ui.where_md.content = self._where(k)
+            ui.history_md.content = self.history.text()
             self._show_status()
         self._save_working()
         if reset_camera or not 1 / REFRAME < _size(a) / self._framed_size < REFRAME:
@@ -649,6 +676,9 @@ class Session:
                 self._save_working()
         if working is not None and restore:
             self.set_design(working, save_as=working.name)
+            with self.lock:  # the default it replaced was no step of the user's
+                self.history.clear()
+                self.ui.history_md.content = ""
             note = (  # where the user looks (above the tabs) and in Files
                 f"Restored the design last edited in this browser: *{esc(working.name)}* "
                 "(its tabs share one working design: the browser keeps it per site)."

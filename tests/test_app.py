@@ -2180,3 +2180,39 @@ def test_the_users_own_view_change_wins_over_the_kept_one(app, monkeypatch):
         assert json.loads(writes[storage.VIEW_KEY])["theta_deg"] == pytest.approx(5.0)
     finally:
         t.close()
+
+
+def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
+    """A designer tries a change and steps back: Undo gives the design before it,
+    controls and program table with it; Redo gives it again; a slider dragged through
+    several values is one step; a hostile label or an empty side does nothing."""
+    from app import history
+
+    s = tab
+    first = s.design
+    undo, redo = (lambda: s.travel("↶ Undo")), (lambda: s.travel("↷ Redo"))
+    undo()
+    assert s.design == first  # nothing to undo
+    monkeypatch.setattr(history, "SETTLE_S", 60.0)  # (a loaded machine's slow drag too)
+    for r_b in (82.0, 85.0, 90.0):  # a drag: one step
+        s.ui.controls["cam.base_radius_mm"].value = r_b
+    monkeypatch.setattr(history, "SETTLE_S", 0.0)  # from here each change is a step
+    s.load_preset("double_index")
+    preset = s.design
+    assert "2 step(s) to undo, 0 to redo" in s.ui.history_md.content
+    undo()
+    assert s.design.cam.base_radius_mm == 90.0 and s.design.motion == first.motion
+    assert s.ui.controls["cam.base_radius_mm"].value == 90.0
+    assert len(s.ui.segments.rows) == len(first.motion.segments)
+    undo()
+    assert s.design == first and s.ui.controls["cam.base_radius_mm"].value == 80.0
+    redo()
+    redo()
+    assert s.design == preset and len(s.ui.segments.rows) == len(preset.motion.segments)
+    s.travel("../../etc/passwd")
+    s.ui.history_btns._impl.value = "nonsense"
+    assert s.design == preset
+    undo()
+    s.ui.controls["cam.width_mm"].value = 20.0  # a new change: nothing to redo
+    redo()
+    assert s.design.cam.width_mm == 20.0 and s.design.motion == first.motion

@@ -737,3 +737,28 @@ def test_the_papers_table_1_stays_for_a_follower_we_cannot_compute():
     md = table_markdown(results, d)
     row = next(line for line in md.splitlines() if line.startswith("| paper's Table 1"))
     assert "| 133.496 |" in row and "not computable" in md
+
+
+def test_history_keeps_one_step_per_burst_and_empties_redo_on_a_change():
+    """app.history: changes within SETTLE_S of each other are one step (a slider drag),
+    the design before the burst is the one kept; undo and redo swap the design on
+    screen between the two sides; a new change empties the redo side; at most MOST
+    steps are kept."""
+    from app import history
+    from camcore.model import Design
+
+    d = [Design(name=f"d{i}") for i in range(5)]
+    h = history.History()
+    assert h.undo(d[0]) is None and h.text() == ""
+    h.record(d[0], 10.0)  # d0 -> d1
+    h.record(d[1], 10.2)  # d1 -> d2, the same drag
+    h.record(d[2], 11.0)  # d2 -> d3, a step of its own
+    assert h.past == [d[0], d[2]]
+    assert h.undo(d[3]) == d[2] and h.undo(d[2]) == d[0] and h.undo(d[0]) is None
+    assert h.redo(d[0]) == d[2] and h.future == [d[3]]
+    assert h.text() == "1 step(s) to undo, 1 to redo"
+    h.record(d[2], 11.1)  # a change after an undo: a step of its own, redo emptied
+    assert h.past == [d[0], d[2]] and h.future == []
+    for i in range(200):
+        h.record(Design(name=f"x{i}"), 20.0 + i)
+    assert len(h.past) == history.MOST and h.past[-1].name == "x199"

@@ -1,0 +1,63 @@
+"""Undo and redo of a tab's designs.
+
+Every design the tab shows replaces the one before it; the one before is kept here,
+so that a designer can try a change and step back. A slider dragged through twenty
+values is one step: a change within SETTLE_S of the previous one joins it (the design
+before the burst is the one kept), as the refiner waits for the tab to be still. At
+most MOST steps are kept each way; a new change empties the redo side. Pure
+bookkeeping: app.session applies what it returns.
+"""
+
+from __future__ import annotations
+
+import math
+
+from camcore.model import Design
+
+MOST = 50  # steps kept back (and forward)
+SETTLE_S = 0.6  # a change within this of the previous one is the same step [s]
+
+
+class History:
+    """The designs before (``past``) and after (``future``) the one on screen."""
+
+    def __init__(self) -> None:
+        self.past: list[Design] = []
+        self.future: list[Design] = []
+        self._last = -math.inf  # when the last change was recorded [s, monotonic]
+
+    def record(self, before: Design, now: float) -> None:
+        """The design on screen changed at ``now`` [s]; ``before`` is the one it replaced."""
+        if now - self._last >= SETTLE_S or not self.past:
+            self.past.append(before)
+            del self.past[:-MOST]
+        self._last = now
+        self.future.clear()
+
+    def undo(self, current: Design) -> Design | None:
+        """The design to show instead of ``current`` (which becomes redoable), None if
+        there is nothing to undo."""
+        return self._step(self.past, self.future, current)
+
+    def redo(self, current: Design) -> Design | None:
+        """The design undone last, None if there is none."""
+        return self._step(self.future, self.past, current)
+
+    def _step(self, source: list[Design], dest: list[Design], current: Design) -> Design | None:
+        if not source:
+            return None
+        dest.append(current)
+        del dest[:-MOST]
+        self._last = -math.inf  # the next change is a step of its own
+        return source.pop()
+
+    def clear(self) -> None:
+        self.past.clear()
+        self.future.clear()
+        self._last = -math.inf
+
+    def text(self) -> str:
+        """How many steps each way, for the line under the buttons ("" if none)."""
+        if not self.past and not self.future:
+            return ""
+        return f"{len(self.past)} step(s) to undo, {len(self.future)} to redo"
