@@ -762,3 +762,18 @@ def test_history_keeps_one_step_per_burst_and_empties_redo_on_a_change():
     for i in range(200):
         h.record(Design(name=f"x{i}"), 20.0 + i)
     assert len(h.past) == history.MOST and h.past[-1].name == "x199"
+
+
+def test_station_lines_are_numbered_above_the_plots():
+    """A teacher's review: the dashed station lines carried no numbers. An axis above
+    each plot labels them at their angles; coinciding stations share one label."""
+    from app.plots import station_axis
+
+    ax = station_axis(np.array([0.0, 100.0, 100.0, 170.0, 170.0, 300.0]))
+    assert ax["side"] == 0 and ax["scale"] == "x"
+    assert ax["splits"] == [0.0, 100.0, 170.0, 300.0]
+    assert ax["values"] == ["0", "1,2", "3,4", "5"]
+    # the paper's double faces: 1 and 2 are 7.4 deg apart, 3 and 4 7.4 too
+    ax = station_axis(np.array([0.0, 100.0, 107.4, 162.6, 170.0, 300.0]))
+    assert ax["values"] == ["0", "1,2", "3,4", "5"]
+    assert ax["splits"] == pytest.approx([0.0, 103.7, 166.3, 300.0])

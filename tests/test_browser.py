@@ -163,6 +163,12 @@ def test_app_in_headless_chromium(tmp_path):
             page.get_by_role("option", name="single roller").click()
             page.get_by_text("In contact: roller").first.wait_for()
             assert session.design.follower.kind.value == "single_roller"
+            # and step back: Undo gives the double concave faces again, Redo the roller
+            page.get_by_role("button", name="↶ Undo").click()
+            page.get_by_text("In contact: S1 (left face)").first.wait_for()
+            assert session.design.follower.kind.value == "double_concave"
+            page.get_by_role("button", name="↷ Redo").click()
+            page.get_by_text("In contact: roller").first.wait_for()
             # a station button moves the mechanism and says where it is
             page.get_by_role("button", name="5", exact=True).click()
             page.get_by_text("at station 5").first.wait_for()
