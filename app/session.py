@@ -306,13 +306,18 @@ class Session:
         with self.lock:
             if self._syncing or self.closed.is_set() or self._superseded("segments", mine):
                 return
-            design, err = controls.try_design(self.base, self._values(), segs)
-            if design is None:
-                self._keep_typed(segs)  # kept through other edits until it is valid
-                self.ui.segments.show(segs)
-                self._show_error(err)
-                return
-            self.set_design(design, reset_camera=False)
+            self._segments(segs)
+
+    def _segments(self, segs: list[dict]) -> None:
+        """on_segments' work, lock held and no ticket taken (the restore's kept program
+        must not supersede a user's table edit waiting on the lock: a review)."""
+        design, err = controls.try_design(self.base, self._values(), segs)
+        if design is None:
+            self._keep_typed(segs)  # kept through other edits until it is valid
+            self.ui.segments.show(segs)
+            self._show_error(err)
+            return
+        self.set_design(design, reset_camera=False)
 
     def _keep_typed(self, segs: list[dict] | None) -> None:
         """The table's unfinished program (None: there is none), kept in the browser
@@ -344,9 +349,26 @@ class Session:
             self.base, self.error, self.file_error = design, None, None
             self._keep_typed(None)
             self._sync_controls(design)
-            self._apply(design, reset_camera=reset_camera)
+            if design == self.design:  # on screen already: everything but the analysis
+                self._reshow(design, reset_camera)  # (a review: 30 clicks, 30 analyses)
+            else:
+                self._apply(design, reset_camera=reset_camera)
             if save_as is not None:  # (the box had read "my cam" whatever the design)
                 self._propose_name(save_as)
+
+    def _reshow(self, design: Design, reset_camera: bool) -> None:
+        """The design on screen set again (a preset or file reloaded, an input error
+        undone): the controls are written already; the table, the kind's controls, the
+        status and the browser's copy follow, as after an analysis. Lock held."""
+        ui = self.ui
+        with self.client.atomic():
+            self._enable_for_kind(design)
+            ui.segments.show(design.motion.segments)
+            ui.low_dwell_md.content = low_dwell_text(self._values(), design)
+            self._show_status()
+        self._save_working()
+        if reset_camera:
+            self.reset_camera()
 
     def _propose_name(self, name: str) -> None:
         """The name the Save box proposes for the design on screen. Lock held."""
@@ -524,7 +546,7 @@ class Session:
         except DesignError as exc:
             with self.lock:
                 return self._show_file_error(f"preset {name}: {exc}")
-        self._replace(d, d.name, f"Loaded preset **{esc(name)}**.")
+        self._replace(d, d.name, f"Loaded the preset *{esc(d.name)}* ({esc(name)}).")
 
     def upload(self, name: str, content: bytes) -> None:
         name = _short(name)  # (a client's file name: shown, so bounded)
@@ -543,19 +565,14 @@ class Session:
     def _replace(self, design: Design, save_as: str, said: str) -> None:
         """Replace the whole design from a button (a preset, a file, a saved design) and
         say ``said``. The newest of a burst is the one made, and the design on screen
-        is not analysed again (viser runs a button's callback at every message: a
-        review's 30 clicks had cost 30 analyses, and another tab its connection)."""
+        is not analysed again (set_design; viser runs a button's callback at every
+        message: a review's 30 clicks had cost 30 analyses, and another tab its
+        connection)."""
         mine = self._take_ticket("replace")
         with self.lock:
             if self.closed.is_set() or self._superseded("replace", mine):
                 return
-            unchanged = self.error is None and self._typed_program is None
-            if unchanged and design == self.design:
-                self.file_error = None
-                self._propose_name(save_as)
-                self._show_status()
-            else:
-                self.set_design(design, save_as=save_as)
+            self.set_design(design, save_as=save_as)
             self._say(said)
 
     def upload_refused(self, name: str, size: int, why: str) -> None:
@@ -686,7 +703,10 @@ class Session:
             self._say(note)
             self._say_quick(note)
         self._restore_program(typed_text, typed if working is not None else None, gen0 + restore)
-        self._restore_view(view)
+        try:  # a view the browser kept must never cost the rest of the restore
+            self._restore_view(view)
+        except Exception:
+            logging.getLogger(__name__).exception("a kept view failed; ignored")
         if why is not None:  # what the browser kept is not lost without a word
             where = (
                 f"it is set aside in this browser's storage as it was "
@@ -722,7 +742,7 @@ class Session:
             mine = self._typed_program is not None
             if typed is not None and self.gen == gen and not mine:
                 try:  # what the browser kept must never cost the tab its restore
-                    self.on_segments(typed)
+                    self._segments(typed)
                 except Exception:  # the tab goes on with its design's own program
                     logging.getLogger(__name__).exception("a kept program failed; ignored")
                     self._typed_program, self.error = None, None
@@ -958,7 +978,7 @@ class Session:
             self._set_playing(not self.playing)
             if not self.playing:
                 self._goto(self.theta_deg)
-                self._keep_view()  # (not while playing: 30 writes a second)
+            self._keep_view()  # (at play and pause, not while playing: 30 a second)
 
     def _tick(self, dt: float, n: int) -> None:
         """The ticker's step: a frame, unless paused meanwhile (a step that waited for

@@ -120,6 +120,18 @@ def runs_deg(
     return tuple((round(float(to_deg(lo)), 3), round(float(to_deg(hi)), 3)) for lo, hi in merged)
 
 
+def merged_deg(ranges) -> tuple[tuple[float, float], ...]:
+    """Ranges [deg] of several violations as one sorted list, overlapping ones merged
+    (where_text reads a list of disjoint runs, as runs_deg makes)."""
+    out: list[list[float]] = []
+    for lo, hi in sorted(tuple(r) for r in ranges):
+        if out and lo <= out[-1][1]:
+            out[-1][1] = max(out[-1][1], hi)
+        else:
+            out.append([lo, hi])
+    return tuple((lo, hi) for lo, hi in out)
+
+
 def where_text(ranges: tuple[tuple[float, float], ...]) -> str:
     """Cam-angle ranges [deg] in words: "theta = 10-20, 35 deg (+2 more)"; a range
     through theta = 0 (its two parts, one from 0, one to 360: runs_deg) as one,

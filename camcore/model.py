@@ -487,14 +487,14 @@ class Cam(_Part):
     )
     feed_mm_per_min: float = Field(
         200.0,
-        gt=0,
+        ge=1,
         le=100000,
         description="the toolpath's cutting feed F along the contour [mm/min] (set it for "
         "your machine, cutter and material)",
     )
     plunge_mm_per_min: float = Field(
         50.0,
-        gt=0,
+        ge=1,
         le=100000,
         description="the toolpath's plunge feed F down into the blank [mm/min]",
     )
@@ -503,7 +503,7 @@ class Cam(_Part):
         ge=0,
         le=200000,
         description="the toolpath's spindle speed S [rpm]; 0 = none written (M3 without "
-        "S: the operator sets it, and the G-code's header says so)",
+        "S: the operator sets it, and the G-code's header says so), else at least 1",
     )
 
     @property
@@ -526,6 +526,10 @@ class Cam(_Part):
             raise ValueError(
                 f"bore_diameter_mm = {self.bore_diameter_mm:g} mm must be below the base "
                 f"circle's diameter 2 r_b = {2 * self.base_radius_mm:g} mm"
+            )
+        if 0 < self.spindle_rpm < 1:  # (it would be written as S0.5, or S5e-05)
+            raise ValueError(
+                f"spindle_rpm = {self.spindle_rpm:g}: 0 (none written) or at least 1 rpm"
             )
         if (self.keyway_width_mm > 0) != (self.keyway_depth_mm > 0):
             raise ValueError("keyway_width_mm and keyway_depth_mm: give both, or neither")

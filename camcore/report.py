@@ -487,8 +487,8 @@ def _unbounded(s: dict, codes, what: str, grows: str) -> str | None:
     """The note of unbounded_notes for the violations ``codes`` of summary ``s``, or
     None: ``what`` happens where they are, and ``grows`` without bound toward it, so the
     cycle's maxima are the samples' largest, set by the grid, not by the cam."""
-    ranges = sorted(
-        tuple(r) for v in s["violations"] if v["code"] in codes for r in v["ranges_deg"]
+    ranges = checks.merged_deg(
+        r for v in s["violations"] if v["code"] in codes for r in v["ranges_deg"]
     )
     if not ranges:
         return None
@@ -603,8 +603,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
                 ""
                 if not s["hertz_beyond_validity_deg"]
                 else "; Hertz beyond validity at "
-                + ", ".join(f"{lo:.1f}-{hi:.1f}" for lo, hi in s["hertz_beyond_validity_deg"])
-                + " deg (conservative stress used)"
+                + checks.where_text(tuple(map(tuple, s["hertz_beyond_validity_deg"])))
+                + " (conservative stress used)"
             ),
         ),
         ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),

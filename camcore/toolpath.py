@@ -229,6 +229,12 @@ def _warning_comments(a) -> list[str]:
     return [] if text is None else [_comment(x) for x in textwrap.wrap("WARNING: " + text, 78)]
 
 
+def _plain(x: float) -> str:
+    """A feed or speed as G-code takes it: plain decimals, 3 places at most, never an
+    exponent (":g" writes 1e+06 or 5e-05, which controllers do not read: a review)."""
+    return f"{x:.3f}".rstrip("0").rstrip(".")
+
+
 def _xy(p) -> str:
     """The X and Y words of a point [mm], to DECIMALS places."""
     return f"X{p[0]:.{DECIMALS}f} Y{p[1]:.{DECIMALS}f}"
@@ -246,7 +252,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     onto the path, the contour, and back out the same way. Feeds and spindle speed:
     cam.feed_mm_per_min, cam.plunge_mm_per_min, cam.spindle_rpm (0: M3 without S)."""
     cam = a.design.cam
-    feed, plunge = cam.feed_mm_per_min, cam.plunge_mm_per_min
+    feed, plunge = _plain(cam.feed_mm_per_min), _plain(cam.plunge_mm_per_min)
     check_passes(cam)
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
@@ -277,7 +283,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
         _comment("the cutter centre path, no cutter compensation G41/G42: G40"),
-        _comment(f"{passes}, feed {feed:g} plunge {plunge:g} mm/min"),
+        _comment(f"{passes}, feed {feed} plunge {plunge} mm/min"),
         _comment(bottom),
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
         *_bore_comments(cam),
@@ -287,11 +293,11 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         "G21 G90 G17 G40 G49 G80",
         f"G0 Z{SAFE_Z_MM:.3f}",
         f"G0 {_xy(lead)}",
-        f"M3 S{cam.spindle_rpm:g}" if cam.spindle_rpm > 0 else "M3",
+        f"M3 S{_plain(cam.spindle_rpm)}" if cam.spindle_rpm > 0 else "M3",
     ]
     contour = [_xy(p) for p in path[1:]] + [_xy(start), _xy(lead)]
     for z in depths:  # each pass starts and ends at the lead point, off the part
-        lines += [f"G1 Z{-z:.4f} F{plunge:g}", f"G1 {_xy(start)} F{feed:g}"]
+        lines += [f"G1 Z{-z:.4f} F{plunge}", f"G1 {_xy(start)} F{feed}"]
         lines += contour
     lines += [f"G0 Z{SAFE_Z_MM:.3f}", "M5", "M30", "%"]
     return "\n".join(lines) + "\n"

@@ -1529,7 +1529,7 @@ def test_a_burst_of_table_edits_or_button_clicks_costs_one_analysis(tab, monkeyp
     assert len(analysed) == 1 and s.design == load_preset("double_index")
     analysed.clear()
     s.load_preset("double_index")  # the design on screen: said, not analysed again
-    assert not analysed and "Loaded preset" in s.ui.files_md.content
+    assert not analysed and "Loaded the preset" in s.ui.files_md.content
 
 
 def test_a_tab_cannot_keep_many_uploads_unfinished(app, tab):
@@ -2221,3 +2221,42 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     s.ui.controls["cam.width_mm"].value = 20.0  # a new change: nothing to redo
     redo()
     assert s.design.cam.width_mm == 20.0 and s.design.motion == first.motion
+
+
+def test_a_table_edit_waiting_on_the_restore_still_wins(tab):
+    """A review: the restore of the browser's unfinished program went through the
+    ticketed entry point, so a user's table edit waiting on the lock was dropped as
+    superseded and the kept program replaced it. The user's edit wins."""
+    s = tab
+    user = [g.model_dump(mode="json") for g in s.design.motion.segments]
+    user[0]["lift_mm"] = user[2]["lift_mm"] = 12.0
+    kept = [dict(g) for g in user]
+    kept[1]["angle_deg"] = 50.0  # 340 deg: unfinished
+    with s.lock:
+        before = s._tickets["segments"]
+        t = threading.Thread(target=s.on_segments, args=(user,))
+        t.start()
+        assert wait_for(lambda: s._tickets["segments"] > before)  # waits on the lock
+        s._restore_program(json.dumps(kept), kept, s.gen)
+    t.join(10)
+    assert s._typed_program is None and s.error is None
+    assert s.design.motion.segments[0].lift_mm == 12.0
+
+
+def test_a_preset_clicked_after_an_edit_is_the_design_shown(tab):
+    """A review: loading the preset on screen skipped writing its values into the
+    controls, so a slider edit waiting on the lock ran afterwards and the design was
+    not the preset the Files line named. The controls are written; the edit then
+    reads the preset's values."""
+    s = tab
+    paper = load_preset("paper_example")
+    with s.lock:
+        before = s._tickets["controls"]
+        t = threading.Thread(
+            target=lambda: s.ui.controls["cam.base_radius_mm"].__setattr__("value", 95.0)
+        )
+        t.start()
+        assert wait_for(lambda: s._tickets["controls"] > before)
+        s.load_preset("paper_example")  # clicked after the edit, the design on screen
+    t.join(10)
+    assert s.design == paper and s.ui.controls["cam.base_radius_mm"].value == 80.0

@@ -534,3 +534,8 @@ def test_a_run_through_theta_0_is_said_as_one():
     assert where_text(runs_deg(theta, np.zeros(3600, bool), extra)) == (
         "theta = 359.9-0.1 (through 0) deg"
     )
+    # several violations' ranges (the cusp note joins two codes): merged first
+    from camcore.checks import merged_deg
+
+    assert where_text(merged_deg([(0, 5), (0, 360)])) == "theta = 0-360 deg"
+    assert where_text(merged_deg([(355, 360), (0, 3), (0, 5)])) == "theta = 355-5 (through 0) deg"

@@ -163,6 +163,22 @@ def test_gcode_uses_the_designs_feeds_and_spindle_speed():
     head = [x for x in lines if x.startswith("(")]
     assert "(3 passes of 5 mm, feed 640 plunge 90 mm/min)" in head
     assert not any("defaults" in x or "S word" in x for x in head)
+    # plain decimals, never an exponent; below 1 (mm/min, rpm) is refused
+    cam = d.cam.model_copy(update={"feed_mm_per_min": 100000.0, "spindle_rpm": 1234.5678})
+    lines = gcode(analyze(d.model_copy(update={"cam": cam}), verify=False)).splitlines()
+    assert "M3 S1234.568" in lines and all("e+" not in x and "e-" not in x for x in lines)
+    assert any(x.endswith(" F100000") for x in lines)
+    from camcore.model import DesignError, design_from_json
+
+    for field, value in (
+        ("feed_mm_per_min", 0.5),
+        ("plunge_mm_per_min", 1e-5),
+        ("spindle_rpm", 0.5),
+    ):
+        data = d.model_dump(mode="json")
+        data["cam"][field] = value
+        with pytest.raises(DesignError, match=field):
+            design_from_json(__import__("json").dumps(data))
 
 
 @pytest.mark.parametrize("tol_mm", [1e-3, 1e-4])
