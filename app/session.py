@@ -671,11 +671,13 @@ class Session:
         if self.closed.is_set():
             return
         if self.store.silent:  # nothing is written over what the tab could not read
-            return self._say(
+            note = (
                 "✖ This browser's storage did not answer: this tab's work is not kept in "
                 "the browser, and designs cannot be saved in it. Reload the page to try "
                 "again (download a design to keep it meanwhile)."
             )
+            self._say(note)
+            return self._say_quick(note)  # where the user looks (a teacher's review)
         why = storage.working_error(raw) if working is None else None
         kept = why is not None and raw is not None and len(raw) <= MAX_DESIGN_BYTES
         if kept and raw is not None:  # (never the saved list here: a failed read is {})

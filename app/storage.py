@@ -48,6 +48,10 @@ MAX_UNREAD_NAME = 1000  # ... of a name this version cannot show, kept as it is
 # site, so a longer text is not one a browser wrote
 MAX_SAVED_CHARS = 5_000_000
 READ_TIMEOUT_S = 5.0  # a tab that never answers (e.g. a test client) costs this, once
+# ... but the first read waits longer: a browser busy with its first frames (software
+# WebGL on a classroom PC) had answered after 5 s in 2 of 11 starts, and the reload
+# kept nothing (a teacher's review)
+FIRST_READ_TIMEOUT_S = 20.0
 
 
 def parse_working(text: str | None) -> Design | None:
@@ -224,6 +228,7 @@ class BrowserStore:
     def __init__(self, client):
         self._storage = client.local_storage
         self.silent = False  # a read got no answer: what is stored is unknown
+        self._answered = False  # a read has been answered (later ones wait less)
 
     def read(self, key: str) -> str | None:
         """The stored string, or None if absent, unreadable or the browser is silent
@@ -235,10 +240,12 @@ class BrowserStore:
         try:
             with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
                 warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
-                value = self._storage.get_item(key, timeout=READ_TIMEOUT_S)
+                wait = READ_TIMEOUT_S if self._answered else FIRST_READ_TIMEOUT_S
+                value = self._storage.get_item(key, timeout=wait)
         except (RuntimeError, TimeoutError):
             self.silent = True
             return None
+        self._answered = True
         return value if isinstance(value, str) else None
 
     def write(self, key: str, value: str) -> None:

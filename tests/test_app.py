@@ -1750,6 +1750,7 @@ def test_a_silent_browser_storage_is_never_written_over(app, monkeypatch):
     writes: dict[str, str] = {}
     with restored_tab(app, monkeypatch, {}, writes, read=silent) as s:
         assert "did not answer" in s.ui.files_md.content
+        assert "did not answer" in s.ui.quick_md.content  # above the tabs, in view
         s.ui.controls["motion.lift_mm"].value = 17.0
         s.save_named("new one")
         assert writes == {} and "Not saved" in s.ui.files_md.content
