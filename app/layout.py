@@ -28,7 +28,7 @@ OVERLAY_LABELS = {
     "instant_centre": "Instant centre I23 = Q and normals",
     "pressure_angle": "Pressure angle φ",
     "arcs": "Base circle and dwell arcs",
-    "wear": "Wear along the profile (Archard; pale none → dark red most)",
+    "wear": "Wear along the profile (Archard; pale none → dark indigo most)",
 }
 DOWNLOADS = (
     ("json", "Design JSON"),

@@ -38,8 +38,10 @@ YOKE_T = 0.006
 DISPLAY_POINTS = 1200  # profile vertices drawn on screen (exports use all of them)
 OVERLAYS = ("contacts", "forces", "instant_centre", "pressure_angle", "arcs", "wear")
 OFF_BY_DEFAULT = frozenset({"wear"})
-WEAR_LOW_RGB = np.array([255, 230, 120])  # no wear ...
-WEAR_HIGH_RGB = np.array([150, 0, 40])  # ... the profile's largest wear
+# the wear band: pale lavender (none) to dark indigo (the most); not red, which marks
+# a broken limit (a teacher's review read a healthy cam's wear as broken stretches)
+WEAR_LOW_RGB = np.array([238, 228, 250])  # no wear ...
+WEAR_HIGH_RGB = np.array([75, 0, 130])  # ... the profile's largest wear
 
 
 def quat_z(angle: float) -> tuple[float, float, float, float]:
@@ -419,7 +421,7 @@ class SceneView:
 
     def _build_wear(self, a) -> None:
         """The cam's Archard wear along its profile as a heat band on the top face (pale:
-        none, dark red: the profile's largest), from camcore.wear.along_profile. Drawn
+        none, dark indigo: the profile's largest), from camcore.wear.along_profile. Drawn
         only while shown (off by default): it is a profile-long computation and ~40 kB
         per redraw that a hidden band would waste; set_overlay draws it when asked."""
         if not self.show["wear"]:
