@@ -1062,7 +1062,7 @@ class Session:
                 self._diagram_of = key
                 say.content = (
                     f"The stations of *{esc(self.design.name)}* are below "
-                    "(the image's ⤢ shows it full size)."
+                    "(the image's ⤢ shows it full size, 1200 px wide: to project)."
                     + (STATION_3_NOTE if self.design.follower.kind.is_double else "")
                 )
                 if self.ui.stations_img is not None:

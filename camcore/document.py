@@ -197,7 +197,8 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
         ax.set_aspect("equal")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°", fontsize=11)
+        # the lift too: the crops follow the contacts, so S = 0 and S = h look alike
+        ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°, S = {to_mm(S):.2f} mm", fontsize=10)
         text = events[k].split(": ", 1)[-1]
         ax.set_xlabel(text, fontsize=8.5, wrap=True)
         _whole_cam_inset(ax, a, float(th), frame, left=left)
@@ -247,6 +248,8 @@ def _whole_cam_inset(ax, a: Analysis, th: float, frame: tuple[float, float], lef
         fontsize=6.5,
         color=CAM_EDGE,
     )
+    # the way the cam turns (clockwise, as in the paper), in the inset's free corner
+    ins.text(0.05, 0.95, "↻", transform=ins.transAxes, ha="left", va="top", fontsize=10)
     stem = to_mm(a.geo.stem_x)
     ins.plot([stem, stem], [0.5 * (y0 + y1), frame[1]], color=FOLLOWER, lw=1.2, label="travel")
     ins.add_patch(
@@ -270,12 +273,14 @@ def stations_png(a: Analysis, width_px: int = 1100) -> bytes:
     return buf.getvalue()
 
 
-def stations_image(a: Analysis, width_px: int = 700) -> np.ndarray:
-    """stations_figure as an (H, W, 3) uint8 array, two panels a row (the app shows it
-    in its narrow side panel)."""
+def stations_image(a: Analysis, width_px: int = 1200) -> np.ndarray:
+    """stations_figure as an (H, W, 3) uint8 array, three panels a row: the app shows
+    it in its side panel, and full size to project (a teacher's review: drawn 700 px
+    wide in two columns, it needed scrolling on a 1280 x 720 projector and its insets'
+    words were 3 px tall in the panel)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
-    fig = stations_figure(a, width_in=width_px / 100, cols=2)
+    fig = stations_figure(a, width_in=width_px / 100, cols=3)
     canvas = FigureCanvasAgg(fig)
     fig.set_dpi(100)
     canvas.draw()
