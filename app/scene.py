@@ -226,7 +226,7 @@ def legend_html() -> str:
         (LOW_RGB, "low-dwell arc"),
         (GUIDE_RGB, "base circle (dashed), guide, roller pins"),
         (STEM_RGB, "stem, yoke and plates"),
-        (EDGE_RGB, "the cam's outline"),
+        (EDGE_RGB, "the cam's outline, and its θ = 0 datum from the hub to the rim"),
     )
 
     def swatch(rgb) -> str:
@@ -379,6 +379,18 @@ class SceneView:
             ),
         )
         self._build_arcs(a, zt + 2e-4, thick * 1.5)
+        r0 = profile.datum_radius(a.profile.points)
+        self._put(  # the cam's theta = 0 ray, turning with it (a teacher's review: the
+            # stations diagram's datum had nothing to match on the 3D cam)
+            "datum",
+            (r0, a.geo.r_b, zt, thick),
+            lambda: s.add_line_segments(
+                "/cam/datum",
+                np.array([[[0.0, 0.1 * a.geo.r_b, zt], [0.0, r0, zt]]], dtype=np.float32),
+                EDGE_RGB,
+                thickness=thick * 1.2,
+            ),
+        )
         parts = follower_parts(a)
         self._face_meshes = [parts[f"face{i}"][0] for i in range(len(a.geo.faces))]
         for name, (mesh, rgb) in parts.items():

@@ -15,6 +15,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
+from . import profile
 from .analysis import Analysis
 from .checks import accepted_jumps
 from .report import inputs_text, report_text, summary
@@ -229,7 +230,7 @@ def _whole_cam_inset(ax, a: Analysis, th: float, frame: tuple[float, float], lef
     ins.fill(X, Y, color=CAM_FILL, ec=CAM_EDGE, lw=0.8, label="cam")
     ins.plot(0, 0, "+", ms=6, mew=1, color="#222222", label="cam axis")
     # the datum: where the cam frame's +Y ray meets the profile, turned with the cam
-    r0 = float(np.hypot(*P[np.argmin(np.abs(np.arctan2(P[:, 0], P[:, 1])))]))
+    r0 = profile.datum_radius(P)
     tip = to_mm(np.array([s_ * r0, c * r0]))
     ins.plot([0, tip[0]], [0, tip[1]], color=CAM_EDGE, lw=1.3, label="θ = 0")
     ins.plot(*tip, "o", ms=3, color=CAM_EDGE)

@@ -227,6 +227,14 @@ def curvature_radius(geo: Geometry, face: Face, kappa_p: np.ndarray) -> np.ndarr
         return np.where(kappa_p == 0.0, np.inf, geo.sigma / kappa_p - r)
 
 
+def datum_radius(points: np.ndarray) -> float:
+    """The profile's radius [m] on the cam frame's +Y ray (theta = 0: where the
+    follower sits at theta = 0, the DXF's datum and the keyway's ray): that of the
+    vertex of the closed profile ``points`` (M, 2) [m] nearest the ray."""
+    k = int(np.argmin(np.abs(np.arctan2(points[:, 0], points[:, 1]))))
+    return float(np.hypot(*points[k]))
+
+
 def radius_extremes(rho: np.ndarray, in_contact: np.ndarray) -> tuple[float, float]:
     """(smallest convex rho > 0, tightest concave |rho| with rho < 0) [m] of the signed
     radii ``rho`` (curvature_radius, per face and angle) where a face touches; inf where

@@ -2263,3 +2263,20 @@ def test_a_preset_clicked_after_an_edit_is_the_design_shown(tab):
         s.load_preset("paper_example")  # clicked after the edit, the design on screen
     t.join(10)
     assert s.design == paper and s.ui.controls["cam.base_radius_mm"].value == 80.0
+
+
+def test_the_3d_cam_marks_its_datum(tab):
+    """A teacher's review: the stations diagram marks the cam's theta = 0 ray, the 3D
+    cam did not. A line on the cam's top face runs from the hub to the rim along the
+    cam frame's +Y ray (under /cam: it turns with the cam), to the profile's radius
+    there; the legend names it."""
+    s = tab
+    node = s.view.nodes["datum"]
+    assert node.name.startswith("/cam/")
+    (seg,) = np.asarray(node.points, float)
+    r_b = s.analysis.geo.r_b
+    assert seg[:, 0].tolist() == [0.0, 0.0] and seg[0, 1] == pytest.approx(0.1 * r_b)
+    P = s.analysis.profile.points
+    on_ray = P[(np.abs(P[:, 0]) < 2e-3) & (P[:, 1] > 0)]  # the profile where it crosses +Y
+    assert seg[1, 1] == pytest.approx(float(np.hypot(*on_ray.T).mean()), abs=1e-4)
+    assert "θ = 0 datum" in scene.legend_html()
