@@ -457,6 +457,7 @@ def where_markdown(
     events: list[str],
     after: list[list[str]] | None = None,
     room_lines: int = WHERE_LINES,
+    paused_s: float = 0.0,
 ) -> str:
     """The line under the angle slider: angle, segment (both names at a boundary), the
     station reached or the two it lies between, what happens there in words, the
@@ -466,7 +467,9 @@ def where_markdown(
     a station a face that touches now but not after it is marked as leaving (the
     stations diagram draws it idle there: the text had said both faces touch, no more).
     ``room_lines``: the lines of room the block keeps, whatever it says (WHERE_LINES in
-    the narrow panel, WIDE_WHERE_LINES in the wide one)."""
+    the narrow panel, WIDE_WHERE_LINES in the wide one). ``paused_s``: the animation
+    stops that long at the station (Pause at stations): said, as a still cam had
+    looked stuck (a teacher's review)."""
     th = math.degrees(a.theta[k])
     st = np.degrees(a.stations)
     step = a.design.limits.resolution_deg
@@ -474,6 +477,8 @@ def where_markdown(
     said = ""
     if at:
         where = f"at station{'s' if len(at) > 1 else ''} " + " and ".join(str(i) for i in at)
+        if paused_s > 0:
+            where = f"‖ paused {paused_s:g} s {where}"
         # (HTML-escaped only: the block is HTML, where Markdown's backslashes would show)
         said = "<br>".join(f"<i>{html.escape(events[i])}</i>" for i in at if i < len(events))
     else:

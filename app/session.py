@@ -979,6 +979,7 @@ class Session:
         with self.lock:
             self._set_playing(not self.playing)
             if not self.playing:
+                self._held = 0.0  # (a pause at a station under way ends with play)
                 self._goto(self.theta_deg)
             self._keep_view()  # (at play and pause, not while playing: 30 a second)
 
@@ -1020,6 +1021,7 @@ class Session:
             self.station_events,
             self.station_faces,
             WIDE_WHERE_LINES if wide else WHERE_LINES,
+            PAUSE_AT_STATION_S if self._held > 0 else 0.0,
         )
 
     def _end_pause(self) -> None:

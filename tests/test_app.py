@@ -1265,6 +1265,7 @@ def test_pause_at_stations_stops_on_each_station_then_goes_on(tab):
     s.ui.pause_box.value = True
     s.frame(0.2, 1)  # 45 deg/s: 9 deg, past 100
     assert s.theta_deg == pytest.approx(100.0) and "at station 1" in s.ui.where_md.content
+    assert f"‖ paused {PAUSE_AT_STATION_S:g} s at station 1" in s.ui.where_md.content
     assert s.ui.angle_slider.value == 100.0
     steps = int(PAUSE_AT_STATION_S / 0.1)
     for n in range(steps):  # held for the pause
@@ -1274,6 +1275,7 @@ def test_pause_at_stations_stops_on_each_station_then_goes_on(tab):
     if s.theta_deg == pytest.approx(100.0):
         s.frame(0.1, steps + 1)
     assert s.theta_deg == pytest.approx(104.5)  # on again, short of station 2
+    assert "paused" not in s.ui.where_md.content
     s.frame(0.1, steps + 2)  # the next step would pass station 2: it stops there
     assert s.theta_deg == pytest.approx(math.degrees(s.analysis.stations[2]))
     s.ui.pause_box.value = False
