@@ -388,7 +388,7 @@ class SceneView:
                 "/cam/datum",
                 np.array([[[0.0, 0.1 * a.geo.r_b, zt], [0.0, r0, zt]]], dtype=np.float32),
                 EDGE_RGB,
-                thickness=thick * 1.2,
+                thickness=thick * 2.0,  # (thicker than the black pressure-angle lines)
             ),
         )
         parts = follower_parts(a)
