@@ -26,10 +26,12 @@ from camcore.report import summary
 
 
 @contextlib.contextmanager
-def restored_tab(app, monkeypatch, stored: dict, writes: dict | None = None, read=None):
+def restored_tab(
+    app, monkeypatch, stored: dict, writes: dict | None = None, read=None, join: bool = True
+):
     """A new tab whose browser storage holds ``stored`` (key -> text), its restore
-    finished; what the tab writes goes to ``writes``. Yields its Session. ``read``:
-    the store's read instead (self, key) -> text."""
+    finished (unless ``join`` is False); what the tab writes goes to ``writes``. Yields
+    its Session. ``read``: the store's read instead (self, key) -> text."""
     from app import storage
 
     default = lambda self, key: stored.get(key)  # noqa: E731
@@ -41,7 +43,8 @@ def restored_tab(app, monkeypatch, stored: dict, writes: dict | None = None, rea
     try:
         assert wait_for(lambda: set(app.sessions) - before)
         (s,) = [app.sessions[c] for c in set(app.sessions) - before]
-        s._restorer.join(10)
+        if join:
+            s._restorer.join(10)
         yield s
     finally:
         t.close()
@@ -2176,20 +2179,12 @@ def test_the_users_own_view_change_wins_over_the_kept_one(app, monkeypatch):
         return {storage.VIEW_KEY: kept}.get(key)
 
     writes: dict[str, str] = {}
-    monkeypatch.setattr(storage.BrowserStore, "read", slow_read)
-    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, k, v: writes.__setitem__(k, v))
-    before = set(app.sessions)
-    t = FakeTab(app.port)
-    try:
-        assert wait_for(lambda: set(app.sessions) - before)
-        (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+    with restored_tab(app, monkeypatch, {}, writes, read=slow_read, join=False) as s:
         s.step("+5°")
         gate.set()
         s._restorer.join(10)
         assert s.theta_deg == pytest.approx(5.0) and s.camera_view == "Front"
         assert json.loads(writes[storage.VIEW_KEY])["theta_deg"] == pytest.approx(5.0)
-    finally:
-        t.close()
 
 
 def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
