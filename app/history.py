@@ -44,6 +44,8 @@ class History:
         return self._step(self.future, self.past, current)
 
     def _step(self, source: list[Design], dest: list[Design], current: Design) -> Design | None:
+        while source and source[-1] == current:  # (a change undone by hand in one burst)
+            source.pop()
         if not source:
             return None
         dest.append(current)

@@ -166,8 +166,9 @@ class Curve:
         )
         if same:
             return
-        if not np.array_equal(stations, self.stations) and stations.size:
-            self.handle.axes = (*self._axes, station_axis(stations))
+        if not np.array_equal(stations, self.stations):  # (numbers gone with the lines)
+            numbers = (station_axis(stations),) if stations.size else ()
+            self.handle.axes = (*self._axes, *numbers)
         self.x, self.ys, self.shade, self.stations = x, list(ys), shade, stations
         if self._aligned:
             self._align_zeros()

@@ -774,6 +774,12 @@ def test_history_keeps_one_step_per_burst_and_empties_redo_on_a_change():
     for i in range(200):
         h.record(Design(name=f"x{i}"), 20.0 + i)
     assert len(h.past) == history.MOST and h.past[-1].name == "x199"
+    # a change undone by hand within one burst leaves a step equal to the design on
+    # screen: undo skips it rather than seem to do nothing
+    h = history.History()
+    h.record(d[0], 1.0)  # d0 -> d1
+    h.record(d[1], 1.1)  # d1 -> d0 again, the same burst: past [d0], screen d0
+    assert h.undo(d[0]) is None and h.past == []
 
 
 def test_station_lines_are_numbered_above_the_plots():
