@@ -146,13 +146,13 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     r_max = to_mm(float(np.max(np.hypot(P[:, 0], P[:, 1]))))
     top = max(r_max, to_mm(rb + float(np.max(at.prog.S)) + 0.2 * rb))
     frame = (-1.05 * r_max, 1.12 * top)
-    # the inset's corner: the right one, unless the contact points lie right of the
-    # axis (a single follower's offset; a concave face's contact is on the side away
-    # from its stem)
     # the crops' middle: the contact points' mean X over the stations, the same for all
     # panels (the axis for a symmetric follower; a single follower set off 30 mm had
     # its roller at the crop's edge, and one set off further would have left it)
     mid = to_mm(float(np.mean(at.point_world[..., 0])))
+    # the inset's corner: the right one, unless the contact points lie right of the
+    # axis (a single follower's offset; a concave face's contact is on the side away
+    # from its stem): then the cam's low side, under the inset, is on the left
     left = bool(mid > to_mm(0.05 * rb))
     for k, (ax, th) in enumerate(zip(axes, a.stations, strict=False)):
         c, s_ = np.cos(th), np.sin(th)
