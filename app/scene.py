@@ -276,7 +276,14 @@ def geometry_key(design) -> str:
             "motion": True,
             "follower": True,
             "limits": {"resolution_deg"},
-            "cam": {"base_radius_mm", "width_mm", "bore_diameter_mm"},
+            # (the keyway too: the 3D cam had kept its old keyway, or none: a review)
+            "cam": {
+                "base_radius_mm",
+                "width_mm",
+                "bore_diameter_mm",
+                "keyway_width_mm",
+                "keyway_depth_mm",
+            },
             "dynamics": {"guide_width_mm", "guide_length_mm", "overhang_mm"},
         }
     )
@@ -380,13 +387,15 @@ class SceneView:
         )
         self._build_arcs(a, zt + 2e-4, thick * 1.5)
         r0 = profile.datum_radius(a.profile.points)
+        cam = a.design.cam  # from the hub, or beyond the bore and its keyway (on this ray)
+        r1 = max(0.1 * a.geo.r_b, from_mm(cam.bore_diameter_mm / 2 + cam.keyway_depth_mm))
         self._put(  # the cam's theta = 0 ray, turning with it (a teacher's review: the
             # stations diagram's datum had nothing to match on the 3D cam)
             "datum",
-            (r0, a.geo.r_b, zt, thick),
+            (r0, r1, zt, thick),
             lambda: s.add_line_segments(
                 "/cam/datum",
-                np.array([[[0.0, 0.1 * a.geo.r_b, zt], [0.0, r0, zt]]], dtype=np.float32),
+                np.array([[[0.0, r1, zt], [0.0, r0, zt]]], dtype=np.float32),
                 EDGE_RGB,
                 thickness=thick * 2.0,  # (thicker than the black pressure-angle lines)
             ),

@@ -77,6 +77,11 @@ FPS = 30.0
 # the design-changing actions that take turns (Session._take_ticket): the controls, the
 # program table, and the buttons that replace the whole design
 TICKETS = ("controls", "segments", "replace")
+SILENT_NOTE = (
+    "✖ This browser's storage did not answer: this tab's work is not kept in the "
+    "browser, and designs cannot be saved in it. Reload the page to try again (download "
+    "a design to keep it meanwhile)."
+)
 _UNREAD = "(not read yet)"  # Session._kept_program before the restore (never a program's JSON)
 UNFINISHED_NOTE = (
     "The segment table's unfinished program is back as it was left (Design › Motion "
@@ -137,6 +142,7 @@ class Session:
         self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
         self._diagram_of = ""  # geometry_key of the stations diagram on screen
         self._held = 0.0  # seconds the animation still stays at a station
+        self._resumed = False  # the stop at a station has just ended
         self._seen: tuple | None = None  # the last camera message: (pose, width, height)
         self._preset_pose: tuple = ()  # where the preset view put the camera
         self._extent: tuple = (None, (0.0, 0.0))  # (analysis, its closeup_extent)
@@ -251,6 +257,9 @@ class Session:
         with self.lock:
             step = self.history.undo if label == HISTORY_BUTTONS[0] else self.history.redo
             design = step(self.design)
+            self.ui.history_md.content = self.history.text()  # (also when none is left)
+            if design is None and self.error is not None:
+                design = self.design  # an input error undone: the design on screen
             if design is None:
                 return
             self._travelling = True
@@ -453,8 +462,8 @@ class Session:
                 ui.stations_img = None
                 ui.stations_fig_md.content = ""
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
-            if ui.quick_md.content:  # it spoke of the design before this one
-                ui.quick_md.content = ""
+            if ui.quick_md.content and ui.quick_md.content != SILENT_NOTE:
+                ui.quick_md.content = ""  # it spoke of the design before this one
             self._show_summary(s)
             ui.where_md.content = self._where(k)
             ui.history_md.content = self.history.text()
@@ -671,13 +680,10 @@ class Session:
         if self.closed.is_set():
             return
         if self.store.silent:  # nothing is written over what the tab could not read
-            note = (
-                "✖ This browser's storage did not answer: this tab's work is not kept in "
-                "the browser, and designs cannot be saved in it. Reload the page to try "
-                "again (download a design to keep it meanwhile)."
-            )
-            self._say(note)
-            return self._say_quick(note)  # where the user looks (a teacher's review)
+            self._say(SILENT_NOTE)
+            # where the user looks, and kept there (a teacher's review; a redraw clears
+            # the other lines under the download button)
+            return self._say_quick(SILENT_NOTE)
         why = storage.working_error(raw) if working is None else None
         kept = why is not None and raw is not None and len(raw) <= MAX_DESIGN_BYTES
         if kept and raw is not None:  # (never the saved list here: a failed read is {})
@@ -853,6 +859,12 @@ class Session:
 
     def save_named(self, name: str) -> None:
         with self.lock:
+            if not self._persist and not self.store.silent:  # (the first read waits 20 s)
+                return self._say(
+                    "… Not saved yet: this tab is still reading this browser's storage "
+                    "(its saved designs must not be written over unseen). Try again in a "
+                    "moment."
+                )
             if not self._persist:  # the browser's list was never read: do not replace it
                 return self._say(
                     "✖ Not saved: this browser's storage did not answer when the tab "
@@ -979,7 +991,7 @@ class Session:
         with self.lock:
             self._set_playing(not self.playing)
             if not self.playing:
-                self._held = 0.0  # (a pause at a station under way ends with play)
+                self._held = 0.0  # (a stop at a station under way ends with Pause)
                 self._goto(self.theta_deg)
             self._keep_view()  # (at play and pause, not while playing: 30 a second)
 
@@ -999,8 +1011,11 @@ class Session:
                 return
             if self._held > 0:  # stopped at a station
                 self._held -= dt
+                self._resumed = self._held <= 0
                 return
-            slow = n % 3 == 0  # angle slider and the line under it at 10 Hz, together
+            # angle slider and the line under it at 10 Hz, together; and on the first
+            # step after a stop, whose "paused" the line must not keep (a review)
+            slow, self._resumed = n % 3 == 0 or self._resumed, False
             to = self.theta_deg + self.speed * dt
             stop = self._station_within(self.speed * dt) if self.ui.pause_box.value else None
             if stop is not None:

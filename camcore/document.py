@@ -275,10 +275,10 @@ def stations_png(a: Analysis, width_px: int = 1100) -> bytes:
 
 
 def stations_image(a: Analysis, width_px: int = 1200) -> np.ndarray:
-    """stations_figure as an (H, W, 3) uint8 array, three panels a row: the app shows
-    it in its side panel, and full size to project (a teacher's review: drawn 700 px
-    wide in two columns, it needed scrolling on a 1280 x 720 projector and its insets'
-    words were 3 px tall in the panel)."""
+    """stations_figure as an (H, W, 3) uint8 array, three panels a row: drawn for the
+    app's full-size view, to project (a teacher's review: 700 px wide in two columns,
+    it needed scrolling on a 1280 x 720 projector; up to six stations now fit). In the
+    narrow side panel it is smaller than before: full size or the wide panel reads it."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     fig = stations_figure(a, width_in=width_px / 100, cols=3)

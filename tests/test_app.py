@@ -1279,6 +1279,14 @@ def test_pause_at_stations_stops_on_each_station_then_goes_on(tab):
         s.frame(0.1, steps + 1)
     assert s.theta_deg == pytest.approx(104.5)  # on again, short of station 2
     assert "paused" not in s.ui.where_md.content
+    # the line drops "paused" on the first step after a stop, whatever the step's
+    # number (a review: only every third step rewrote it, and it lingered)
+    s._held, s._resumed = 0.05, False
+    s._goto(100.0)  # stopped at station 1, and said
+    assert "paused" in s.ui.where_md.content
+    s.frame(0.1, 31)  # the stop ends ...
+    s.frame(0.1, 32)  # ... and the cam moves on a step that is not a third one
+    assert s.theta_deg == pytest.approx(104.5) and "paused" not in s.ui.where_md.content
     s.frame(0.1, steps + 2)  # the next step would pass station 2: it stops there
     assert s.theta_deg == pytest.approx(math.degrees(s.analysis.stations[2]))
     s.ui.pause_box.value = False
@@ -1759,6 +1767,7 @@ def test_a_silent_browser_storage_is_never_written_over(app, monkeypatch):
         assert "did not answer" in s.ui.files_md.content
         assert "did not answer" in s.ui.quick_md.content  # above the tabs, in view
         s.ui.controls["motion.lift_mm"].value = 17.0
+        assert "did not answer" in s.ui.quick_md.content  # and kept there
         s.save_named("new one")
         assert writes == {} and "Not saved" in s.ui.files_md.content
 
@@ -2180,6 +2189,8 @@ def test_the_users_own_view_change_wins_over_the_kept_one(app, monkeypatch):
 
     writes: dict[str, str] = {}
     with restored_tab(app, monkeypatch, {}, writes, read=slow_read, join=False) as s:
+        s.save_named("early")  # the browser not read yet: not written over unseen
+        assert "still reading" in s.ui.files_md.content and not writes
         s.step("+5°")
         gate.set()
         s._restorer.join(10)
@@ -2221,6 +2232,17 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     s.ui.controls["cam.width_mm"].value = 20.0  # a new change: nothing to redo
     redo()
     assert s.design.cam.width_mm == 20.0 and s.design.motion == first.motion
+    # an input error on screen and nothing left to undo: Undo gives back the design on
+    # screen, its values in the controls; the steps' line follows (a review)
+    monkeypatch.setattr(history, "SETTLE_S", 60.0)
+    s.history.clear()
+    s.ui.controls["cam.width_mm"].value = 22.0
+    s.ui.controls["cam.width_mm"].value = 20.0  # undone by hand in the same burst
+    s.ui.controls["motion.lift_mm"].value = -3.0  # an input error
+    assert s.error is not None
+    undo()
+    assert s.error is None and s.ui.controls["motion.lift_mm"].value == s.design.motion.lift_mm
+    assert s.design.cam.width_mm == 20.0 and s.ui.history_md.content == ""
 
 
 def test_a_table_edit_waiting_on_the_restore_still_wins(tab):
@@ -2277,3 +2299,12 @@ def test_the_3d_cam_marks_its_datum(tab):
     on_ray = P[(np.abs(P[:, 0]) < 2e-3) & (P[:, 1] > 0)]  # the profile where it crosses +Y
     assert seg[1, 1] == pytest.approx(float(np.hypot(*on_ray.T).mean()), abs=1e-4)
     assert "θ = 0 datum" in scene.legend_html()
+    s.ui.controls["cam.bore_diameter_mm"].value = 30.0  # a bore and its keyway on the ray
+    round_bore = np.asarray(s.view.nodes["cam"].vertices).copy()
+    s.ui.controls["cam.keyway_width_mm"].value = 8.0
+    s.ui.controls["cam.keyway_depth_mm"].value = 3.3
+    assert s.error is None
+    # the 3D cam is cut again with its keyway (it had kept the round bore)
+    assert not np.array_equal(np.asarray(s.view.nodes["cam"].vertices), round_bore)
+    (seg,) = np.asarray(s.view.nodes["datum"].points, float)
+    assert seg[0, 1] == pytest.approx((15.0 + 3.3) * 1e-3)  # starts beyond the keyway
