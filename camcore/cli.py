@@ -57,9 +57,11 @@ def _apply_set(data: dict, assignment: str) -> None:
     set_field(data, path.strip(), value, "--set ")
 
 
-def _design(args, unused_note: bool = True) -> Design:
+def _design(args, unused_note: bool = True, kinds: tuple[FollowerKind, ...] = ()) -> Design:
     """The design the arguments name: a file or a preset, --follower, --set (with a
-    note for a follower field the design's kind does not use, if ``unused_note``)."""
+    note for a follower field the design's kind does not use, if ``unused_note``).
+    ``kinds``: the followers the command analyses, if others than the design's own
+    (their fields left out of the file are named too)."""
     if args.preset and args.design:
         raise DesignError("give a design file or --preset, not both")
     if args.preset:
@@ -89,7 +91,7 @@ def _design(args, unused_note: bool = True) -> Design:
     if args.design:  # said of the design analysed: after --follower and --set
         given = [a.partition("=")[0].strip() for a in sets]
         given += ["follower.kind"] if getattr(args, "follower", None) else []
-        left_out = defaulted_fields(_with_given(text, given), design)
+        left_out = defaulted_fields(_with_given(text, given), design, kinds)
         if left_out:
             print(f"note: {args.design}: {defaults_note(left_out, len(left_out))}", file=sys.stderr)
     return design
@@ -189,7 +191,8 @@ def _compare(args) -> int:
                 f"choose from {', '.join(k.value for k in FollowerKind)}"
             )
         kinds = tuple(FollowerKind(n) for n in dict.fromkeys(names))
-    rows = compare_rows(_design(args, unused_note=False), kinds)  # (every kind's fields)
+    # (every kind's fields: no note for one the design's own kind does not use)
+    rows = compare_rows(_design(args, unused_note=False, kinds=kinds), kinds)
     print(json.dumps(rows, indent=2) if args.json else compare_text(rows))
     for r in rows:
         if r["breaks"]:

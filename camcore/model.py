@@ -978,7 +978,9 @@ def _shown_value(x) -> str | None:
     return None
 
 
-def defaulted_fields(text: str | bytes, design: Design) -> list[str]:
+def defaulted_fields(
+    text: str | bytes, design: Design, kinds: tuple[FollowerKind, ...] = ()
+) -> list[str]:
     """The inputs a design document leaves out, which took their default values (the
     paper example's where the paper gives one), as "path = value" ("dynamics (the
     whole group)" for a group left out). A hand-written file without a base radius is
@@ -987,7 +989,9 @@ def defaulted_fields(text: str | bytes, design: Design) -> list[str]:
     Not listed: the name, fields whose default is "unset" (None), follower fields the
     design's kind does not use (FollowerKind.uses), and the motion's own fields (its
     forms, classic or segments, have their own rules: only a motion left out is
-    named)."""
+    named). ``kinds``: the followers analysed, if more than the design's own (compare:
+    a concave face's radius left out is its default there too, a designer's review)."""
+    kinds = kinds or (design.follower.kind,)
     data = json.loads(text)
     out = []
     for group in type(design).model_fields:
@@ -1002,7 +1006,7 @@ def defaulted_fields(text: str | bytes, design: Design) -> list[str]:
         for name, field in type(part).model_fields.items():
             if name in data[group] or field.default is None:
                 continue
-            if group == "follower" and not design.follower.kind.uses(name):
+            if group == "follower" and not any(k.uses(name) for k in kinds):
                 continue
             value = getattr(part, name)
             out.append(f"{group}.{name} = {value.value if isinstance(value, Enum) else value}")

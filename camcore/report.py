@@ -662,6 +662,9 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
                 "follower": kind.value,
                 "valid": s["valid"],
                 "breaks": sorted({f"{v.code} ({v.equation})" for v in a.violations}),
+                # figures without a bound (a jam, a cusp, a velocity jump): said beside
+                # them (a designer's review read 2,004,164 MPa in the table unflagged)
+                "unbounded": [note for _, note in unbounded_notes(s)],
                 "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
                 "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
                 "paper_table1_N": paper_table1_N(design, kind),
@@ -751,7 +754,19 @@ def compare_text(rows: list[dict]) -> str:
             _fmt(r["cam_torque_drive_max_Nm"], 3),
         )
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in cells))
-    return "\n".join(lines)
+    return "\n".join(lines + _verdict_lines(rows))
+
+
+def _verdict_lines(rows: list[dict]) -> list[str]:
+    """Each follower's verdict under the tables, and the figures of its that have no
+    bound (a designer's review: the verdicts went to stderr only, so a table written
+    to a file read as all good, with 2,004,164 MPa beside a cusp unflagged)."""
+    lines = ["", f"{'follower':>14}  limits"]
+    for r in rows:
+        said = "met" if r["valid"] else "BREAKS " + ", ".join(r["breaks"])
+        lines.append(f"{r['follower']:>14}  {said}")
+        lines += [f"{'':>14}  !! {note}" for note in r["unbounded"]]
+    return lines
 
 
 def _life_text(follower: str, long: bool = False) -> str:

@@ -154,6 +154,38 @@ def test_compare_table(capsys):
     assert main(["compare", "--preset", "paper_example", "--followers", "wheel"]) == 2
 
 
+def test_compare_says_each_verdict_and_each_unbounded_figure(tmp_path, capsys):
+    """A designer's review: compare's verdicts went to stderr only, so a table written
+    to a file read as all good beside 2,004,164 MPa at a cusp; and the defaults a file
+    left out were named for the design's own follower only, not for the others it
+    compared. The text ends with each follower's limits, and a figure without a bound
+    is said under it (JSON: "unbounded"); the note names every compared kind's field."""
+    bad = ["--set", "motion.lift_mm=40", "--set", "cam.base_radius_mm=30"]
+    assert main(["compare", "--preset", "paper_example", "--json", *bad]) == 1
+    rows = json.loads(capsys.readouterr().out)
+    assert main(["compare", "--preset", "paper_example", *bad]) == 1
+    out = capsys.readouterr().out
+    verdicts = out[out.rindex("limits") :]
+    for r in rows:
+        said = "met" if r["valid"] else "BREAKS " + ", ".join(r["breaks"])
+        assert f"{r['follower']:>14}  {said}" in verdicts
+        for note in r["unbounded"]:
+            assert f"!! {note}" in verdicts
+    cusped = [r for r in rows if any("cusp" in n for n in r["unbounded"])]
+    assert cusped and all("curvature_convex (Eq. 22)" in r["breaks"] for r in cusped)
+    assert all(r["unbounded"] == [] for r in rows if r["valid"])
+    # a file leaving out fields of the other followers: named too
+    data = json.loads(design_to_json(load_preset("paper_example").with_kind("single_roller")))
+    del data["follower"]["face_radius_mm"], data["follower"]["offset_mm"]
+    path = tmp_path / "roller.json"
+    path.write_text(json.dumps(data))
+    assert main(["compare", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "follower.face_radius_mm = -250.0" in err and "follower.offset_mm = 10.0" in err
+    assert main(["report", str(path)]) == 0  # the roller alone: not its fields
+    assert "face_radius_mm" not in capsys.readouterr().err
+
+
 def test_export_files(tmp_path, capsys):
     out = {ext: tmp_path / f"cam.{ext}" for ext in ("stl", "dxf", "csv", "json")}
     assert (
