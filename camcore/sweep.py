@@ -44,6 +44,7 @@ from .model import (
     format_validation_error,
     load_preset,
     name_follows_kind,
+    read_design,
     set_field,
 )
 
@@ -162,9 +163,12 @@ def _one_type(path: str, values: tuple) -> tuple:
     return values
 
 
-def parse_spec(text: str | bytes) -> Spec:
+def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     """A SPEC document, strictly: unknown keys, a key twice, bad ranges and grids of more
-    than MAX_DESIGNS designs are refused with the offending key named."""
+    than MAX_DESIGNS designs are refused with the offending key named. ``base_dir``: the
+    folder of the spec's file, where a base ``{"file": NAME}`` is read from (the command
+    line's; a spec from anywhere else names no file: a designer's review had pasted a
+    whole design into the spec)."""
     from .model import _check_tree, _non_finite, _object_pairs
 
     try:
@@ -177,6 +181,10 @@ def parse_spec(text: str | bytes) -> Spec:
     base = data.get("base", {"preset": "paper_example"})
     if isinstance(base, dict) and set(base) == {"preset"}:
         design = load_preset(str(base["preset"]))
+    elif isinstance(base, dict) and set(base) == {"file"}:
+        if base_dir is None or not isinstance(base["file"], str) or not base["file"]:
+            raise DesignError('base: {"file": NAME} names a design file beside the spec file')
+        design, _ = read_design(Path(base_dir) / base["file"])
     elif isinstance(base, dict):
         design = design_from_json(json.dumps(base))
     else:
@@ -679,7 +687,8 @@ def tally(path: str | Path) -> str:
 
 
 def load_spec(path: str | Path) -> Spec:
-    return parse_spec(read_capped(path, MAX_SPEC_BYTES))
+    """The SPEC file at ``path`` (a base {"file": NAME} read beside it)."""
+    return parse_spec(read_capped(path, MAX_SPEC_BYTES), base_dir=Path(path).parent)
 
 
 def pareto_mask(values: np.ndarray) -> np.ndarray:

@@ -948,3 +948,30 @@ def test_a_grid_too_large_is_refused_before_its_values_are_made(monkeypatch):
     huge = '{"grid": {"cam.width_mm": {"from": 1, "to": 2, "num": 1%s}}}' % ("0" * 4000)
     with pytest.raises(DesignError, match="over 10\\^15 designs"):
         sweep.parse_spec(huge)
+
+
+def test_a_spec_can_name_its_base_design_file(tmp_path):
+    """A designer's review pasted a whole design into the spec: a base {"file": NAME} is
+    read beside the spec file, strictly (a bad file says why); the spec's document
+    keeps the design itself; a spec not read from a file (the app's) names no file."""
+    from camcore.model import design_to_json, load_preset
+
+    d = load_preset("paper_example").with_kind("single_roller")
+    (tmp_path / "mine.json").write_text(design_to_json(d))
+    spec_path = tmp_path / "spec.json"
+    spec_path.write_text(
+        json.dumps({"base": {"file": "mine.json"}, "grid": {"cam.width_mm": [10, 12]}})
+    )
+    spec = sweep.load_spec(spec_path)
+    assert spec.base == json.loads(d.model_dump_json()) and spec.size == 2
+    assert json.loads(spec.document())["base"]["follower"]["kind"] == "single_roller"
+    with pytest.raises(DesignError, match="beside the spec file"):
+        sweep.parse_spec(spec_path.read_text())
+    (tmp_path / "mine.json").write_text('{"cam": {"base_radius_mm": -5}}')
+    with pytest.raises(DesignError, match="base_radius_mm"):
+        sweep.load_spec(spec_path)
+    spec_path.write_text(
+        json.dumps({"base": {"file": "absent.json"}, "grid": {"cam.width_mm": [10]}})
+    )
+    with pytest.raises(DesignError, match="absent.json"):
+        sweep.load_spec(spec_path)
