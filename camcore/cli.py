@@ -1,4 +1,4 @@
-"""Command line: ``camcore report | compare | export | sweep | pareto``.
+"""Command line: ``camcore report | compare | export | sweep | pareto | fields``.
 
 Exit status (the same for every command, so scripts can rely on it):
 
@@ -282,6 +282,24 @@ def _figure_names(text: str) -> list[str]:
     return names
 
 
+def _fields(args) -> int:
+    """Every field a design file or --set can give: path, default, range, meaning."""
+    from .model import field_table
+
+    rows = field_table()
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return EXIT_VALID
+    for r in rows:
+        default = "-" if r["default"] is None else r["default"]
+        print(f"{r['path']} = {default}" + (f"   ({r['range']})" if r["range"] else ""))
+        if r["description"]:
+            print(f"    {r['description']}")
+        if r["followers"] is not None:
+            print(f"    used by: {', '.join(r['followers']) or 'none'}")
+    return EXIT_VALID
+
+
 def _pareto(args) -> int:
     _need_pyarrow("camcore pareto reads Parquet")
     from .explore import FIGURES, table_front
@@ -397,6 +415,10 @@ def _parser() -> argparse.ArgumentParser:
             help="override one design field, e.g. --set cam.base_radius_mm=90 "
             "(repeatable; VALUE is JSON, or a bare word for names)",
         )
+
+    fl = sub.add_parser("fields", help="list every design field (--set PATH=VALUE, design files)")
+    fl.add_argument("--json", action="store_true", help="print JSON rows")
+    fl.set_defaults(run=_fields)
 
     r = sub.add_parser("report", help="analyse one design")
     source(r)

@@ -978,6 +978,59 @@ def _shown_value(x) -> str | None:
     return None
 
 
+def field_table() -> list[dict]:
+    """Every field a design file or ``--set`` can give, as rows {"path", "default",
+    "range", "description", "followers"} (a designer's review: only a misspelled
+    ``--set`` had listed a group's fields). The motion's are its classic form's
+    (motion.lift_mm, ...) and a program segment's (motion.segments.N.kind, ...);
+    "followers": the kinds that use a follower field (FollowerKind.uses), else None."""
+    defaults = Design()
+    rows = []
+
+    def add(path: str, field, default, group: str = "") -> None:
+        bounds = []
+        for t in (field.annotation, *get_args(field.annotation)):  # (an Enum | None too)
+            if isinstance(t, type) and issubclass(t, Enum):
+                bounds.append("one of " + ", ".join(m.value for m in t))
+        for m in field.metadata:
+            for op, sign in (("ge", ">="), ("gt", ">"), ("le", "<="), ("lt", "<")):
+                if getattr(m, op, None) is not None:
+                    bounds.append(f"{sign} {getattr(m, op):g}")
+        kinds = None
+        if group == "follower" and path != "follower.kind":
+            kinds = [k.value for k in FollowerKind if k.uses(path.rpartition(".")[2])]
+        rows.append(
+            {
+                "path": path,
+                "default": default.value if isinstance(default, Enum) else default,
+                "range": ", ".join(bounds),
+                "description": field.description or "",
+                "followers": kinds,
+            }
+        )
+
+    for group in ("cam", "follower", "dynamics", "material", "wear", "limits"):
+        part = getattr(defaults, group)
+        for name, field in type(part).model_fields.items():
+            add(f"{group}.{name}", field, getattr(part, name), group)
+    classic = classic_of(defaults.motion.segments) or {}
+    for name, field in ClassicMotion.model_fields.items():
+        add(f"motion.{name}", field, classic.get(name))
+    first = defaults.motion.segments[0]
+    for name, field in MotionSegment.model_fields.items():
+        add(f"motion.segments.N.{name}", field, getattr(first, name))
+    rows.append(
+        {
+            "path": "name",
+            "default": defaults.name,
+            "range": f"at most {NAME_MAX} characters",
+            "description": "the design's name (files, headers, the app's title)",
+            "followers": None,
+        }
+    )
+    return rows
+
+
 def defaulted_fields(
     text: str | bytes, design: Design, kinds: tuple[FollowerKind, ...] = ()
 ) -> list[str]:

@@ -359,3 +359,28 @@ def test_a_cam_that_needs_no_spring_says_so(capsys):
     assert "none needed at this speed: the follower's weight keeps it on the cam" in out
     # its acceleration jumps, accepted by its limits, are said, not passed over
     assert "  ~ acceleration jumps accepted at theta = 0.000, 150.000, 180.000, 330.000" in out
+
+
+def test_fields_lists_every_settable_field_with_its_default(capsys):
+    """A designer's review: nothing listed the fields --set takes. `camcore fields`
+    lists each one; every path is one --set accepts, and setting a field to the
+    default it lists leaves the default design as it is (the list is the model's)."""
+    from camcore.model import Design, design_from_json, field_table, set_field
+
+    rows = run_json(capsys, "fields", "--json")
+    assert rows == json.loads(json.dumps(field_table()))
+    paths = {r["path"] for r in rows}
+    for group in ("cam", "follower", "dynamics", "material", "wear", "limits"):
+        model = type(getattr(Design(), group))
+        assert {f"{group}.{n}" for n in model.model_fields} <= paths, group
+    base = json.loads(Design().model_dump_json())
+    for r in rows:
+        if r["default"] is None:
+            continue
+        data = json.loads(json.dumps(base))
+        set_field(data, r["path"].replace(".N.", ".0."), r["default"])
+        assert design_from_json(json.dumps(data)) == Design(), r["path"]
+    roller = next(r for r in rows if r["path"] == "follower.roller_radius_mm")
+    assert set(roller["followers"]) == {"single_roller", "double_roller"}
+    assert main(["fields"]) == 0
+    assert "cam.feed_mm_per_min = 200.0" in capsys.readouterr().out
