@@ -286,12 +286,13 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"{passes}, feed {feed} plunge {plunge} mm/min"),
         _comment(bottom),
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
+        _comment("one contour at final size: rough out a larger blank first"),
         *_bore_comments(cam),
         *_deep_pass_comments(depths[0], to_mm(D)),
         *_feed_comments(cam),
         *_warning_comments(a),
         "G21 G90 G17 G40 G49 G80",
-        f"G0 Z{SAFE_Z_MM:.3f}",
+        f"G0 Z{SAFE_Z_MM:.4f}",
         f"G0 {_xy(lead)}",
         f"M3 S{_plain(cam.spindle_rpm)}" if cam.spindle_rpm > 0 else "M3",
     ]
@@ -299,5 +300,5 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     for z in depths:  # each pass starts and ends at the lead point, off the part
         lines += [f"G1 Z{-z:.4f} F{plunge}", f"G1 {_xy(start)} F{feed}"]
         lines += contour
-    lines += [f"G0 Z{SAFE_Z_MM:.3f}", "M5", "M30", "%"]
+    lines += [f"G0 Z{SAFE_Z_MM:.4f}", "M5", "M30", "%"]
     return "\n".join(lines) + "\n"

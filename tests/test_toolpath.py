@@ -130,7 +130,11 @@ def test_gcode_header_says_what_the_operator_must_set():
     assert "(feeds are defaults: check them for your machine and material)" in head
     assert "(no spindle speed given: M3 has no S word, set it before the run)" in head
     assert "(the cutter centre path, no cutter compensation G41/G42: G40)" in head
+    assert "(one contour at final size: rough out a larger blank first)" in head
     assert "M3" in text.splitlines()
+    # every Z word to the same 4 places (a designer's review: Z5.000 beside Z-15.0000)
+    zs = re.findall(r"Z(-?\d+\.\d+)", text)
+    assert zs and all(len(z.split(".")[1]) == 4 for z in zs)
 
 
 def test_gcode_uses_the_designs_feeds_and_spindle_speed():
