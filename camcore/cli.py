@@ -248,6 +248,9 @@ def _sweep(args) -> int:
     from . import sweep
 
     spec = sweep.load_spec(args.spec)
+    if spec.defaulted:  # a base design file leaving inputs out: said, as report does
+        left_out = list(spec.defaulted)
+        print(f"note: {args.spec}: base {defaults_note(left_out, len(left_out))}", file=sys.stderr)
     if args.workers is not None and args.workers < 1:
         raise DesignError("--workers: at least 1")
     if args.chunk < 1:

@@ -40,6 +40,7 @@ from .model import (
     Design,
     DesignError,
     FollowerKind,
+    defaulted_fields,
     design_from_json,
     format_validation_error,
     load_preset,
@@ -65,6 +66,9 @@ class Spec:
     base: dict
     axes: tuple[tuple[str, tuple], ...]
     grid: object = field(default=None, compare=False)  # the grid as given (ranges kept)
+    # a base design file's inputs left out, which took their defaults and no grid axis
+    # gives (model.defaulted_fields): the command line says them, as report does
+    defaulted: tuple[str, ...] = field(default=(), compare=False)
 
     def document(self) -> str:
         """The spec as a SPEC document with its base resolved (a preset by its design):
@@ -116,6 +120,17 @@ def _axis(path: str, raw) -> tuple:
     if not isinstance(raw, list) or not raw or len(raw) > MAX_VALUES:
         raise DesignError(f"grid.{path}: a list of 1 to {MAX_VALUES} values, or a range")
     return _one_type(path, tuple(raw))
+
+
+def _defaulted(text, design: Design, grid: dict) -> tuple[str, ...]:
+    """defaulted_fields of a base design file, less those a grid axis gives (a whole
+    group a grid axis gives part of is named by its other fields)."""
+    out = []
+    for entry in defaulted_fields(text, design):
+        path = entry.split(" = ")[0].removesuffix(" (the whole group)")
+        if not any(p == path or p.startswith(path + ".") for p in grid):
+            out.append(entry)
+    return tuple(out)
 
 
 def _axis_size(raw) -> int:
@@ -179,12 +194,13 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
         raise DesignError('sweep spec: an object with "grid" and optionally "base"')
     _check_tree(data)
     base = data.get("base", {"preset": "paper_example"})
+    base_text = None  # a base design file's text
     if isinstance(base, dict) and set(base) == {"preset"}:
         design = load_preset(str(base["preset"]))
     elif isinstance(base, dict) and set(base) == {"file"}:
         if base_dir is None or not isinstance(base["file"], str) or not base["file"]:
             raise DesignError('base: {"file": NAME} names a design file beside the spec file')
-        design, _ = read_design(Path(base_dir) / base["file"])
+        design, base_text = read_design(Path(base_dir) / base["file"])
     elif isinstance(base, dict):
         design = design_from_json(json.dumps(base))
     else:
@@ -206,7 +222,8 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     base_dict = json.loads(design.model_dump_json())
     for path, values in axes:
         _check_values(base_dict, path, values)
-    spec = Spec(base_dict, axes, grid)
+    left_out = () if base_text is None else _defaulted(base_text, design, grid)
+    spec = Spec(base_dict, axes, grid, left_out)
     if spec.size > MAX_DESIGNS:
         raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")
     return spec

@@ -950,7 +950,7 @@ def test_a_grid_too_large_is_refused_before_its_values_are_made(monkeypatch):
         sweep.parse_spec(huge)
 
 
-def test_a_spec_can_name_its_base_design_file(tmp_path):
+def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
     """A designer's review pasted a whole design into the spec: a base {"file": NAME} is
     read beside the spec file, strictly (a bad file says why); the spec's document
     keeps the design itself; a spec not read from a file (the app's) names no file."""
@@ -970,6 +970,22 @@ def test_a_spec_can_name_its_base_design_file(tmp_path):
     (tmp_path / "mine.json").write_text('{"cam": {"base_radius_mm": -5}}')
     with pytest.raises(DesignError, match="base_radius_mm"):
         sweep.load_spec(spec_path)
+    # a file leaving inputs out: those no axis gives are said, as report says them
+    data = json.loads(design_to_json(d))
+    del data["cam"]["base_radius_mm"], data["cam"]["width_mm"], data["dynamics"]
+    (tmp_path / "mine.json").write_text(json.dumps(data))
+    grid = {"cam.width_mm": [10, 12]}
+    spec_path.write_text(json.dumps({"base": {"file": "mine.json"}, "grid": grid}))
+    spec = sweep.load_spec(spec_path)
+    assert "cam.base_radius_mm = 80.0" in spec.defaulted
+    assert "dynamics (the whole group)" in spec.defaulted
+    assert not any("width_mm" in x for x in spec.defaulted)  # the grid gives it
+    from camcore.cli import main
+
+    assert main(["sweep", str(spec_path), "--out", str(tmp_path / "r.parquet"), "--fast"]) == 0
+    assert "base not in the file, so their defaults: cam.base_radius_mm = 80.0" in (
+        capsys.readouterr().err
+    )
     spec_path.write_text(
         json.dumps({"base": {"file": "absent.json"}, "grid": {"cam.width_mm": [10]}})
     )
