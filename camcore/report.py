@@ -340,6 +340,20 @@ def _fmt(x, nd=3) -> str:
     return f"{x:.{nd}f}".replace(f"-{0:.{nd}f}", f"{0:.{nd}f}")  # no "-0.00 W"
 
 
+def _fmt_against(x, limit: float | None, nd: int) -> str:
+    """_fmt, with more places where ``nd`` would print the ``limit`` itself for a value
+    that is not it (a designer's review read a valid 29.999 deg as "30.00" beside the
+    30 deg limit)."""
+    text = _fmt(x, nd)
+    if x is None or limit is None or x == limit:
+        return text
+    for places in range(nd, nd + 7):  # (at most 6 places more)
+        text = _fmt(x, places)
+        if text != _fmt(limit, places):
+            break
+    return text
+
+
 def _train_text(t: dict | None) -> str:
     """The elastic train's row of ``machine_rows``."""
     if t is None:
@@ -545,6 +559,7 @@ def unbounded_notes(s: dict) -> list[tuple[str, str]]:
 
 def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
+    limit = None if design is None else design.limits.max_pressure_angle_deg
     rows = [
         ("follower", s["follower"]),
         ("valid", "yes" if s["valid"] else "NO"),
@@ -568,8 +583,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
         ),
         (
             "max pressure angle rise / fall",
-            f"{_fmt(s['pressure_angle_max_deg']['rise'], 2)} / "
-            f"{_fmt(s['pressure_angle_max_deg']['fall'], 2)} deg",
+            f"{_fmt_against(s['pressure_angle_max_deg']['rise'], limit, 2)} / "
+            f"{_fmt_against(s['pressure_angle_max_deg']['fall'], limit, 2)} deg",
         ),
         ("rho rise (min .. max)", f"{_fmt(s['curvature_radius_mm']['rise'], 2)} mm"),
         ("rho fall (min .. max)", f"{_fmt(s['curvature_radius_mm']['fall'], 2)} mm"),

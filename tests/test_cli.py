@@ -384,3 +384,17 @@ def test_fields_lists_every_settable_field_with_its_default(capsys):
     assert set(roller["followers"]) == {"single_roller", "double_roller"}
     assert main(["fields"]) == 0
     assert "cam.feed_mm_per_min = 200.0" in capsys.readouterr().out
+
+
+def test_a_figure_just_under_its_limit_is_not_printed_as_the_limit():
+    """A designer's review: a valid pressure angle of 29.999 deg printed "30.00" beside
+    the 30 deg limit. Where the usual places would print the limit for another value,
+    more are shown."""
+    from camcore.report import _fmt_against
+
+    assert _fmt_against(29.9994, 30.0, 2) == "29.999"
+    assert _fmt_against(30.0004, 30.0, 2) == "30.0004"
+    assert _fmt_against(29.99996, 30.0, 2) == "29.99996"
+    assert _fmt_against(30.0, 30.0, 2) == "30.00"
+    assert _fmt_against(12.3456, 30.0, 2) == "12.35"
+    assert _fmt_against(None, 30.0, 2) == "-" and _fmt_against(29.9994, None, 2) == "30.00"
