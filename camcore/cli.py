@@ -34,6 +34,7 @@ from .model import (
     preset_names,
     read_design,
     set_field,
+    with_given,
 )
 
 EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT = 0, 1, 2
@@ -91,22 +92,10 @@ def _design(args, unused_note: bool = True, kinds: tuple[FollowerKind, ...] = ()
     if args.design:  # said of the design analysed: after --follower and --set
         given = [a.partition("=")[0].strip() for a in sets]
         given += ["follower.kind"] if getattr(args, "follower", None) else []
-        left_out = defaulted_fields(_with_given(text, given), design, kinds)
+        left_out = defaulted_fields(with_given(text, given), design, kinds)
         if left_out:
             print(f"note: {args.design}: {defaults_note(left_out, len(left_out))}", file=sys.stderr)
     return design
-
-
-def _with_given(text: str | bytes, paths: list[str]) -> str:
-    """The design document with the fields the command line gave marked present (their
-    values do not matter to defaulted_fields): none of them is a default."""
-    data = json.loads(text)
-    for path in paths:
-        group, _, name = path.partition(".")
-        node = data.setdefault(group, {})
-        if isinstance(node, dict) and name and "." not in name:
-            node.setdefault(name, None)
-    return json.dumps(data)
 
 
 def _note_unused(design: Design, sets: list[str]) -> None:

@@ -978,6 +978,10 @@ def _shown_value(x) -> str | None:
     return None
 
 
+GROUPS = ("cam", "follower", "dynamics", "material", "wear", "limits")  # of fields (motion's
+# own: its classic form or its segments)
+
+
 def field_table() -> list[dict]:
     """Every field a design file or ``--set`` can give, as rows {"path", "default",
     "range", "description", "followers"} (a designer's review: only a misspelled
@@ -1009,7 +1013,7 @@ def field_table() -> list[dict]:
             }
         )
 
-    for group in ("cam", "follower", "dynamics", "material", "wear", "limits"):
+    for group in GROUPS:
         part = getattr(defaults, group)
         for name, field in type(part).model_fields.items():
             add(f"{group}.{name}", field, getattr(part, name), group)
@@ -1029,6 +1033,26 @@ def field_table() -> list[dict]:
         }
     )
     return rows
+
+
+def with_given(text: str | bytes, paths: list[str]) -> str:
+    """The design document ``text`` with the fields at ``paths`` (dotted, as --set and
+    a sweep grid give them) marked present, their values unchanged elsewhere: for
+    defaulted_fields, none of them is a default. A whole group's path marks all its
+    fields."""
+    data = json.loads(text)
+    groups = {g: type(getattr(Design(), g)) for g in GROUPS}
+    for path in paths:
+        group, _, name = path.partition(".")
+        node = data.setdefault(group, {})
+        if not isinstance(node, dict):
+            continue
+        if not name and group in groups:
+            for field in groups[group].model_fields:
+                node.setdefault(field, None)
+        elif name and "." not in name:
+            node.setdefault(name, None)
+    return json.dumps(data)
 
 
 def defaulted_fields(

@@ -47,6 +47,7 @@ from .model import (
     name_follows_kind,
     read_design,
     set_field,
+    with_given,
 )
 
 MAX_SPEC_BYTES = 1_000_000
@@ -122,15 +123,15 @@ def _axis(path: str, raw) -> tuple:
     return _one_type(path, tuple(raw))
 
 
-def _defaulted(text, design: Design, grid: dict) -> tuple[str, ...]:
-    """defaulted_fields of a base design file, less those a grid axis gives (a whole
-    group a grid axis gives part of is named by its other fields)."""
-    out = []
-    for entry in defaulted_fields(text, design):
-        path = entry.split(" = ")[0].removesuffix(" (the whole group)")
-        if not any(p == path or p.startswith(path + ".") for p in grid):
-            out.append(entry)
-    return tuple(out)
+def _defaulted(text, design: Design, axes) -> tuple[str, ...]:
+    """defaulted_fields of a base design file, less those a grid axis gives, for every
+    follower kind the grid runs (model.with_given, as the command line's --set)."""
+    kinds = {design.follower.kind}
+    for path, values in axes:
+        if path == "follower.kind":
+            kinds |= {FollowerKind(v) for v in values if v in set(FollowerKind)}
+    given = with_given(text, [path for path, _ in axes])
+    return tuple(defaulted_fields(given, design, tuple(kinds)))
 
 
 def _axis_size(raw) -> int:
@@ -222,7 +223,7 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     base_dict = json.loads(design.model_dump_json())
     for path, values in axes:
         _check_values(base_dict, path, values)
-    left_out = () if base_text is None else _defaulted(base_text, design, grid)
+    left_out = () if base_text is None else _defaulted(base_text, design, axes)
     spec = Spec(base_dict, axes, grid, left_out)
     if spec.size > MAX_DESIGNS:
         raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")

@@ -980,6 +980,17 @@ def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
     assert "cam.base_radius_mm = 80.0" in spec.defaulted
     assert "dynamics (the whole group)" in spec.defaulted
     assert not any("width_mm" in x for x in spec.defaulted)  # the grid gives it
+    assert not any("face_radius_mm" in x for x in spec.defaulted)  # a roller's file
+    kinds = {"cam.width_mm": [10], "follower.kind": ["single_roller", "double_concave"]}
+    spec_path.write_text(json.dumps({"base": {"file": "mine.json"}, "grid": kinds}))
+    data["follower"].pop("face_radius_mm")
+    (tmp_path / "mine.json").write_text(json.dumps(data))
+    assert "follower.face_radius_mm = -250.0" in sweep.load_spec(spec_path).defaulted
+    (tmp_path / "mine.json").write_text(json.dumps(data | {"dynamics": {}}))
+    whole = {"dynamics": [json.loads(d.dynamics.model_dump_json())], "cam.width_mm": [10]}
+    spec_path.write_text(json.dumps({"base": {"file": "mine.json"}, "grid": whole}))
+    assert not any("dynamics" in x for x in sweep.load_spec(spec_path).defaulted)
+    spec_path.write_text(json.dumps({"base": {"file": "mine.json"}, "grid": grid}))
     from camcore.cli import main
 
     assert main(["sweep", str(spec_path), "--out", str(tmp_path / "r.parquet"), "--fast"]) == 0
