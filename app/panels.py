@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from camcore.model import Design, design_to_json
+from camcore.model import Design, FollowerKind, design_to_json
 from camcore.motion import segment_word
 from camcore.report import machine_rows, unbounded_notes
 from camcore.units import to_mm
@@ -380,7 +380,12 @@ def summary_markdown(s: dict) -> str:
     fn, st = s["contact_force_max_N"], s["contact_stress_max_MPa"]
     rows = [
         ("High-dwell radius R", f"{f(s['dwell_radius_mm'], 3)} mm"),
-        ("ψ_h / ψ_l", f"{f(s['psi_h_deg'], 3)} / {f(s['psi_l_deg'], 3)} °"),
+        (
+            "ψ_h / ψ_l",
+            f"{f(s['psi_h_deg'], 3)} / {f(s['psi_l_deg'], 3)} °"
+            if FollowerKind(s["follower"]).is_double
+            else "– (one contact)",
+        ),
         ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
         ("ρ rise", f"{f(rho['rise'], 1)} mm"),
         ("ρ fall", f"{f(rho['fall'], 1)} mm"),

@@ -557,6 +557,25 @@ def unbounded_notes(s: dict) -> list[tuple[str, str]]:
     return [(why, note) for why, note in found if note is not None]
 
 
+def _psi_text(s: dict) -> str:
+    """psi_h / psi_l, or a dash for a single follower, as for every figure that does
+    not apply: its one contact hands over to nothing (Eqs. 23, 25 are about two faces;
+    the summary keeps their 0)."""
+    if not FollowerKind(s["follower"]).is_double:
+        return "-"
+    return f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg"
+
+
+def _stations_text(stations_deg: list[float]) -> str:
+    """The stations, each angle once: a single follower's pairs coincide (its psi = 0)."""
+    shown: list[str] = []
+    for v in stations_deg:
+        word = f"{v:.3f}"
+        if not shown or shown[-1] != word:
+            shown.append(word)
+    return " ".join(shown) + " deg"
+
+
 def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
     limit = None if design is None else design.limits.max_pressure_angle_deg
@@ -564,11 +583,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
         ("follower", s["follower"]),
         ("valid", "yes" if s["valid"] else "NO"),
         ("high-dwell radius R (Eq. 20)", f"{_fmt(s['dwell_radius_mm'], 4)} mm"),
-        (
-            "psi_h / psi_l (Eqs. 23, 25)",
-            f"{_fmt(s['psi_h_deg'], 4)} / {_fmt(s['psi_l_deg'], 4)} deg",
-        ),
-        ("stations", " ".join(f"{v:.3f}" for v in s["stations_deg"]) + " deg"),
+        ("psi_h / psi_l (Eqs. 23, 25)", _psi_text(s)),
+        ("stations", _stations_text(s["stations_deg"])),
         (
             "dwell arcs high / low (Eqs. 24, 26)",
             f"{_fmt(s['dwell_arc_deg']['high'], 3)} / {_fmt(s['dwell_arc_deg']['low'], 3)} deg",

@@ -302,3 +302,22 @@ def test_a_stress_from_a_near_cusp_says_so():
     a = analyze(Design.model_validate(data), verify=False)
     (v,) = [v for v in a.violations if v.code == "contact_stress"]
     assert v.amount > 10 * 10.0 and "cusp" not in v.message
+
+
+def test_a_single_followers_text_says_no_psi_and_each_station_once():
+    """A single follower's psi are 0 and its stations come in equal pairs (nothing to
+    hand over): the printed report and the app's table show a dash and each angle once,
+    the JSON keeps the numbers."""
+    from app.panels import summary_markdown
+    from camcore.report import report_text
+
+    single = summary(analyze(load_preset("paper_example").with_kind("single_roller")))
+    assert single["psi_h_deg"] == 0.0 and len(single["stations_deg"]) == 6
+    text = report_text(single)
+    assert "psi_h / psi_l (Eqs. 23, 25)          -\n" in text
+    assert "stations                             0.000 100.000 170.000 300.000 deg" in text
+    assert "– (one contact)" in summary_markdown(single)
+    double = summary(analyze(load_preset("paper_example")))
+    assert "3.6984 / 3.3723 deg" in report_text(double)
+    assert "0.000 100.000 107.397 162.603 170.000 300.000 deg" in report_text(double)
+    assert "3.698 / 3.372 °" in summary_markdown(double)
