@@ -9,6 +9,7 @@ that makes a valid design. Values the session writes in (``show``) fire no edit.
 from __future__ import annotations
 
 import contextlib
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -77,7 +78,11 @@ class SegmentTable:
         self.rows: list[dict] = []  # widget handles by key, one dict per segment
         self._extra: list = []
         self.sums: Any = None  # the sums' markdown handle, built with the rows
-        self._quiet = False  # True while the session writes values in
+        # the thread writing the session's values in (show): viser runs a widget's
+        # callbacks in the thread that sets its value, so that thread's callbacks are
+        # the session's own writes; a user's edit arrives on another thread and counts
+        # (a plain flag had dropped an edit made while the table was being redrawn)
+        self._writer: int | None = None
         self.lock: Any = contextlib.nullcontext()  # the session's (bound with on_change)
 
     def kinds(self) -> list[str]:
@@ -102,7 +107,7 @@ class SegmentTable:
         typed = [str(g["kind"]) if isinstance(g, dict) else g.kind.value for g in segs]
         if self.kinds() != typed:  # (as typed: a refused kind stays on screen as it is)
             self._build(rows)
-        self._quiet = True
+        self._writer = threading.get_ident()
         try:
             for r, g, kind in zip(self.rows, rows, typed, strict=True):
                 # a row whose kind the user changed in place keeps its widgets: their
@@ -119,11 +124,11 @@ class SegmentTable:
                 if g.law is not None:
                     r["law"].value = LABEL_OF_LAW[g.law]
         finally:
-            self._quiet = False
+            self._writer = None
         self.sums.content = segment_sums_markdown([g.as_dict() for g in rows])
 
     def _edited(self) -> None:
-        if not self._quiet:
+        if self._writer != threading.get_ident():
             self.on_change(self.as_dicts())
 
     def act(self, i: int, action: str) -> None:

@@ -765,6 +765,32 @@ def test_a_port_just_left_by_a_stopped_server_is_free():
     assert _port_free("127.0.0.1", port)
 
 
+def test_a_table_edit_made_while_the_table_is_redrawn_counts(tab):
+    """The session writing its values into the table (show) fires no edit, but a
+    user's edit arriving meanwhile on another thread does (a shared flag had dropped
+    it: a review)."""
+    table = tab.ui.segments
+    got: list[list[dict]] = []
+    table.on_change = got.append  # (the session's handler is not what is tested here)
+    shown = [g.model_dump(mode="json", exclude_none=True) for g in tab.design.motion.segments]
+    shown[0]["angle_deg"] = 90.0  # a value written in place: the rows stay
+    inside, go = threading.Event(), threading.Event()
+
+    def hold(_e):  # the session's write of row 1's angle, held half way
+        if threading.current_thread() is writer:
+            inside.set()
+            go.wait(5)
+
+    table.rows[0]["angle"].on_update(hold)
+    writer = threading.Thread(target=table.show, args=(shown,))
+    writer.start()
+    assert inside.wait(5)
+    table.rows[3]["angle"].value = 55.0  # the user's edit, meanwhile
+    go.set()
+    writer.join(5)
+    assert len(got) == 1 and got[0][3]["angle_deg"] == 55.0  # the edit, and only it
+
+
 def test_segment_table_edits_the_program(tab):
     """The segment table (issue 10): rows follow the design; moving, adding, removing
     and editing rows re-analyses at once; a program that does not close says so and
