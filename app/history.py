@@ -62,4 +62,5 @@ class History:
         """How many steps each way, for the line under the buttons ("" if none)."""
         if not self.past and not self.future:
             return ""
-        return f"{len(self.past)} step(s) to undo, {len(self.future)} to redo"
+        n = len(self.past)
+        return f"{n} {'step' if n == 1 else 'steps'} to undo, {len(self.future)} to redo"

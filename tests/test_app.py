@@ -2241,7 +2241,7 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     monkeypatch.setattr(history, "SETTLE_S", 0.0)  # from here each change is a step
     s.load_preset("double_index")
     preset = s.design
-    assert "2 step(s) to undo, 0 to redo" in s.ui.history_md.content
+    assert "2 steps to undo, 0 to redo" in s.ui.history_md.content
     undo()
     assert s.design.cam.base_radius_mm == 90.0 and s.design.motion == first.motion
     assert s.ui.controls["cam.base_radius_mm"].value == 90.0

@@ -768,7 +768,7 @@ def test_history_keeps_one_step_per_burst_and_empties_redo_on_a_change():
     assert h.past == [d[0], d[2]]
     assert h.undo(d[3]) == d[2] and h.undo(d[2]) == d[0] and h.undo(d[0]) is None
     assert h.redo(d[0]) == d[2] and h.future == [d[3]]
-    assert h.text() == "1 step(s) to undo, 1 to redo"
+    assert h.text() == "1 step to undo, 1 to redo"
     h.record(d[2], 11.1)  # a change after an undo: a step of its own, redo emptied
     assert h.past == [d[0], d[2]] and h.future == []
     for i in range(200):
