@@ -253,6 +253,7 @@ def _display_points(a) -> np.ndarray:
 
 
 LABEL_SHARE = 0.025  # a label's height in a preset view: of the view's height
+PHI_LEGS = 0.2  # the pressure-angle construction's legs at most: of the view's height
 
 
 def label_height(pos, look, fov: float) -> float:
@@ -606,7 +607,10 @@ class SceneView:
         # pressure angle at the driving face: normal vs. the follower's path (Y)
         i = 0 if on[0] else len(a.geo.faces) - 1
         p, n = pw[i], a.normal[i, k]
-        L = 0.45 * a.geo.r_b
+        # its legs a share of what the view shows (the labels' height says that): at
+        # 0.45 r_b the close-up had its arc off screen and the label 15 mm from the
+        # contact, out on the cam
+        L = min(0.45 * a.geo.r_b, PHI_LEGS * self.label_h / LABEL_SHARE)
         phi = float(a.pressure_angle[i, k])
         pts = [
             ((p[0], p[1], z), (p[0], p[1] + L, z)),

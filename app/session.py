@@ -667,16 +667,17 @@ class Session:
         restart, brings the user back to them). Until the read returns nothing is
         written, so the default design never overwrites what the browser kept."""
         gen0 = self.gen
-        raw = self.store.read(storage.WORKING_KEY)
+        stored = self.store.read_all(storage.KEYS)
+        raw = stored[storage.WORKING_KEY]
         working = storage.parse_working(raw)
-        saved_text = self.store.read(storage.SAVED_KEY)
+        saved_text = stored[storage.SAVED_KEY]
         saved = storage.parse_saved(saved_text)
         self._unread = storage.unread_entries(saved_text, saved)
-        setup = storage.parse_setup(self.store.read(storage.EXPLORE_KEY))
-        typed_text = self.store.read(storage.PROGRAM_KEY)
+        setup = storage.parse_setup(stored[storage.EXPLORE_KEY])
+        typed_text = stored[storage.PROGRAM_KEY]
         typed = storage.parse_program(typed_text)
-        view = storage.parse_view(self.store.read(storage.VIEW_KEY))
-        aside = self.store.read(storage.UNREADABLE_KEY)  # set aside by an earlier visit?
+        view = storage.parse_view(stored[storage.VIEW_KEY])
+        aside = stored[storage.UNREADABLE_KEY]  # set aside by an earlier visit?
         if self.closed.is_set():
             return
         if self.store.silent:  # nothing is written over what the tab could not read

@@ -15,6 +15,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from concurrent.futures import ThreadPoolExecutor
 
 from camcore.model import (
     MAX_DESIGN_BYTES,
@@ -40,6 +41,7 @@ PROGRAM_KEY = "camdesigner.program"
 # how the tab was looking at the design: cam angle, play speed, pause at stations, wide
 # panel, overlays, camera preset (a teacher's review: a reload kept the design only)
 VIEW_KEY = "camdesigner.view"
+KEYS = (WORKING_KEY, SAVED_KEY, EXPLORE_KEY, PROGRAM_KEY, VIEW_KEY, UNREADABLE_KEY)  # all read
 MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
@@ -47,11 +49,10 @@ MAX_UNREAD_NAME = 1000  # ... of a name this version cannot show, kept as it is
 # the saved list's stored text: a browser's storage holds about 5 million characters a
 # site, so a longer text is not one a browser wrote
 MAX_SAVED_CHARS = 5_000_000
-READ_TIMEOUT_S = 5.0  # a tab that never answers (e.g. a test client) costs this, once
-# ... but the first read waits longer: a browser busy with its first frames (software
-# WebGL on a classroom PC) had answered after 5 s in 2 of 11 starts, and the reload
-# kept nothing (a teacher's review)
-FIRST_READ_TIMEOUT_S = 20.0
+# how long a read waits for a browser that is connected but does not answer: a browser
+# busy with its first frames (software WebGL on a classroom PC) had answered after 5 s
+# in 2 of 11 starts, and the reload kept nothing (a teacher's review)
+READ_TIMEOUT_S = 20.0
 
 
 def parse_working(text: str | None) -> Design | None:
@@ -228,7 +229,6 @@ class BrowserStore:
     def __init__(self, client):
         self._storage = client.local_storage
         self.silent = False  # a read got no answer: what is stored is unknown
-        self._answered = False  # a read has been answered (later ones wait less)
 
     def read(self, key: str) -> str | None:
         """The stored string, or None if absent, unreadable or the browser is silent
@@ -238,15 +238,24 @@ class BrowserStore:
         if self.silent:
             return None
         try:
-            with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
-                warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
-                wait = READ_TIMEOUT_S if self._answered else FIRST_READ_TIMEOUT_S
-                value = self._storage.get_item(key, timeout=wait)
+            value = self._storage.get_item(key, timeout=READ_TIMEOUT_S)
         except (RuntimeError, TimeoutError):
             self.silent = True
             return None
-        self._answered = True
         return value if isinstance(value, str) else None
+
+    def read_all(self, keys: tuple[str, ...]) -> dict[str, str | None]:
+        """``read`` of every key, all asked at once: a busy browser answers them
+        together. (Read one after another, the third of six had waited past its 5 s
+        while the browser drew its first frames with software WebGL, and the tab kept
+        nothing from then on.) A silent browser costs READ_TIMEOUT_S once."""
+        with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
+            warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
+            with ThreadPoolExecutor(len(keys), thread_name_prefix="storage-read") as pool:
+                values = list(pool.map(self.read, keys))
+        if self.silent:  # (one read failed: what the others say is not the whole story)
+            return dict.fromkeys(keys)
+        return dict(zip(keys, values, strict=True))
 
     def write(self, key: str, value: str) -> None:
         try:
