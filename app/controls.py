@@ -126,7 +126,7 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
         (
             Spec("cam.base_radius_mm", "Base radius r_b [mm]", "slider", 10, 300, 1),
             Spec("cam.width_mm", "Width w [mm]", "slider", 1, 100, 0.5),
-            Spec("cam.speed_rpm", "Speed [rpm]", "number", step=10),
+            Spec("cam.speed_rpm", "Cam speed [rpm]", "number", step=10),
             Spec(
                 "cam.bore_diameter_mm",
                 "Bore diameter [mm]",
@@ -190,6 +190,13 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "number",
                 step=10,
                 hint="G-code: S on M3; 0 = none written (set it at the machine)",
+            ),
+            Spec(
+                "cam.safe_height_mm",
+                "Rapid height [mm]",
+                "number",
+                step=1,
+                hint="G-code: moves between cuts this high above the blank, above every clamp",
             ),
         ),
     ),

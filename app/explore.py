@@ -36,8 +36,10 @@ PARAMETERS = {
     "Lift h [mm]": "motion.lift_mm",
     "Rise β_r [°]": "motion.rise_deg",
     "Fall β_f [°]": "motion.fall_deg",
-    "Speed [rpm]": "cam.speed_rpm",
+    "Cam speed [rpm]": "cam.speed_rpm",
 }
+# labels of earlier versions, as a kept setup may hold them
+OLD_LABELS = {"Speed [rpm]": "Cam speed [rpm]"}
 FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
 MAX_STEPS = 15  # per axis
 MAX_RANGE_ABS = 1e9  # of a range's ends: far beyond every field's own limits
@@ -144,6 +146,7 @@ class ExplorePanel:
             return
         for dd, rng, axis in ((self.x, self.x_range, "x"), (self.y, self.y_range, "y")):
             label = data.get(axis)
+            label = OLD_LABELS.get(label, label) if isinstance(label, str) else label
             if not isinstance(label, str) or label not in PARAMETERS:
                 continue
             dd.value = label  # proposes a range, replaced by the kept one below

@@ -213,6 +213,11 @@ def _export(args) -> int:
 
     design = _design(args)
     outputs = _outputs(args)
+    if args.cutter_diameter_mm is not None and "toolpath" not in outputs:
+        raise DesignError(  # (a maker's review: it had been ignored without a word)
+            "--cutter-diameter-mm is the cutter of --toolpath FILE: give that too, or "
+            "--set cam.cutter_diameter_mm=D to keep it in the design"
+        )
     a = analyze(design)
     _write(a, outputs)
     from .export import PART_KINDS, mounting_note

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .checks import CUSPED
-from .model import Design, design_to_json, omega_rad_s
+from .model import NAME_MAX, Design, design_to_json, omega_rad_s
 from .motion import RISE, SEGMENT_NAMES, per_second
 from .train import on_grid
 from .units import to_deg, to_mm, to_mpa, to_um_per_mcycle
@@ -238,7 +238,7 @@ def file_label(a) -> str:
     # the fixed part first: a reader that cuts it short (the STL's 80 bytes) cuts the name
     return (
         f"camdesigner {package_version()}, mm, profile within {tol:g} mm: "
-        f"cam {plain(a.design.name, 60)}"
+        f"cam {plain(a.design.name, NAME_MAX)}"
     )
 
 

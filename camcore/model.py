@@ -505,6 +505,13 @@ class Cam(_Part):
         description="the toolpath's spindle speed S [rpm]; 0 = none written (M3 without "
         "S: the operator sets it, and the G-code's header says so), else at least 1",
     )
+    safe_height_mm: float = Field(
+        5.0,
+        ge=0.5,
+        le=1000,
+        description="the toolpath's rapid height above the blank's top face [mm]: above "
+        "every clamp",
+    )
 
     @property
     def cut_depth_mm(self) -> float:

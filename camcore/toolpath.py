@@ -34,7 +34,8 @@ from . import profile
 from .export import ExportError, require_star_shaped, warning
 from .units import MM, to_deg, to_mm
 
-SAFE_Z_MM = 5.0  # rapid height above the blank's top face
+SPIN_UP_S = 2  # the dwell after M3 [s] (G4 P in seconds on LinuxCNC, grbl, Mach; a
+# Fanuc-style control reads P in ms: 2 ms there, too short but harmless)
 DECIMALS = 4  # of the X, Y words [mm]: 0.1 um, what controllers take
 ROUNDING_MM = 0.5 * 10.0**-DECIMALS * math.sqrt(2)  # the most a rounded vertex moves
 MAX_MOVES = 1_000_000  # lines of cutting moves in one file (~20 MB)
@@ -122,7 +123,8 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
         raise GougeError(
             f"a {to_mm(D):g} mm cutter would gouge the cam (a concave stretch tighter than "
             f"its radius) at cam angles {where} deg; the tightest concave radius is "
-            f"{to_mm(_tightest_concave(a)):.5g} mm: use a cutter of at most twice that"
+            f"{to_mm(_tightest_concave(a)):.5g} mm: a cutter of at most twice that "
+            f"({2 * to_mm(_tightest_concave(a)):.4g} mm) always fits"
         )
     kappa = max(float(discrete_curvature(pts).max()), 0.0)
     return path, a.chord_error * (1.0 + d * kappa)
@@ -141,9 +143,10 @@ def _tightest_concave(a) -> float:
 
 
 def _comment(text: str) -> str:
-    """A G-code comment: parentheses and anything unusual stripped (a design name is
-    user input; in G-code a ')' would end the comment and run the rest)."""
-    return "(" + re.sub(r"[^A-Za-z0-9 _.,:=+\-/]", "_", text)[:80] + ")"
+    """A G-code comment: parentheses made brackets, anything unusual stripped (a design
+    name is user input; in G-code a ')' would end the comment and run the rest)."""
+    text = text.translate(str.maketrans("()", "[]"))
+    return "(" + re.sub(r"[^A-Za-z0-9 _.,:=+\-/&\[\]]", "_", text)[:80] + ")"
 
 
 def _round_up(x: float, digits: int = 3) -> float:
@@ -281,24 +284,30 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"cam contour: {a.design.name}"),
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
+
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
         _comment("the cutter centre path, no cutter compensation G41/G42: G40"),
         _comment(f"{passes}, feed {feed} plunge {plunge} mm/min"),
         _comment(bottom),
         _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
         _comment("one contour at final size: rough out a larger blank first"),
+        _comment("work zero G54, no tool change and no length offset called: load the"),
+        _comment("cutter and set its length offset first, G43 H on a Fanuc-style control"),
+        _comment(f"rapids at Z{cam.safe_height_mm:g}: above every clamp. No coolant called"),
         *_bore_comments(cam),
         *_deep_pass_comments(depths[0], to_mm(D)),
         *_feed_comments(cam),
         *_warning_comments(a),
-        "G21 G90 G17 G40 G49 G80",
-        f"G0 Z{SAFE_Z_MM:.4f}",
+        # no G49: it would cancel the length offset the operator set (a maker's review)
+        "G21 G90 G17 G40 G80 G54",
+        f"G0 Z{cam.safe_height_mm:.4f}",
         f"G0 {_xy(lead)}",
         f"M3 S{_plain(cam.spindle_rpm)}" if cam.spindle_rpm > 0 else "M3",
+        f"G4 P{SPIN_UP_S:g}",
     ]
     contour = [_xy(p) for p in path[1:]] + [_xy(start), _xy(lead)]
     for z in depths:  # each pass starts and ends at the lead point, off the part
         lines += [f"G1 Z{-z:.4f} F{plunge}", f"G1 {_xy(start)} F{feed}"]
         lines += contour
-    lines += [f"G0 Z{SAFE_Z_MM:.4f}", "M5", "M30", "%"]
+    lines += [f"G0 Z{cam.safe_height_mm:.4f}", "M5", "M30", "%"]
     return "\n".join(lines) + "\n"

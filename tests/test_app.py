@@ -1084,7 +1084,7 @@ def test_explore_setup_round_trips_and_refuses_junk(tab):
     from app import storage
 
     e = tab.ui.explore
-    e.x.value, e.y.value = "Speed [rpm]", "Roller radius r_c [mm]"
+    e.x.value, e.y.value = "Cam speed [rpm]", "Roller radius r_c [mm]"
     e.x_range.value, e.y_range.value = (900.0, 1500.0), (5.0, 12.5)
     e.steps.value, e.all_kinds.value = 5, False
     e.fig_c.value = "max pressure angle"
@@ -1092,6 +1092,9 @@ def test_explore_setup_round_trips_and_refuses_junk(tab):
     e.x.value, e.y.value = "Lift h [mm]", "Rise β_r [°]"
     e.steps.value, e.all_kinds.value, e.fig_c.value = 9, True, "none"
     e.apply_setup(storage.parse_setup(__import__("json").dumps(kept)))
+    assert e.setup() == kept
+    e.x.value = "Lift h [mm]"  # a setup kept under the field's earlier label
+    e.apply_setup({**kept, "x": "Speed [rpm]"})
     assert e.setup() == kept
     junk = {
         "x": "<b>not a field</b>",
@@ -1440,7 +1443,7 @@ def test_a_cutter_that_gouges_is_said_before_the_download(tab, downloads):
     assert "⚠ G-code:" in status and "a 190 mm cutter would gouge" in status
     s.ui.download_btns["toolpath"].value = True
     refusal = s.ui.files_md.content
-    assert "gouge" in refusal and "use a cutter of at most" in refusal
+    assert "gouge" in refusal and "always fits" in refusal
     s.ui.controls["cam.cutter_diameter_mm"].value = 20.0
     assert "⚠ G-code" not in s.ui.status.content  # the next design: not said before checked
     s.refine()

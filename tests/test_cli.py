@@ -398,3 +398,28 @@ def test_a_figure_just_under_its_limit_is_not_printed_as_the_limit():
     assert _fmt_against(30.0, 30.0, 2) == "30.00"
     assert _fmt_against(12.3456, 30.0, 2) == "12.35"
     assert _fmt_against(None, 30.0, 2) == "-" and _fmt_against(29.9994, None, 2) == "30.00"
+
+
+def test_a_cutter_without_a_toolpath_is_an_error(tmp_path, capsys):
+    """--cutter-diameter-mm only sets the toolpath's cutter: alone it had been ignored
+    without a word (a maker's review)."""
+    out = tmp_path / "cam.stl"
+    assert (
+        main(
+            ["export", "--preset", "paper_example", "--stl", str(out), "--cutter-diameter-mm", "6"]
+        )
+        == 2
+    )
+    assert "--cutter-diameter-mm is the cutter of --toolpath FILE" in capsys.readouterr().err
+    assert not out.exists()
+    nc = tmp_path / "cam.nc"
+    args = [
+        "export",
+        "--preset",
+        "paper_example",
+        "--toolpath",
+        str(nc),
+        "--cutter-diameter-mm",
+        "6",
+    ]
+    assert main(args) == 0 and "cutter diameter 6 mm" in nc.read_text()

@@ -105,3 +105,13 @@ def test_the_offset_figures_are_what_camcore_computes():
         s = summary(analyze(Design.model_validate(data), verify=False))
         computed.append(f"{s['pressure_angle_max_deg']['rise']:.2f}")
     assert printed == tuple(computed)
+
+
+def test_the_download_name_shown_is_the_papers_example_s():
+    """The README's example download name is the one the app gives the paper's example
+    now (its fingerprint moves with every new design field: a maker's review found it
+    stale)."""
+    from app.panels import file_stem
+
+    (printed,) = _printed(r"design \(`([a-z0-9_-]+)\.stl` for the")
+    assert printed == file_stem(load_preset("paper_example"))

@@ -74,6 +74,11 @@ def test_the_cutter_may_not_be_wider_than_the_tightest_concave_stretch():
     from camcore.report import summary  # the report's figure, to the digits written
 
     assert f"{summary(a)['radius_of_curvature_mm']['concave_min']:.5g}" == f"{said:.5g}"
+    # the diameter it promises fits (a maker's review: "at most twice that" gave no
+    # number, and a cutter just over it passed)
+    fits = float(re.search(r"at most twice that \(([\d.]+) mm\) always fits", str(err.value))[1])
+    assert fits == pytest.approx(2 * said, rel=1e-3)
+    toolpath.cutter_path(a, fits * MM)
 
 
 def test_gcode_reads_back_to_the_path():
@@ -135,6 +140,29 @@ def test_gcode_header_says_what_the_operator_must_set():
     # every Z word to the same 4 places (a designer's review: Z5.000 beside Z-15.0000)
     zs = re.findall(r"Z(-?\d+\.\d+)", text)
     assert zs and all(len(z.split(".")[1]) == 4 for z in zs)
+
+
+def test_gcode_sets_up_safely_on_any_control():
+    """A maker's review: the start line cancelled the operator's tool-length offset
+    (G49) and named no work zero, the rapid height was fixed and the feed began as M3
+    started the spindle. Now: G54 and no G49, with the header saying what to set; the
+    design's rapid height on every rapid; a dwell after M3; and a name's parentheses
+    kept as brackets (they had read '_double concave faces_')."""
+    d = PAPER.model_copy(update={"cam": PAPER.cam.model_copy(update={"safe_height_mm": 42.5})})
+    lines = toolpath.gcode(analyze(d, verify=False)).splitlines()
+    code = [line for line in lines if not line.startswith("(")]
+    assert "G54" in code[1].split() and not any("G49" in line for line in code)
+    head = [line for line in lines if line.startswith("(")]
+    assert "(work zero G54, no tool change and no length offset called: load the)" in head
+    assert "(cutter and set its length offset first, G43 H on a Fanuc-style control)" in head
+    assert "(rapids at Z42.5: above every clamp. No coolant called)" in head
+    rapids = [line for line in code if line.startswith("G0 Z")]
+    assert rapids == ["G0 Z42.5000"] * 2  # to the start, and home at the end
+    m3 = code.index("M3")
+    assert code[m3 + 1] == "G4 P2" and code[m3 + 2].startswith("G1 Z-")
+    assert "(cam contour: Chuang, Hsu & Chang, Section 6 example [double concave faces])" in head
+    with pytest.raises(ValueError, match="safe_height_mm"):
+        PAPER.cam.model_validate({**PAPER.cam.model_dump(), "safe_height_mm": 0.1})
 
 
 def test_gcode_uses_the_designs_feeds_and_spindle_speed():
