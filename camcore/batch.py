@@ -542,6 +542,13 @@ def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
     width: list[float | None] = [None] * B
     if bt.flat:  # report._flat_face_width_mm
         width = list(2.0 * np.abs(-loc.prog.V.reshape(B, N) - bt.stem_x[:, None]).max(axis=1) * 1e3)
+    # report._face_contact_x_mm: a concave pad's or a flat face's stretch in contact
+    x = (loc.point_world[..., 0].reshape(F, B, N) - bt.stem_x[None, :, None]) * 1e3
+    spans = [
+        _range(x[i], inc[i]) if bt.flat or d0.follower.kind.is_concave else [None] * B
+        for i in range(F)
+    ]
+    faces = [{f"face{i + 1}": spans[i][b] if i < F else None for i in range(2)} for b in range(B)]
     cols = zip(
         _max(phi, rise),
         _max(phi, fall),
@@ -559,6 +566,7 @@ def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
         _scaled(_max(b_half), 1e3),
         _max(Ft, high),
         width,
+        faces,
         high.any(axis=1),
         strict=True,
     )
@@ -579,6 +587,7 @@ def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
             "contact_stress_safety_factor": d0.limits.contact_stress_safety_factor,
             "total_load_high_dwell_N": ft_h,
             "flat_face_width_min_mm": None if wid is None else float(wid),
+            "face_contact_x_mm": face_x,
         }
         for (
             pa_r,
@@ -597,6 +606,7 @@ def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
             b,
             ft_h,
             wid,
+            face_x,
             has_high,
         ) in cols
     ]

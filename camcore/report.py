@@ -106,6 +106,21 @@ def _flat_face_width_mm(a: Analysis) -> float | None:
     return 2.0 * float(np.max(np.abs(x))) * 1e3
 
 
+def _face_contact_x_mm(a: Analysis) -> dict[str, list[float] | None]:
+    """Where the contact runs on each face over the cycle: [min, max] of its X from the
+    follower's axis [mm] (at the grid's samples), the stretch a concave pad or a flat
+    face must cover, plus the margin the designer adds (a maker's review: a concave
+    follower could not be sized from the report). None for a roller (it turns), a
+    knife edge (the contact is its tip) and a face that never touches."""
+    out: dict[str, list[float] | None] = {"face1": None, "face2": None}
+    for i, f in enumerate(a.geo.faces):
+        on = a.in_contact[i]
+        if (a.geo.flat or f.r < 0) and on.any():
+            x = (a.point_world[i, on, 0] - a.geo.stem_x) * 1e3
+            out[f"face{i + 1}"] = [float(x.min()), float(x.max())]
+    return out
+
+
 def _classic_arcs(a: Analysis) -> dict:
     """Angles the high and low dwell arcs subtend on the cam (Eqs. 24, 26), for the
     paper's program; None for other programs (see ``dwells``)."""
@@ -310,6 +325,7 @@ def summary(a: Analysis) -> dict:
         "contact_stress_safety_factor": a.design.limits.contact_stress_safety_factor,
         "total_load_high_dwell_N": _max(a.Ft, high),
         "flat_face_width_min_mm": _flat_face_width_mm(a),
+        "face_contact_x_mm": _face_contact_x_mm(a),
         **_machine(a),
         **_wear(a),
         "train": _train(a),
@@ -557,6 +573,12 @@ def unbounded_notes(s: dict) -> list[tuple[str, str]]:
     return [(why, note) for why, note in found if note is not None]
 
 
+def _face_x_text(spans: dict) -> str:
+    """face_contact_x_mm as "lo .. hi mm", the faces of a double follower side by side."""
+    shown = [f"{_fmt(v[0], 2)} .. {_fmt(v[1], 2)}" for v in spans.values() if v is not None]
+    return " / ".join(shown) + " mm" if shown else "-"
+
+
 def _psi_text(s: dict) -> str:
     """psi_h / psi_l, or a dash for a single follower, as for every figure that does
     not apply: its one contact hands over to nothing (Eqs. 23, 25 are about two faces;
@@ -639,6 +661,7 @@ def report_text(s: dict, design: Design | None = None) -> str:
             ),
         ),
         ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),
+        ("face contact x from the axis", _face_x_text(s["face_contact_x_mm"])),
         (
             "allowable stress / safety factor",
             f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}",

@@ -284,7 +284,6 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         _comment(f"cam contour: {a.design.name}"),
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
-
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
         _comment("the cutter centre path, no cutter compensation G41/G42: G40"),
         _comment(f"{passes}, feed {feed} plunge {plunge} mm/min"),

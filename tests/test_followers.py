@@ -321,3 +321,32 @@ def test_a_single_followers_text_says_no_psi_and_each_station_once():
     assert "3.6984 / 3.3723 deg" in report_text(double)
     assert "0.000 100.000 107.397 162.603 170.000 300.000 deg" in report_text(double)
     assert "3.698 / 3.372 °" in summary_markdown(double)
+
+
+@pytest.mark.parametrize(
+    "kind", ["double_concave", "single_concave", "flat_face", "single_roller", "knife_edge"]
+)
+def test_the_face_contact_span_is_where_the_faces_touch(kind):
+    """face_contact_x_mm: the stretch of a concave pad or a flat face the contact runs
+    over (a maker's review: a concave follower could not be sized). Each end is a
+    contact point at some angle of the grid, every contact point lies within it, and a
+    flat face's span gives its width figure; a roller turns and a knife edge is its tip,
+    so neither has one."""
+    a = analyze(load_preset("paper_example").with_kind(kind))
+    spans = summary(a)["face_contact_x_mm"]
+    if kind in ("single_roller", "knife_edge"):
+        assert spans == {"face1": None, "face2": None}
+        return
+    for i in range(len(a.geo.faces)):
+        lo, hi = spans[f"face{i + 1}"]
+        x = (a.point_world[i, a.in_contact[i], 0] - a.geo.stem_x) * 1e3
+        assert lo == pytest.approx(x.min(), abs=1e-12) and hi == pytest.approx(x.max(), abs=1e-12)
+        assert lo < hi
+    if kind == "double_concave":  # S1 works left of the axis, S2 right of it
+        assert spans["face1"][1] < 0 < spans["face2"][0]
+    else:
+        assert spans["face2"] is None
+    if kind == "flat_face":
+        lo, hi = spans["face1"]
+        width = summary(a)["flat_face_width_min_mm"]
+        assert width == pytest.approx(2 * max(-lo, hi), rel=1e-12)
