@@ -508,9 +508,27 @@ def inputs_text(design) -> str:
             f"{design.limits.contact_stress_safety_factor:g}), E {m.cam_E_GPa:g} GPa "
             f"nu {m.cam_nu:g}; follower E {m.follower_E_GPa:g} GPa nu {m.follower_nu:g}",
         ),
+        ("making", _making_text(c)),
     ]
     width = max(len(k) for k, _ in lines)
     return "\n".join(f"{k.ljust(width)}  {v}" for k, v in lines)
+
+
+def _making_text(c) -> str:
+    """The cam's making inputs: the keyway and the G-code's cutter, passes, feeds and
+    heights (a maker's review: the report that goes to the shop had only the bore)."""
+    keyway = (
+        f"keyway {c.keyway_width_mm:g} x {c.keyway_depth_mm:g} mm"
+        if c.keyway_width_mm > 0
+        else "no keyway"
+    )
+    passes = "1 pass" if c.passes == 1 else f"{c.passes} passes"
+    spindle = f"{c.spindle_rpm:g} rpm" if c.spindle_rpm > 0 else "not given"
+    return (
+        f"{keyway}; G-code: cutter {c.cutter_diameter_mm:g} mm, {passes}, breakthrough "
+        f"{c.breakthrough_mm:g} mm, feed {c.feed_mm_per_min:g} / plunge "
+        f"{c.plunge_mm_per_min:g} mm/min, spindle {spindle}, rapids {c.safe_height_mm:g} mm"
+    )
 
 
 def _unbounded(s: dict, codes, what: str, grows: str) -> str | None:

@@ -66,6 +66,11 @@ def test_report_from_file_and_text(tmp_path, capsys):
     # the inputs head the text report (a review: a value a file left out went unseen),
     # and a figure that does not apply is "-", not "- mm"
     assert "r_b 80 mm, width 15 mm, 1200 rpm" in out.out and "E 210 GPa nu 0.29" in out.out
+    # and how it is to be made (a maker's review: the shop's report had only the bore)
+    assert (
+        "  making    no keyway; G-code: cutter 10 mm, 1 pass, breakthrough 0 mm, feed 200 / "
+        "plunge 50 mm/min, spindle not given, rapids 5 mm\n" in out.out
+    )
     assert out.out.index("program   1. rise 100 deg 15 mm cycloidal") < out.out.index("Eq. 20")
     assert "flat face width needed               -\n" in out.out and "  - mm" not in out.out
 
