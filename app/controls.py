@@ -150,6 +150,14 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 hint="beyond the bore radius (e.g. 3.3 for an 8 mm key)",
             ),
             Spec(
+                "cam.bore_flat_mm",
+                "Bore flat (D shaft) [mm]",
+                "number",
+                step=0.1,
+                hint="size across the flat, facing theta = 0 (e.g. 4.5 for a 5 mm D shaft); "
+                "0 = round",
+            ),
+            Spec(
                 "cam.cutter_diameter_mm",
                 "Cutter diameter [mm]",
                 "number",

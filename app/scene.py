@@ -284,6 +284,7 @@ def geometry_key(design) -> str:
                 "bore_diameter_mm",
                 "keyway_width_mm",
                 "keyway_depth_mm",
+                "bore_flat_mm",
             },
             "dynamics": {"guide_width_mm", "guide_length_mm", "overhang_mm"},
         }

@@ -94,32 +94,50 @@ def bore_outline(cam) -> np.ndarray | None:
     A round bore is a BORE_SEGMENTS-gon. With a keyway (cam.keyway_width_mm b,
     cam.keyway_depth_mm t2) the hole is the circle plus a slot of width b reaching
     t2 beyond the bore radius, centred on +Y: the theta = 0 ray, where the follower
-    sits when the rise begins, so the key fixes the cam's phase on the shaft. The
-    outline stays star-shaped about the axis (its polar angle only increases).
+    sits when the rise begins, so the key fixes the cam's phase on the shaft. With a
+    D flat (cam.bore_flat_mm across it) the circle is cut by a chord square to that
+    ray, for the same reason. The outline stays star-shaped about the axis (its polar
+    angle only increases).
     """
     R = cam.bore_diameter_mm / 2
     if R <= 0:
         return None
-    if cam.keyway_width_mm <= 0:
+    if cam.keyway_width_mm <= 0 and cam.bore_flat_mm <= 0:
         t = math.pi / 2 + 2 * math.pi * np.arange(BORE_SEGMENTS) / BORE_SEGMENTS
         return R * np.column_stack([np.cos(t), np.sin(t)])
-    hw, top = cam.keyway_width_mm / 2, R + cam.keyway_depth_mm
-    foot = math.sqrt(R * R - hw * hw)  # where the slot's sides meet the circle
+    hw, foot, top = _bore_break(cam)
     a_c = math.atan2(foot, hw)  # polar angle of the right foot
     arc = np.linspace(math.pi - a_c, 2 * math.pi + a_c, BORE_SEGMENTS)
     circle = R * np.column_stack([np.cos(arc), np.sin(arc)])
+    if top == foot:  # a flat: the closing edge, from the arc's end to its start
+        return circle
     return np.vstack([[[hw, top], [-hw, top]], circle])
 
 
-def keyed_bore_xyb(cam) -> list[tuple[float, float, float]]:
-    """The keyed bore of bore_outline as LWPOLYLINE vertices (x, y, bulge) [mm]: the
-    slot's top and left side as lines, the circle from the left foot round the bottom
-    to the right foot as one arc (bulge tan(angle / 4), counter-clockwise), and the
-    right side closing it."""
-    R, hw = cam.bore_diameter_mm / 2, cam.keyway_width_mm / 2
-    top, foot = R + cam.keyway_depth_mm, math.sqrt(R * R - hw * hw)
-    swept = math.pi + 2 * math.atan2(foot, hw)  # from pi - a_c to 2 pi + a_c
-    return [(hw, top, 0.0), (-hw, top, 0.0), (-hw, foot, math.tan(swept / 4)), (hw, foot, 0.0)]
+def _bore_break(cam) -> tuple[float, float, float]:
+    """Where a keyway or a D flat breaks the bore circle, on the theta = 0 ray [mm]:
+    the half-width hw of the break, the height ``foot`` where its sides meet the
+    circle and its ``top``. A keyway: its half-width b / 2, the sides' feet and the
+    slot's top R + t2. A flat: the chord at the across-flat size less the radius,
+    from one foot to the other (top = foot: no sides)."""
+    R = cam.bore_diameter_mm / 2
+    if cam.keyway_width_mm > 0:
+        hw = cam.keyway_width_mm / 2
+        return hw, math.sqrt(R * R - hw * hw), R + cam.keyway_depth_mm
+    c = cam.bore_flat_mm - R  # the flat's distance from the axis
+    return math.sqrt(R * R - c * c), c, c
+
+
+def broken_bore_xyb(cam) -> list[tuple[float, float, float]]:
+    """A keyed or D-flat bore of bore_outline as LWPOLYLINE vertices (x, y, bulge)
+    [mm]: the slot's top and left side as lines (a flat: the chord alone), the circle
+    from the left foot round the bottom to the right foot as one arc (bulge
+    tan(angle / 4), counter-clockwise), and the right side closing it."""
+    hw, foot, top = _bore_break(cam)
+    bulge = math.tan((math.pi + 2 * math.atan2(foot, hw)) / 4)  # from pi - a_c to 2 pi + a_c
+    if top == foot:  # a flat: the chord, then the arc back to its start
+        return [(hw, foot, 0.0), (-hw, foot, bulge)]
+    return [(hw, top, 0.0), (-hw, top, 0.0), (-hw, foot, bulge), (hw, foot, 0.0)]
 
 
 def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
@@ -312,12 +330,12 @@ def dxf_bytes(a, reference: bool = True) -> bytes:
     whatever its plot flag: a maker's review).
 
     Layers: PROFILE (the closed profile, one LWPOLYLINE), BORE (the shaft hole: a true
-    circle, or with a keyway its outline of three lines and a true arc, which CAM
-    software recognizes as the bore), and two reference layers that are not
-    features and are set not to plot: CENTERLINES (a centre cross at the axis, CENTER
-    linetype) and DATUM (the angular datum: a radial line on the theta = 0 ray, with a
-    note saying what the follower does there, ``datum_note``, and one saying what the
-    file is, ``file_label``; the cam turns clockwise).
+    circle, or with a keyway its outline of three lines and a true arc, with a D flat a
+    line and a true arc, which CAM software recognizes as the bore), and two reference
+    layers that are not features and are set not to plot: CENTERLINES (a centre cross at
+    the axis, CENTER linetype) and DATUM (the angular datum: a radial line on the theta
+    = 0 ray, with a note saying what the follower does there, ``datum_note``, and one
+    saying what the file is, ``file_label``; the cam turns clockwise).
     """
     import ezdxf
 
@@ -334,9 +352,9 @@ def dxf_bytes(a, reference: bool = True) -> bytes:
     hole = bore_outline(cam)
     if hole is not None:
         doc.layers.add("BORE", color=3)
-        if cam.keyway_width_mm > 0:
+        if cam.keyway_width_mm > 0 or cam.bore_flat_mm > 0:
             msp.add_lwpolyline(
-                keyed_bore_xyb(cam), format="xyb", close=True, dxfattribs={"layer": "BORE"}
+                broken_bore_xyb(cam), format="xyb", close=True, dxfattribs={"layer": "BORE"}
             )
         else:
             msp.add_circle(

@@ -465,6 +465,13 @@ class Cam(_Part):
         le=5000,
         description="depth t2 of the keyway into the hub, beyond the bore radius [mm]",
     )
+    bore_flat_mm: float = Field(
+        0.0,
+        ge=0,
+        le=20000,
+        description="a D-shaped bore for a D shaft: the size across its flat [mm] (e.g. "
+        "4.5 for a 5 mm shaft), the flat facing the theta = 0 ray; 0 = a round bore",
+    )
     cutter_diameter_mm: float = Field(
         10.0,
         gt=0,
@@ -538,6 +545,17 @@ class Cam(_Part):
             raise ValueError(
                 f"spindle_rpm = {self.spindle_rpm:g}: 0 (none written) or at least 1 rpm"
             )
+        if self.bore_flat_mm > 0:
+            if self.bore_diameter_mm == 0:
+                raise ValueError("bore_flat_mm: a flat needs a bore (bore_diameter_mm > 0)")
+            if self.keyway_width_mm > 0:
+                raise ValueError("bore_flat_mm: a flat or a keyway, not both")
+            if not self.bore_diameter_mm / 2 < self.bore_flat_mm < self.bore_diameter_mm:
+                raise ValueError(
+                    f"bore_flat_mm = {self.bore_flat_mm:g} mm must lie between the bore's "
+                    f"radius and its diameter ({self.bore_diameter_mm / 2:g} to "
+                    f"{self.bore_diameter_mm:g} mm, both excluded)"
+                )
         if (self.keyway_width_mm > 0) != (self.keyway_depth_mm > 0):
             raise ValueError("keyway_width_mm and keyway_depth_mm: give both, or neither")
         if self.keyway_width_mm > 0:

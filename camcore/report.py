@@ -520,6 +520,8 @@ def _making_text(c) -> str:
     keyway = (
         f"keyway {c.keyway_width_mm:g} x {c.keyway_depth_mm:g} mm"
         if c.keyway_width_mm > 0
+        else f"D-flat bore, {c.bore_flat_mm:g} mm across"
+        if c.bore_flat_mm > 0
         else "no keyway"
     )
     passes = "1 pass" if c.passes == 1 else f"{c.passes} passes"

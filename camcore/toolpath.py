@@ -206,6 +206,8 @@ def _bore_comments(cam) -> list[str]:
     key = (
         f" and its {cam.keyway_width_mm:g} x {cam.keyway_depth_mm:g} mm keyway"
         if cam.keyway_width_mm > 0
+        else f" with its flat, {cam.bore_flat_mm:g} mm across"
+        if cam.bore_flat_mm > 0
         else ""
     )
     return [_comment(f"not cut here: the {cam.bore_diameter_mm:g} mm bore{key}")]

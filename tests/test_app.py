@@ -694,6 +694,15 @@ def test_a_keyway_is_edited_and_removed_in_the_tab(tab, downloads):
     assert "give both, or neither" in s.error  # ... the message says how
     c["cam.keyway_depth_mm"].value = 0.0
     assert s.error is None and s.design.cam.bore_diameter_mm == 0.0
+    # a D-flat bore instead (a maker's review): the 3D cam is cut again with it
+    c["cam.bore_diameter_mm"].value = 5.0
+    before = np.asarray(s.view.nodes["cam"].vertices).copy()
+    c["cam.bore_flat_mm"].value = 4.5
+    assert s.error is None and s.design.cam.bore_flat_mm == 4.5
+    after = np.asarray(s.view.nodes["cam"].vertices)
+    inner = after[np.hypot(after[:, 0], after[:, 1]) < 0.003]  # [m]
+    assert inner[:, 1].max() == pytest.approx(0.002, abs=1e-6)  # the flat, 2 mm up +Y
+    assert before.shape != after.shape or not np.allclose(before, after)
 
 
 def test_an_export_that_fails_unexpectedly_says_so(tab, downloads, monkeypatch):

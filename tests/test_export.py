@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from pydantic import ValidationError
 
-from camcore import export
+from camcore import export, toolpath
 from camcore.analysis import analyze
 from camcore.model import Design, FollowerKind, load_preset
 
@@ -231,6 +231,61 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
     else:
         assert a.prog.S[0] == pytest.approx(0.015) and a.prog.V[1] < 0
     assert a.geo.stem_x == pytest.approx(-offset * 1e-3)
+
+
+def test_a_d_flat_bore_is_cut_square_to_the_datum():
+    """A D-flat bore for a motor's D shaft (a maker's review: without a keyway nothing
+    on a printed or laser-cut cam fixed its phase): the STL is watertight with the
+    volume of the profile less the D (computed here: the arc's fan of chords plus the
+    triangle under the flat, close to the exact circle less its segment), the flat on
+    the +Y ray 4 mm from the axis; in the DXF one line and one true arc; the G-code
+    and the report say it."""
+    from camcore.report import inputs_text
+
+    data = with_bore(10.0).model_dump()
+    data["cam"]["bore_flat_mm"] = 9.0  # a 10 mm D shaft, 9 mm across the flat
+    a = analyze(Design.model_validate(data), verify=False)
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight and mesh.is_winding_consistent and mesh.euler_number == 0
+    R, c = 5.0, 4.0
+    hw, m = math.sqrt(R * R - c * c), export.BORE_SEGMENTS
+    sweep = math.pi + 2 * math.atan2(c, hw)
+    hole = 0.5 * R * R * (m - 1) * math.sin(sweep / (m - 1)) + hw * c
+    exact = math.pi * R * R - (R * R * math.acos(c / R) - c * hw)
+    assert hole == pytest.approx(exact, rel=1e-4)
+    assert mesh.volume == pytest.approx((a.profile.area * 1e6 - hole) * 15.0, rel=1e-9)
+    inner = mesh.vertices[np.hypot(mesh.vertices[:, 0], mesh.vertices[:, 1]) < 6]
+    assert inner[:, 1].max() == pytest.approx(c) and inner[:, 1].min() == pytest.approx(
+        -R, abs=1e-3
+    )
+    doc = ezdxf.read(io.StringIO(export.dxf_bytes(a, reference=False).decode()))
+    (bore,) = [e for e in doc.modelspace() if e.dxf.layer == "BORE"]
+    parts = list(bore.virtual_entities())
+    assert sorted(e.dxftype() for e in parts) == ["ARC", "LINE"]
+    (line,) = [e for e in parts if e.dxftype() == "LINE"]
+    assert line.dxf.start[1] == pytest.approx(c) == line.dxf.end[1]
+    assert abs(line.dxf.start[0] - line.dxf.end[0]) == pytest.approx(2 * hw)
+    (arc,) = [e for e in parts if e.dxftype() == "ARC"]
+    assert arc.dxf.radius == pytest.approx(R)
+    assert (arc.dxf.end_angle - arc.dxf.start_angle) % 360 == pytest.approx(math.degrees(sweep))
+    assert "(not cut here: the 10 mm bore with its flat, 9 mm across)" in toolpath.gcode(a)
+    assert "D-flat bore, 9 mm across" in inputs_text(a.design)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"bore_flat_mm": 4.5, "bore_diameter_mm": 0.0}, "a flat needs a bore"),
+        ({"bore_flat_mm": 28.0, "keyway_width_mm": 8.0, "keyway_depth_mm": 3.0}, "not both"),
+        ({"bore_flat_mm": 15.0}, "between the bore's radius and its diameter"),
+        ({"bore_flat_mm": 30.0}, "between the bore's radius and its diameter"),
+    ],
+)
+def test_bore_flat_limits(change, message):
+    data = with_bore(30.0).model_dump()
+    data["cam"].update(change)
+    with pytest.raises(ValidationError, match=message):
+        Design.model_validate(data)
 
 
 @pytest.mark.parametrize(
