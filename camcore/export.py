@@ -346,7 +346,7 @@ def dxf_bytes(a, reference: bool = True) -> bytes:
     doc.header.custom_vars.append("camdesigner", file_label(a))  # (a drawing property)
     doc.layers.add("PROFILE", color=7)
     msp = doc.modelspace()
-    msp.add_lwpolyline(p.tolist(), close=True, dxfattribs={"layer": "PROFILE"})
+    msp.add_lwpolyline(profile_xyb(p), format="xyb", close=True, dxfattribs={"layer": "PROFILE"})
     if reference:
         _reference_layers(doc, a, p)
     hole = bore_outline(cam)
@@ -369,6 +369,38 @@ def dxf_bytes(a, reference: bool = True) -> bytes:
     buf = io.StringIO()
     doc.write(buf)
     return buf.getvalue().encode("utf-8")
+
+
+ARC_RADIUS_MM = 1e-9  # vertices this near one radius lie on one dwell's arc [mm]
+
+
+def profile_xyb(p: np.ndarray) -> list[tuple[float, float, float]]:
+    """The closed profile ``p`` (M, 2) [mm, counter-clockwise] as LWPOLYLINE vertices
+    (x, y, bulge): a dwell's arc (three or more consecutive vertices at one distance from
+    the axis: in a dwell the contact point stands still, so the cam there is a circle
+    about its axis) as one true arc (bulge tan(angle / 4)), the rest as its chords (a
+    maker's review: lasers and CAM programs take an arc as an arc, where a chain of
+    chords is ~1,000 short moves)."""
+    r = np.hypot(p[:, 0], p[:, 1])
+    # start where the radius changes, so that no arc runs across the polyline's ends
+    # (the profile starts at theta = 0, often inside the low dwell)
+    step = np.flatnonzero(np.abs(r - np.roll(r, 1)) >= ARC_RADIUS_MM)
+    first = int(step[0]) if step.size else 0
+    p, r = np.roll(p, -first, axis=0), np.roll(r, -first)
+    polar = np.arctan2(p[:, 1], p[:, 0])
+    out, i, m = [], 0, p.shape[0]
+    while i < m:
+        j = i
+        while j + 1 < m and abs(r[j + 1] - r[i]) < ARC_RADIUS_MM:
+            j += 1
+        if j - i >= 2:  # an arc from vertex i to vertex j
+            swept = (polar[j] - polar[i]) % (2 * np.pi)
+            out.append((float(p[i, 0]), float(p[i, 1]), float(np.tan(swept / 4))))
+            i = j
+        else:
+            out.append((float(p[i, 0]), float(p[i, 1]), 0.0))
+            i += 1
+    return out
 
 
 def _reference_layers(doc, a, p: np.ndarray) -> None:

@@ -172,8 +172,46 @@ def test_keyway_in_dxf_and_datum_layers():
     datum = [e for e in msp if e.dxf.layer == "DATUM" and e.dxftype() == "LINE"][0]
     assert datum.dxf.start[0] == 0.0 == datum.dxf.end[0]  # on the theta = 0 ray (+Y)
     profile = [e for e in msp if e.dxf.layer == "PROFILE"][0]
-    top = max(p[1] for p in profile.get_points() if abs(p[0]) < 1.0)
+    outline = list(ezdxf.path.make_path(profile).flattening(0.001))  # (arcs too)
+    top = max(p[1] for p in outline if abs(p[0]) < 1.0)
     assert datum.dxf.end[1] == pytest.approx(top, abs=0.5)
+
+
+@pytest.mark.parametrize("kind", ["double_concave", "single_roller"])
+def test_the_dxf_draws_the_dwells_as_true_arcs(kind):
+    """The profile's dwells are true arcs in the DXF (a maker's review: lasers and CAM
+    programs take an arc as an arc): one per dwell, about the axis, of the dwell
+    radius (Eq. 20) and the base radius, sweeping the arcs the report gives (Eqs. 24,
+    26); every vertex of the profile lies on the DXF's outline, and the outline's
+    extra points on the arcs lie on the circles."""
+    from camcore.report import summary
+
+    a = analyze(load_preset("paper_example").with_kind(kind), verify=False)
+    s = summary(a)
+    doc = ezdxf.read(io.StringIO(export.dxf_bytes(a, reference=False).decode()))
+    (profile,) = [e for e in doc.modelspace() if e.dxf.layer == "PROFILE"]
+    arcs = sorted(
+        (e for e in profile.virtual_entities() if e.dxftype() == "ARC"),
+        key=lambda e: -e.dxf.radius,
+    )
+    assert [round(e.dxf.radius, 6) for e in arcs] == [round(s["dwell_radius_mm"], 6), 80.0]
+    for e, which in zip(arcs, ("high", "low"), strict=True):
+        assert np.allclose(tuple(e.dxf.center)[:2], 0.0, atol=1e-9)
+        swept = (e.dxf.end_angle - e.dxf.start_angle) % 360
+        assert swept == pytest.approx(s["dwell_arc_deg"][which], abs=1e-3)
+    # each profile vertex is a vertex of the outline, or lies on one of its arcs
+    corners = {(round(x, 9), round(y, 9)) for x, y, *_ in profile.get_points()}
+    for x, y in a.profile.points * 1e3:
+        if (round(x, 9), round(y, 9)) in corners:
+            continue
+        polar = math.degrees(math.atan2(y, x))
+        on = [
+            e
+            for e in arcs
+            if (polar - e.dxf.start_angle) % 360 <= (e.dxf.end_angle - e.dxf.start_angle) % 360
+        ]
+        assert on and abs(math.hypot(x, y) - on[0].dxf.radius) < 1e-9, (x, y)
+    assert len(profile) < a.profile.points.shape[0] * 0.7  # the arcs' vertices are gone
 
 
 @pytest.mark.parametrize(
