@@ -245,6 +245,33 @@ def _xy(p) -> str:
     return f"X{p[0]:.{DECIMALS}f} Y{p[1]:.{DECIMALS}f}"
 
 
+ARC_TOL_MM = 1e-9  # path vertices this near one radius lie on one dwell's arc [mm]
+
+
+def _contour_moves(v: np.ndarray, cam_r: np.ndarray) -> list[str]:
+    """The moves from v[0] through v[1:] [mm, clockwise]: G1 chords, and each run of
+    three or more vertices where the cam is at one distance from the axis (``cam_r``,
+    per vertex) as one G2 arc about X0 Y0: a dwell, where the contact point stands
+    still, so the cam is a circle about its axis and the cutter's path the circle a
+    cutter radius out (the DXF draws it so too). I and J are the centre's offset from
+    the arc's start as written (incremental, every control's default). A move after an
+    arc says G1 again: both words are modal."""
+    r = cam_r
+    out, mode, i, m = [], "G1", 0, v.shape[0] - 1
+    while i < m:
+        j = i
+        while j < m and abs(r[j + 1] - r[i]) < ARC_TOL_MM:
+            j += 1
+        if j - i >= 2:  # an arc through v[i + 1 .. j - 1] to v[j]
+            x0, y0 = (round(float(c), DECIMALS) for c in v[i])
+            out.append(f"G2 {_xy(v[j])} I{-x0 + 0.0:.{DECIMALS}f} J{-y0 + 0.0:.{DECIMALS}f}")
+            mode, i = "G2", j
+        else:
+            out.append(_xy(v[i + 1]) if mode == "G1" else f"G1 {_xy(v[i + 1])}")
+            mode, i = "G1", i + 1
+    return out
+
+
 def gcode(a, cutter_diameter: float | None = None) -> str:
     """G-code (RS-274, millimetres, absolute) that cuts the cam's outside contour.
 
@@ -264,10 +291,12 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     check_size(cam, path.shape[0] + 2)
     stated = _round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
+    cam_r = to_mm(np.hypot(*a.profile.points.T))[::-1]  # the cam's radius at each vertex
     # start at the path's outermost point and plunge D further out along its ray: the
     # cam and the blank (up to the cam's largest radius + D) lie inside that radius
     radius = np.hypot(path[:, 0], path[:, 1])
-    path = np.roll(path, -int(np.argmax(radius)), axis=0)
+    shift = -int(np.argmax(radius))
+    path, cam_r = np.roll(path, shift, axis=0), np.roll(cam_r, shift)
     start = path[0]
     lead = start * (1.0 + to_mm(D) / float(radius.max()))
     clear = math.floor(10 * (float(np.hypot(*lead)) - to_mm(D) / 2)) / 10  # the cutter's
@@ -306,7 +335,8 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         f"M3 S{_plain(cam.spindle_rpm)}" if cam.spindle_rpm > 0 else "M3",
         f"G4 P{SPIN_UP_S:g}",
     ]
-    contour = [_xy(p) for p in path[1:]] + [_xy(start), _xy(lead)]
+    closed = np.vstack([path, path[:1]]), np.append(cam_r, cam_r[0])
+    contour = _contour_moves(*closed) + [f"G1 {_xy(lead)}"]
     for z in depths:  # each pass starts and ends at the lead point, off the part
         lines += [f"G1 Z{-z:.4f} F{plunge}", f"G1 {_xy(start)} F{feed}"]
         lines += contour

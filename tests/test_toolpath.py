@@ -81,25 +81,80 @@ def test_the_cutter_may_not_be_wider_than_the_tightest_concave_stretch():
     toolpath.cutter_path(a, fits * MM)
 
 
+def _first_pass(text: str):
+    """The first pass as a controller reads it: (lead, moves) where each move is
+    ("G1", end) or ("G2", end, centre), X Y from the feed onto the path to the lead-out,
+    G words modal, I J incremental from the move's start."""
+    mode, pos, moves, cutting = "G0", None, [], False
+    for line in text.splitlines():
+        if line.startswith("("):
+            continue
+        words = dict((w[0], w[1:]) for w in line.split() if w[0] in "GXYIJZ")
+        mode = next((f"G{g}" for g in re.findall(r"G(\d+)", line) if g in "0123"), mode)
+        if "Z" in words:
+            if cutting and float(words["Z"]) > 0:
+                break
+            cutting = float(words["Z"]) < 0
+            continue
+        if "X" not in words:
+            continue
+        end = np.array([float(words["X"]), float(words["Y"])])
+        if not cutting:
+            pos = end  # the rapid to the lead-in point
+            continue
+        if mode == "G2":
+            moves.append(("G2", end, pos + [float(words["I"]), float(words["J"])], pos))
+        else:
+            moves.append(("G1", end))
+        pos = end
+    return moves
+
+
+def _sampled(moves, lead, step_deg: float = 0.01) -> np.ndarray:
+    """The cutter centre's track through ``moves`` (arcs clockwise, sampled finely)."""
+    pts = [lead]
+    for m in moves:
+        if m[0] == "G2":
+            _, end, c, start = m
+            a0 = math.atan2(*(start - c)[::-1])
+            a1 = math.atan2(*(end - c)[::-1])
+            sweep = (a0 - a1) % (2 * math.pi)  # clockwise
+            t = a0 - np.linspace(0, sweep, max(2, int(math.degrees(sweep) / step_deg)))
+            r = np.hypot(*(start - c))
+            pts += list(c + r * np.column_stack([np.cos(t), np.sin(t)]))[1:]
+        else:
+            pts.append(m[1])
+    return np.array(pts)
+
+
 def test_gcode_reads_back_to_the_path():
+    """Read as a controller would (G words modal, arcs clockwise about I J), the first
+    pass feeds onto the path, cuts through every path vertex (to the rounding), ends
+    where it began and leads out; each dwell is one G2 arc about the axis whose ends are
+    equally far from it (a maker's review: the dwells had been chords)."""
     a = analyze(PAPER)
     D = 10 * MM
     text = toolpath.gcode(a, D)
     assert text.startswith("%\n") and "G21" in text and "M30" in text
-    xy = np.array(
-        [(float(m[1]), float(m[2])) for m in re.finditer(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", text)]
-    )
+    lead = np.array([float(v) for v in re.search(r"G0 X(-?[\d.]+) Y(-?[\d.]+)", text).groups()])
+    moves = _first_pass(text)
+    arcs = [m for m in moves if m[0] == "G2"]
+    assert len(arcs) == 2  # the high and the low dwell (the contour starts at an arc's end)
+    for _, end, c, start in arcs:
+        assert np.allclose(c, 0.0, atol=1e-9)
+        assert abs(np.hypot(*end) - np.hypot(*start)) < 2e-4
+    r_arcs = sorted(round(float(np.hypot(*m[3])), 3) for m in arcs)
+    s = __import__("camcore.report", fromlist=["summary"]).summary(a)
+    assert r_arcs == [round(80.0 + 5.0, 3), round(s["dwell_radius_mm"] + 5.0, 3)]
+    track = _sampled(moves, lead)
     path = toolpath.cutter_path(a, D)[0] / MM
-    lead, cut = xy[0], xy[1:-1]
-    # every path vertex is cut, clockwise (climb), from the outermost, and it closes
-    assert cut.shape[0] == path.shape[0] + 1
-    out = int(np.argmax(np.hypot(*path[::-1].T)))
-    np.testing.assert_allclose(cut[:-1], np.roll(path[::-1], -out, axis=0), atol=1e-4)
-    np.testing.assert_allclose(cut[-1], cut[0])
-    area = 0.5 * np.sum(
-        cut[:-1, 0] * np.roll(cut[:-1, 1], -1) - np.roll(cut[:-1, 0], -1) * cut[:-1, 1]
-    )
-    assert area < 0  # clockwise
+    gap = toolpath.distance_to_polyline(path, track, 5.0)
+    assert gap.max() < 2e-4  # every path vertex is cut (rounding to 0.1 um, arcs exact)
+    cut = track[1:-1]
+    np.testing.assert_allclose(cut[-1], cut[0], atol=1e-4)  # it closes ...
+    area = 0.5 * np.sum(cut[:, 0] * np.roll(cut[:, 1], -1) - np.roll(cut[:, 0], -1) * cut[:, 1])
+    assert area < 0  # ... clockwise (climb)
+    assert len(moves) < path.shape[0] * 0.7  # the dwells' vertices are arcs now
     # the plunge happens off the part and off the blank: a cutter there clears a disc
     # of the cam's largest radius + D (a maker's review: it had plunged at r_b + 1.5 D,
     # half inside a blank of the cam's size), and the feed in runs along the ray
@@ -227,13 +282,19 @@ def test_the_header_bound_holds_for_the_written_coordinates(tol_mm):
     text = toolpath.gcode(a, D)
     stated = float(re.search(r"path within ([0-9.e-]+) mm", text).group(1))
     path, bound = toolpath.cutter_path(a, D)
-    xy = np.array(
-        [(float(m[1]), float(m[2])) for m in re.finditer(r"X(-?\d+\.\d+) Y(-?\d+\.\d+)", text)]
-    )[1:-2]  # the path's vertices, clockwise (not the lead-in and the closing ones)
+    xy = np.array([m[1] for m in _first_pass(text)])[:-1]  # the vertices written (not
+    # the lead-out): each is a path vertex (an arc's inner ones are left out), rounded
     cw = path[::-1] / MM
-    cw = np.roll(cw, -int(np.argmax(np.hypot(*cw.T))), axis=0)  # from the outermost
-    moved = np.hypot(*(xy - cw).T).max()
+    moved = max(np.hypot(*(cw - v).T).min() for v in xy)
     assert moved <= toolpath.ROUNDING_MM
+    # an arc is the exact offset of a dwell: the circle about the axis, at the dwell's
+    # radius + D/2, its radius as written (from the rounded start) within the bound
+    from camcore.report import summary
+
+    dwells = (80.0 + 5.0, summary(a)["dwell_radius_mm"] + 5.0)
+    for m in _first_pass(text):
+        if m[0] == "G2":
+            assert min(abs(np.hypot(*m[3]) - r) for r in dwells) <= stated
     assert bound / MM + moved <= stated <= 1.01 * (bound / MM + toolpath.ROUNDING_MM)
     # Z is the cam width exactly, and the header says so in a whole comment
     assert "(Z-15 = the cam width exactly: add a breakthrough allowance)" in text.splitlines()
@@ -353,3 +414,27 @@ def test_a_pass_deeper_than_the_cutter_is_flagged():
     data = PAPER.model_dump()
     data["cam"]["pass_depth_mm"] = 5.0
     assert "CAUTION" not in toolpath.gcode(analyze(Design.model_validate(data), verify=False))
+
+
+@pytest.mark.parametrize("preset", ["double_index", "indexer_345", "valve_lift_roller"])
+@pytest.mark.parametrize("kind", [None, "single_roller", "flat_face"])
+def test_every_program_is_cut_through_every_path_vertex(preset, kind):
+    """Programs with several dwells, other followers: read back as a controller would,
+    the track passes every path vertex (arcs and chords), and an arc is never cut where
+    the cam is not a circle about the axis."""
+    from camcore.model import load_preset
+
+    d = load_preset(preset) if kind is None else load_preset(preset).with_kind(kind)
+    a = analyze(d, verify=False)
+    text = toolpath.gcode(a)
+    lead = np.array([float(v) for v in re.search(r"G0 X(-?[\d.]+) Y(-?[\d.]+)", text).groups()])
+    moves = _first_pass(text)
+    d_mm = d.cam.cutter_diameter_mm / 2
+    path = toolpath.cutter_path(a)[0] / MM
+    assert toolpath.distance_to_polyline(path, _sampled(moves, lead), 5.0).max() < 2e-4
+    cam_r = np.hypot(*a.profile.points.T) / MM
+    for m in (m for m in moves if m[0] == "G2"):
+        _, end, c, start = m
+        near = np.hypot(*(path - start).T) < 1e-3  # the arc's start, a path vertex
+        assert abs(cam_r[near][0] + d_mm - np.hypot(*(start - c))) < 1e-3
+    assert sum(m[0] == "G2" for m in moves) >= 1
