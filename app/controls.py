@@ -139,8 +139,8 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "Keyway width b [mm]",
                 "number",
                 step=0.1,
-                hint="in the bore, on the theta = 0 ray (e.g. 8 in a 30 mm bore, DIN 6885); "
-                "0 = none",
+                hint="in the bore, on the theta = 0 ray (e.g. 8 in a 30 mm bore, DIN 6885), "
+                "with its depth below; 0 = none",
             ),
             Spec(
                 "cam.keyway_depth_mm",
