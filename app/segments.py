@@ -83,6 +83,9 @@ class SegmentTable:
         # the session's own writes; a user's edit arrives on another thread and counts
         # (a plain flag had dropped an edit made while the table was being redrawn)
         self._writer: int | None = None
+        # held while show() writes the rows: an edit reads them whole, never half old
+        # and half new (a review: a torn read had made a 351 deg program)
+        self._rows_lock = threading.Lock()
         self.lock: Any = contextlib.nullcontext()  # the session's (bound with on_change)
 
     def kinds(self) -> list[str]:
@@ -105,6 +108,11 @@ class SegmentTable:
         in kind, rows rebuilt when segments were added, removed or changed kind."""
         rows = [Row.of(g) for g in segs]
         typed = [str(g["kind"]) if isinstance(g, dict) else g.kind.value for g in segs]
+        with self._rows_lock:
+            self._write(rows, typed)
+        self.sums.content = segment_sums_markdown([g.as_dict() for g in rows])
+
+    def _write(self, rows: list[Row], typed: list[str]) -> None:
         if self.kinds() != typed:  # (as typed: a refused kind stays on screen as it is)
             self._build(rows)
         self._writer = threading.get_ident()
@@ -125,11 +133,18 @@ class SegmentTable:
                     r["law"].value = LABEL_OF_LAW[g.law]
         finally:
             self._writer = None
-        self.sums.content = segment_sums_markdown([g.as_dict() for g in rows])
 
-    def _edited(self) -> None:
-        if self._writer != threading.get_ident():
-            self.on_change(self.as_dicts())
+    def _edited(self, widget, value) -> None:
+        """A widget's new ``value``: the whole table goes to on_change, read when no
+        redraw is half done; an edit the redraw wrote over meanwhile is dropped (the
+        table shows what holds)."""
+        if self._writer == threading.get_ident():
+            return  # the session's own write
+        with self._rows_lock:
+            if widget.value != value:
+                return
+            segs = self.as_dicts()
+        self.on_change(segs)
 
     def act(self, i: int, action: str) -> None:
         """A row's button (or the add button, i = len(rows), action "+"). The rows are
@@ -182,6 +197,6 @@ class SegmentTable:
             "move": gui.add_button_group(n, ("↑", "↓", "✕")),
         }
         for key in ("kind", "angle", "lift", "law"):
-            row[key].on_update(lambda _e: self._edited())
+            row[key].on_update(lambda e: self._edited(e.target, e.target.value))
         row["move"].on_click(lambda e, j=i: self.act(j, e.target.value))
         return row

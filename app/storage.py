@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import json
 import math
-import warnings
-from concurrent.futures import ThreadPoolExecutor
+import threading
 
 from camcore.model import (
     MAX_DESIGN_BYTES,
@@ -249,18 +248,26 @@ class BrowserStore:
         together. (Read one after another, the third of six had waited past its 5 s
         while the browser drew its first frames with software WebGL, and the tab kept
         nothing from then on.) A silent browser costs READ_TIMEOUT_S once."""
-        with warnings.catch_warnings():  # a tab closed meanwhile: nothing to read
-            warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
-            with ThreadPoolExecutor(len(keys), thread_name_prefix="storage-read") as pool:
-                values = list(pool.map(self.read, keys))
-        if self.silent:  # (one read failed: what the others say is not the whole story)
+        values: dict[str, str | None] = {}
+        threads = [  # (daemon threads: a read left waiting never holds up the exit)
+            threading.Thread(
+                target=lambda k=k: values.__setitem__(k, self.read(k)),
+                name="storage-read",
+                daemon=True,
+            )
+            for k in keys
+        ]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        if self.silent or len(values) < len(keys):  # (a read failed: the rest is not
+            self.silent = True  # the whole story)
             return dict.fromkeys(keys)
-        return dict(zip(keys, values, strict=True))
+        return {k: values[k] for k in keys}
 
     def write(self, key: str, value: str) -> None:
-        try:
-            with warnings.catch_warnings():
-                warnings.filterwarnings("ignore", message="Queued a .* on a closed connection")
-                self._storage.set_item(key, value)
+        try:  # (viser's warning about a closed tab is filtered in app.main)
+            self._storage.set_item(key, value)
         except Exception:  # the tab is gone: nothing to keep
             pass

@@ -775,29 +775,43 @@ def test_a_port_just_left_by_a_stopped_server_is_free():
 
 
 def test_a_table_edit_made_while_the_table_is_redrawn_counts(tab):
-    """The session writing its values into the table (show) fires no edit, but a
-    user's edit arriving meanwhile on another thread does (a shared flag had dropped
-    it: a review)."""
+    """The session writing its values into the table (show) fires no edit; a user's
+    edit arriving meanwhile on another thread counts, on the whole table as redrawn (a
+    shared flag had dropped it; then a review found it read half old, half new rows, a
+    351 deg program), unless the redraw wrote over that very widget: then the table
+    shows what holds and the edit is dropped."""
     table = tab.ui.segments
     got: list[list[dict]] = []
     table.on_change = got.append  # (the session's handler is not what is tested here)
-    shown = [g.model_dump(mode="json", exclude_none=True) for g in tab.design.motion.segments]
-    shown[0]["angle_deg"] = 90.0  # a value written in place: the rows stay
-    inside, go = threading.Event(), threading.Event()
+    before = [g.model_dump(mode="json", exclude_none=True) for g in tab.design.motion.segments]
+    shown = [dict(g) for g in before]
+    shown[0]["angle_deg"], shown[1]["angle_deg"] = 90.0, 80.0  # written in place
+    for row, value, counts in ((0, 55.0, True), (3, 55.0, False)):
+        table.show(before)
+        got.clear()
+        inside, go = threading.Event(), threading.Event()
+        writer = threading.Thread(target=table.show, args=(shown,))
 
-    def hold(_e):  # the session's write of row 1's angle, held half way
-        if threading.current_thread() is writer:
-            inside.set()
-            go.wait(5)
+        def hold(_e, writer=writer, inside=inside, go=go):  # held after row 1's write
+            if threading.current_thread() is writer:
+                inside.set()
+                go.wait(5)
 
-    table.rows[0]["angle"].on_update(hold)
-    writer = threading.Thread(target=table.show, args=(shown,))
-    writer.start()
-    assert inside.wait(5)
-    table.rows[3]["angle"].value = 55.0  # the user's edit, meanwhile
-    go.set()
-    writer.join(5)
-    assert len(got) == 1 and got[0][3]["angle_deg"] == 55.0  # the edit, and only it
+        table.rows[0]["angle"].on_update(hold)
+        writer.start()
+        assert inside.wait(5)
+        widget = table.rows[row]["angle"]
+        user = threading.Thread(target=lambda w=widget, v=value: setattr(w, "value", v))
+        user.start()  # the user's edit, meanwhile: it waits for the redraw to end
+        user.join(0.3)
+        go.set()
+        writer.join(5)
+        user.join(5)
+        table.rows[0]["angle"]._impl.update_cb.remove(hold)
+        if counts:  # row 1, already redrawn: the edit, on the redrawn table
+            assert got == [[{**shown[0], "angle_deg": 55.0}, *shown[1:]]]
+        else:  # row 4, written over by the redraw: dropped, the screen shows the redraw
+            assert got == [] and widget.value == shown[3]["angle_deg"]
 
 
 def test_segment_table_edits_the_program(tab):
