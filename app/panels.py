@@ -424,10 +424,14 @@ def summary_markdown(s: dict) -> str:
         ),
         ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
     ]
-    spans = [v for v in s["face_contact_x_mm"].values() if v is not None]
+    double = FollowerKind(s["follower"]).is_double
+    spans = [
+        f"{f'S{i} ' if double else ''}{f(v[0])} … {f(v[1])}"
+        for i, v in enumerate(s["face_contact_x_mm"].values(), start=1)
+        if v is not None
+    ]
     if spans:  # a concave pad's or a flat face's stretch in contact (not a roller's)
-        shown = " / ".join(f"{f(lo)} … {f(hi)}" for lo, hi in spans)
-        rows.append(("Contact on the face(s): x from the axis", f"{shown} mm"))
+        rows.append(("Contact on the face(s): x from the axis", f"{' / '.join(spans)} mm"))
     if s["profile"]["hub_wall_mm"] is not None:
         rows.append(
             ("Hub wall (thinnest, bore to profile)", f"{f(s['profile']['hub_wall_mm'], 2)} mm")

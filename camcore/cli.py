@@ -213,10 +213,10 @@ def _export(args) -> int:
 
     design = _design(args)
     outputs = _outputs(args)
-    if args.cutter_diameter_mm is not None and "toolpath" not in outputs:
+    if args.cutter_diameter_mm is not None and not outputs.keys() & CUTTER_OUTPUTS:
         raise DesignError(  # (a maker's review: it had been ignored without a word)
-            "--cutter-diameter-mm is the cutter of --toolpath FILE: give that too, or "
-            "--set cam.cutter_diameter_mm=D to keep it in the design"
+            "--cutter-diameter-mm is the cutter of --toolpath FILE (the design files "
+            "--json, --html and --pdf keep it too): give one of them"
         )
     a = analyze(design)
     _write(a, outputs)
@@ -227,6 +227,7 @@ def _export(args) -> int:
     return _verdict(a)
 
 
+CUTTER_OUTPUTS = {"toolpath", "json", "html", "pdf"}  # the outputs the cutter changes
 EXPORT_FLAGS = ("stl", "dxf", "dxf_cut", "csv", "series", "toolpath", "json", "html", "pdf")
 
 

@@ -74,7 +74,7 @@ def thin_evenly(points: np.ndarray, n: int) -> np.ndarray:
 
 def cam_mesh(a, max_points: int | None = None):
     """trimesh.Trimesh of the cam: profile extruded by the width, in mm, with the
-    design's shaft bore and keyway (if any) through it.
+    design's shaft bore, and its keyway or D flat (if any), through it.
 
     ``max_points`` thins the profile evenly for on-screen display (the exports use
     every vertex).
@@ -144,7 +144,7 @@ def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
     hole = bore_outline(a.design.cam)
     if hole is not None and np.hypot(*hole.T).max() >= np.hypot(p[:, 0], p[:, 1]).min():
         raise ExportError(
-            f"the bore (and keyway) reach {np.hypot(*hole.T).max():g} mm from "
+            f"the bore (and its keyway) reach {np.hypot(*hole.T).max():g} mm from "
             "the axis and cut through the profile"
         )
     return hole
@@ -299,7 +299,7 @@ def mounting_note(a) -> str | None:
         return None
     return (
         "no shaft bore (cam.bore_diameter_mm = 0): the part is a solid disc; set a bore "
-        "(and a keyway) to mount it on a shaft"
+        "(and a keyway or a D flat) to mount it on a shaft"
     )
 
 

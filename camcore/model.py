@@ -435,6 +435,9 @@ class Follower(_Part):
         return self.offset_mm if self.kind.is_double else 0.0
 
 
+FLAT_SHARE = (0.55, 0.98)  # a D flat's size across it: of the bore diameter
+
+
 class Cam(_Part):
     """The disk cam. It turns clockwise, as in the paper."""
 
@@ -469,8 +472,9 @@ class Cam(_Part):
         0.0,
         ge=0,
         le=20000,
-        description="a D-shaped bore for a D shaft: the size across its flat [mm] (e.g. "
-        "4.5 for a 5 mm shaft), the flat facing the theta = 0 ray; 0 = a round bore",
+        description="a D-shaped bore for a D shaft: the size across its flat [mm], 0.55 "
+        "to 0.98 of the bore diameter (e.g. 4.5 for a 5 mm shaft), the flat facing the "
+        "theta = 0 ray; 0 = a round bore",
     )
     cutter_diameter_mm: float = Field(
         10.0,
@@ -550,11 +554,12 @@ class Cam(_Part):
                 raise ValueError("bore_flat_mm: a flat needs a bore (bore_diameter_mm > 0)")
             if self.keyway_width_mm > 0:
                 raise ValueError("bore_flat_mm: a flat or a keyway, not both")
-            if not self.bore_diameter_mm / 2 < self.bore_flat_mm < self.bore_diameter_mm:
-                raise ValueError(
-                    f"bore_flat_mm = {self.bore_flat_mm:g} mm must lie between the bore's "
-                    f"radius and its diameter ({self.bore_diameter_mm / 2:g} to "
-                    f"{self.bore_diameter_mm:g} mm, both excluded)"
+            lo, hi = (f * self.bore_diameter_mm for f in FLAT_SHARE)
+            if not lo <= self.bore_flat_mm <= hi:
+                raise ValueError(  # (a review: 0.99999 D had made a DXF bulge of 7.5e7)
+                    f"bore_flat_mm = {self.bore_flat_mm:g} mm must lie between "
+                    f"{FLAT_SHARE[0]:g} and {FLAT_SHARE[1]:g} x the bore diameter "
+                    f"({lo:g} to {hi:g} mm)"
                 )
         if (self.keyway_width_mm > 0) != (self.keyway_depth_mm > 0):
             raise ValueError("keyway_width_mm and keyway_depth_mm: give both, or neither")

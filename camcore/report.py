@@ -593,9 +593,15 @@ def unbounded_notes(s: dict) -> list[tuple[str, str]]:
     return [(why, note) for why, note in found if note is not None]
 
 
-def _face_x_text(spans: dict) -> str:
-    """face_contact_x_mm as "lo .. hi mm", the faces of a double follower side by side."""
-    shown = [f"{_fmt(v[0], 2)} .. {_fmt(v[1], 2)}" for v in spans.values() if v is not None]
+def _face_x_text(s: dict) -> str:
+    """face_contact_x_mm as "lo .. hi mm"; a double follower's faces named (S1, S2:
+    one of them may never touch)."""
+    double = FollowerKind(s["follower"]).is_double
+    shown = [
+        f"{f'S{i} ' if double else ''}{_fmt(v[0], 2)} .. {_fmt(v[1], 2)}"
+        for i, v in enumerate(s["face_contact_x_mm"].values(), start=1)
+        if v is not None
+    ]
     return " / ".join(shown) + " mm" if shown else "-"
 
 
@@ -681,7 +687,7 @@ def report_text(s: dict, design: Design | None = None) -> str:
             ),
         ),
         ("flat face width needed", f"{_fmt(s['flat_face_width_min_mm'], 3)} mm"),
-        ("face contact x from the axis", _face_x_text(s["face_contact_x_mm"])),
+        ("face contact x from the axis", _face_x_text(s)),
         (
             "allowable stress / safety factor",
             f"{s['contact_stress_allowable_MPa']:g} MPa / {s['contact_stress_safety_factor']:g}",

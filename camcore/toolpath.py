@@ -34,6 +34,7 @@ from . import profile
 from .export import ExportError, require_star_shaped, warning
 from .units import MM, to_deg, to_mm
 
+FEED_PLANE_MM = 1.0  # the first plunge starts this high above the blank [mm]
 SPIN_UP_S = 2  # the dwell after M3 [s] (G4 P in seconds on LinuxCNC, grbl, Mach; a
 # Fanuc-style control reads P in ms: 2 ms there, too short but harmless)
 DECIMALS = 4  # of the X, Y words [mm]: 0.1 um, what controllers take
@@ -334,6 +335,9 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
         f"G0 {_xy(lead)}",
         f"M3 S{_plain(cam.spindle_rpm)}" if cam.spindle_rpm > 0 else "M3",
         f"G4 P{SPIN_UP_S:g}",
+        # down to the feed plane at rapid, beside the blank: the plunge feed is for the cut
+        # (a review: from a 50 mm rapid height it fed through air for a minute)
+        f"G0 Z{min(cam.safe_height_mm, FEED_PLANE_MM):.4f}",
     ]
     closed = np.vstack([path, path[:1]]), np.append(cam_r, cam_r[0])
     contour = _contour_moves(*closed) + [f"G1 {_xy(lead)}"]

@@ -428,3 +428,6 @@ def test_a_cutter_without_a_toolpath_is_an_error(tmp_path, capsys):
         "6",
     ]
     assert main(args) == 0 and "cutter diameter 6 mm" in nc.read_text()
+    js = tmp_path / "design.json"  # a design file keeps it (a review: not ignored there)
+    args = ["export", "--preset", "paper_example", "--json", str(js), "--cutter-diameter-mm", "6"]
+    assert main(args) == 0 and json.loads(js.read_text())["cam"]["cutter_diameter_mm"] == 6.0

@@ -315,8 +315,8 @@ def test_a_d_flat_bore_is_cut_square_to_the_datum():
     [
         ({"bore_flat_mm": 4.5, "bore_diameter_mm": 0.0}, "a flat needs a bore"),
         ({"bore_flat_mm": 28.0, "keyway_width_mm": 8.0, "keyway_depth_mm": 3.0}, "not both"),
-        ({"bore_flat_mm": 15.0}, "between the bore's radius and its diameter"),
-        ({"bore_flat_mm": 30.0}, "between the bore's radius and its diameter"),
+        ({"bore_flat_mm": 16.4}, r"between 0.55 and 0.98 x the bore diameter \(16.5 to 29.4"),
+        ({"bore_flat_mm": 29.5}, "between 0.55 and 0.98 x the bore diameter"),
     ],
 )
 def test_bore_flat_limits(change, message):

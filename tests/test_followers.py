@@ -344,6 +344,9 @@ def test_the_face_contact_span_is_where_the_faces_touch(kind):
         assert lo < hi
     if kind == "double_concave":  # S1 works left of the axis, S2 right of it
         assert spans["face1"][1] < 0 < spans["face2"][0]
+        text = __import__("camcore.report", fromlist=["report_text"]).report_text(summary(a))
+        lo1, hi1, lo2, hi2 = (f"{v:.2f}" for v in (*spans["face1"], *spans["face2"]))
+        assert f"S1 {lo1} .. {hi1} / S2 {lo2} .. {hi2} mm" in text  # each face named
     else:
         assert spans["face2"] is None
     if kind == "flat_face":

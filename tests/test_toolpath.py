@@ -212,9 +212,11 @@ def test_gcode_sets_up_safely_on_any_control():
     assert "(cutter and set its length offset first, G43 H on a Fanuc-style control)" in head
     assert "(rapids at Z42.5: above every clamp. No coolant called)" in head
     rapids = [line for line in code if line.startswith("G0 Z")]
-    assert rapids == ["G0 Z42.5000"] * 2  # to the start, and home at the end
+    # up before moving over, down at rapid to 1 mm above the blank beside it (a review:
+    # the plunge feed had run from the rapid height, a minute through air), home
+    assert rapids == ["G0 Z42.5000", "G0 Z1.0000", "G0 Z42.5000"]
     m3 = code.index("M3")
-    assert code[m3 + 1] == "G4 P2" and code[m3 + 2].startswith("G1 Z-")
+    assert code[m3 + 1 : m3 + 3] == ["G4 P2", "G0 Z1.0000"] and code[m3 + 3].startswith("G1 Z-")
     assert "(cam contour: Chuang, Hsu & Chang, Section 6 example [double concave faces])" in head
     with pytest.raises(ValueError, match="safe_height_mm"):
         PAPER.cam.model_validate({**PAPER.cam.model_dump(), "safe_height_mm": 0.1})
