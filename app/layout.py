@@ -35,6 +35,7 @@ DOWNLOADS = (
     ("stl", "Cam STL (mm)"),
     ("dxf", "Profile DXF (mm)"),
     ("dxf_cut", "Outline DXF, cut only (mm)"),
+    ("follower_dxf", "Follower faces DXF (mm)"),
     ("csv", "Profile CSV"),
     ("series", "Per-angle CSV"),
     ("toolpath", "G-code (cutter path)"),

@@ -228,7 +228,18 @@ def _export(args) -> int:
 
 
 CUTTER_OUTPUTS = {"toolpath", "json", "html", "pdf"}  # the outputs the cutter changes
-EXPORT_FLAGS = ("stl", "dxf", "dxf_cut", "csv", "series", "toolpath", "json", "html", "pdf")
+EXPORT_FLAGS = (
+    "stl",
+    "dxf",
+    "dxf_cut",
+    "follower_dxf",
+    "csv",
+    "series",
+    "toolpath",
+    "json",
+    "html",
+    "pdf",
+)
 
 
 def _need_pyarrow(what: str) -> None:

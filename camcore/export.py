@@ -422,6 +422,76 @@ def _reference_layers(doc, a, p: np.ndarray) -> None:
         )
 
 
+FACE_MARGIN_MM = 2.0  # the follower drawing's face reaches this beyond the contact [mm]
+
+
+def follower_dxf_bytes(a) -> bytes:
+    """DXF (R2010, mm) of the follower's working faces, to build its body around: on
+    layer FACE each concave face's arc (radius |r_f|, a true ARC) or the flat face's
+    line, over the stretch the contact runs (report's face_contact_x_mm) and
+    FACE_MARGIN_MM beyond it each way; on CENTERLINES (not plotted) the follower's axis
+    and each face's centre; on NOTES (not plotted) what it is. The follower stands at
+    zero lift: X from its axis, Y from the cam's axis, the cam below. A roller is a
+    bearing and a knife edge its tip: ExportError says so (a maker's review: nothing
+    gave the follower's faces)."""
+    import ezdxf
+
+    from .report import _face_contact_x_mm
+
+    geo, f = a.geo, a.design.follower
+    if not (geo.flat or f.kind.is_concave):
+        rollers = "its rollers are bearings" if f.kind.is_double else "its roller is a bearing"
+        what = "its tip is a point" if geo.r == 0 else f"{rollers} (r_c {to_mm(geo.r):g} mm)"
+        raise ExportError(f"a {f.kind.label} follower has no face to draw: {what}")
+    spans = [v for v in _face_contact_x_mm(a).values() if v is not None]
+    if not spans:
+        raise ExportError("no face touches the cam: there is no working face to draw")
+    doc = ezdxf.new("R2010", setup=True)
+    doc.units = ezdxf.units.MM
+    doc.header.custom_vars.append("camdesigner", file_label(a))
+    for name, color, ltype in (
+        ("FACE", 7, "Continuous"),
+        ("CENTERLINES", 8, "CENTER"),
+        ("NOTES", 1, "Continuous"),
+    ):
+        layer = doc.layers.add(name, color=color, linetype=ltype)
+        layer.dxf.plot = int(name == "FACE")
+    msp = doc.modelspace()
+    y0, sx = to_mm(geo.y0), to_mm(geo.stem_x)
+    top = 0.0
+    for face, (lo, hi) in zip(geo.faces, spans, strict=False):
+        lo, hi = lo - FACE_MARGIN_MM, hi + FACE_MARGIN_MM
+        if len(geo.faces) == 2:  # a double follower's faces stay on their own side
+            lo, hi = (lo, min(hi, 0.0)) if face.x_c > 0 else (max(lo, 0.0), hi)
+        if geo.flat:
+            msp.add_line((lo, y0), (hi, y0), dxfattribs={"layer": "FACE"})
+            top = max(top, y0)
+            continue
+        R, cx = -to_mm(face.r), to_mm(face.x_c) - sx  # the face's centre, below the cam
+        a0, a1 = (math.degrees(math.acos((x - cx) / R)) for x in (hi, lo))  # from +X
+        msp.add_arc((cx, y0), R, a0, a1, dxfattribs={"layer": "FACE"})
+        msp.add_line((cx, y0 - 0.05 * R), (cx, y0 + 0.05 * R), dxfattribs={"layer": "CENTERLINES"})
+        top = max(top, y0 + R)
+    msp.add_line((0.0, 0.0), (0.0, top + 20.0), dxfattribs={"layer": "CENTERLINES"})
+    what = (
+        "flat face"
+        if geo.flat
+        else f"concave face{'s' if len(spans) == 2 else ''} r_f = {to_mm(-geo.r):g} mm"
+    )
+    for text, dy in (
+        (f"{what}: the contact's stretch and {FACE_MARGIN_MM:g} mm beyond it", 8.0),
+        ("follower at zero lift: X from its axis, Y from the cam's axis", 4.0),
+    ):
+        msp.add_text(text, height=2.5, dxfattribs={"layer": "NOTES"}).set_placement((2.0, top + dy))
+    from ezdxf import bbox
+
+    ext = bbox.extents(msp)
+    msp.reset_extents(ext.extmin, ext.extmax)
+    buf = io.StringIO()
+    doc.write(buf)
+    return buf.getvalue().encode("utf-8")
+
+
 _PART = {k: v.replace(" ", "_") for k, v in SEGMENT_NAMES.items()}  # CSV: no spaces
 
 
@@ -511,6 +581,12 @@ EXPORTS: dict[str, ExportKind] = {
         "_cut.dxf",
         "DXF of the outline to cut only (mm; profile and bore, no reference layers)",
         lambda a: dxf_bytes(a, reference=False),
+    ),
+    "follower_dxf": ExportKind(
+        "_follower.dxf",
+        "DXF of the follower's working faces (mm; concave arcs or the flat face, over "
+        "the contact's stretch)",
+        follower_dxf_bytes,
     ),
     "csv": ExportKind(
         "_profile.csv", "CSV of the profile vertices", lambda a: csv_text(a).encode()

@@ -317,9 +317,15 @@ def test_preset_and_downloads(tab, downloads):
         ("csv", "_profile.csv"),
         ("series", "_series.csv"),
         ("toolpath", ".nc"),
+        ("follower_dxf", "_follower.dxf"),  # (the preset's single concave face)
     ):
         s.ui.download_btns[kind].value = True
         assert downloads[-1][0].endswith(ext) and len(downloads[-1][1]) > 1000
+    s.ui.controls["follower.kind"].value = "single roller"  # no face to draw: said why
+    sent = len(downloads)
+    s.ui.download_btns["follower_dxf"].value = True
+    assert "has no face to draw: its roller is a bearing" in s.ui.files_md.content
+    assert len(downloads) == sent
 
 
 def test_stations_angle_and_animation(tab):

@@ -2,6 +2,7 @@
 
 import io
 import math
+import re
 
 import ezdxf
 import numpy as np
@@ -420,3 +421,43 @@ def test_the_drawn_profile_is_thinned_along_its_length():
     stride = p[:: -(-p.shape[0] // n)]
     assert np.hypot(*np.diff(stride, axis=0).T).max() > 20 * mean
     assert export.thin_evenly(p[:10], n).tolist() == list(range(10))
+
+
+@pytest.mark.parametrize("kind", ["double_concave", "single_concave", "flat_face"])
+def test_the_follower_dxf_draws_faces_that_cover_every_contact(kind):
+    """The follower's working faces (a maker's review: nothing gave them): every point
+    where a face touches the cam, brought to zero lift, lies on the drawn arc (or line)
+    and inside its ends, FACE_MARGIN_MM short of them at most; the drawing is readable."""
+    a = analyze(load_preset("paper_example").with_kind(kind), verify=False)
+    doc = ezdxf.read(io.StringIO(export.follower_dxf_bytes(a).decode()))
+    assert not doc.audit().has_errors
+    faces = [e for e in doc.modelspace() if e.dxf.layer == "FACE"]
+    assert len(faces) == len(a.geo.faces) and doc.layers.get("NOTES").dxf.plot == 0
+    for i, e in enumerate(faces):
+        on = a.in_contact[i]
+        p = a.point_world[i, on] * 1e3 - [a.geo.stem_x * 1e3, 0.0]
+        p[:, 1] -= a.prog.S[on] * 1e3  # the follower at zero lift
+        if e.dxftype() == "LINE":
+            assert np.allclose(p[:, 1], e.dxf.start[1], atol=1e-9)
+            ends = sorted((e.dxf.start[0], e.dxf.end[0]))
+        else:
+            c = np.array(tuple(e.dxf.center)[:2])
+            assert e.dxf.radius == pytest.approx(250.0)
+            assert np.allclose(np.hypot(*(p - c).T), 250.0, atol=1e-6)
+            ends = sorted((e.start_point.x, e.end_point.x))
+        assert ends[0] <= p[:, 0].min() <= ends[0] + export.FACE_MARGIN_MM + 1e-9
+        assert ends[1] - export.FACE_MARGIN_MM - 1e-9 <= p[:, 0].max() <= ends[1]
+
+
+@pytest.mark.parametrize(
+    "kind, says",
+    [
+        ("single_roller", "its roller is a bearing (r_c 8 mm)"),
+        ("double_roller", "its rollers are bearings"),
+        ("knife_edge", "its tip is a point"),
+    ],
+)
+def test_a_follower_without_a_face_to_draw_says_why(kind, says):
+    a = analyze(load_preset("paper_example").with_kind(kind), verify=False)
+    with pytest.raises(export.ExportError, match="has no face to draw: " + re.escape(says)):
+        export.follower_dxf_bytes(a)
