@@ -471,7 +471,8 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
         )
     for b, (d, geo) in enumerate(zip(bt.designs, bt.geos, strict=True)):  # Eq. 28
         if F == 2:
-            codes[b] += [v.code for v in checks._dwell_arcs(SimpleNamespace(geo=geo, design=d))]
+            one = SimpleNamespace(geo=geo, design=d)
+            codes[b] += [v.code for v in checks._dwell_arcs(one) + checks.rollers_apart(one)]
         codes[b] += group[0]  # the program's continuity
     touching = loc.in_contact.any(axis=0).reshape(B, N)
     FN = loc.guide.FN.reshape(B, N)

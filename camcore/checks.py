@@ -48,6 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import extremes
+from .model import FollowerKind
 from .units import MM, to_deg, to_mm
 
 LIFT_TOLERANCE_M = 1e-8  # 1e-5 mm: far above round-off, far below any real defect
@@ -372,6 +373,30 @@ def _dwell_arcs(a) -> list[Violation]:
     return out
 
 
+def rollers_apart(a) -> list[Violation]:
+    """A double roller's two rollers, of radius r_c at X = -e and +e, must not touch:
+    2 e > 2 r_c (not in the paper, whose e = 10 mm clears its r_c = 8 mm; a designer's
+    review found overlapping rollers valid, and a sweep's Pareto front led with them).
+    Needs only the design and its faces (e = 0: one roller, analysed as one face)."""
+    f = a.design.follower
+    if f.kind != FollowerKind.double_roller or len(a.geo.faces) != 2:
+        return []
+    gap = 2 * (f.offset_mm - f.roller_radius_mm)
+    if gap > 0:
+        return []
+    return [
+        Violation(
+            "rollers_overlap",
+            "double rollers",
+            f"the two rollers (r_c = {f.roller_radius_mm:g} mm at X = +-e = +-{f.offset_mm:g} "
+            f"mm) {'touch' if gap == 0 else f'overlap by {-gap:.4g} mm'}: e must exceed r_c, "
+            "with room for their pins and the yoke",
+            (),
+            -gap,
+        )
+    ]
+
+
 def _on_circle_deg(lo: float, hi: float) -> tuple[tuple[float, float], ...]:
     """The range [lo, hi] [deg] within [0, 360]: split in two where it passes 360."""
     if hi <= 360.0:
@@ -592,6 +617,7 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
         + _pressure_angle(a)
         + _contact_stress(a)
         + _dwell_arcs(a)
+        + rollers_apart(a)
         + _continuity(a)
         + _forces(a)
         + _train(a)

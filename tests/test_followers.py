@@ -353,3 +353,21 @@ def test_the_face_contact_span_is_where_the_faces_touch(kind):
         lo, hi = spans["face1"]
         width = summary(a)["flat_face_width_min_mm"]
         assert width == pytest.approx(2 * max(-lo, hi), rel=1e-12)
+
+
+@pytest.mark.parametrize(("e", "broken"), [(5.0, True), (8.0, True), (8.5, False), (0.0, False)])
+def test_double_rollers_must_not_touch(e, broken):
+    """Two rollers of r_c = 8 mm at X = +-e: overlapping (e < r_c) or touching (e = r_c)
+    is a violation (a designer's review: they were valid, and led a sweep's front);
+    e = 0 is one roller. The batched core of sweeps says the same."""
+    from camcore import batch
+
+    data = load_preset("paper_example").with_kind("double_roller").model_dump()
+    data["follower"]["offset_mm"] = e
+    d = Design.model_validate(data)
+    codes = [v.code for v in analyze(d, verify=False).violations]
+    assert ("rollers_overlap" in codes) == broken
+    assert [v["code"] for v in batch.summaries([d])[0]["violations"]] == codes
+    if broken and e < 8.0:
+        (v,) = [v for v in analyze(d, verify=False).violations if v.code == "rollers_overlap"]
+        assert "overlap by 6 mm" in v.message and v.amount == pytest.approx(6.0)
