@@ -319,6 +319,10 @@ def summary(a: Analysis) -> dict:
         "contact_stress_max_MPa": {
             "cycle": _scaled(peak(a, "stress_max", _max(a.stress)), 1e-6),
             "high_dwell": _scaled(_max(a.stress[:, high]), 1e-6) if high.any() else None,
+            # while both faces of a double follower touch (the load shared): where the
+            # paper's lower stress shows (a teacher's review: the cycle's peak, in the
+            # one-face windows, hid it)
+            "high_dwell_two_contact": _scaled(_max(a.stress[:, two]), 1e-6),
         },
         **_hertz(a),
         "contact_stress_allowable_MPa": allowable_contact_stress_MPa(a.design),
@@ -757,6 +761,9 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
                 "F2_max_N": s["guide_force_max_N"]["F2"],
                 "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
                 "stress_high_dwell_MPa": s["contact_stress_max_MPa"]["high_dwell"],
+                "stress_high_dwell_two_contact_MPa": s["contact_stress_max_MPa"][
+                    "high_dwell_two_contact"
+                ],
                 "max_lift_error_mm": s["verification"]["max_lift_error_mm"],
                 "wear_depth_max_um_per_Mcycle": s["wear_depth_max_um_per_Mcycle"],
                 "pitting_life_cycles": s["pitting_life_cycles"],
@@ -779,6 +786,7 @@ def compare_text(rows: list[dict]) -> str:
         "|F2|max",
         "sigma max",
         "sigma dwell",
+        "sigma 2-cont.",
     )
     keys = (
         "FN_high_dwell_N",
@@ -789,10 +797,11 @@ def compare_text(rows: list[dict]) -> str:
         "F2_max_N",
         "stress_max_MPa",
         "stress_high_dwell_MPa",
+        "stress_high_dwell_two_contact_MPa",
     )
     lines = [
         "  ".join(f"{h:>14}" for h in head),
-        "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa")),
+        "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa", "MPa")),
     ]
     for r in rows:
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 3):>14}" for k in keys))

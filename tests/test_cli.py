@@ -47,7 +47,7 @@ def test_report_json_contract(capsys, kind):
     assert len(s["curvature_radius_mm"]["rise"]) == 2
     assert set(s["contact_force_max_N"]) >= {"cycle", "high_dwell"}
     assert set(s["guide_force_max_N"]) == {"F1", "F2"}
-    assert set(s["contact_stress_max_MPa"]) == {"cycle", "high_dwell"}
+    assert set(s["contact_stress_max_MPa"]) == {"cycle", "high_dwell", "high_dwell_two_contact"}
     v = s["verification"]
     assert v["max_lift_error_mm"] <= v["allowed_lift_error_mm"] < 2e-3
     assert v["chord_error_mm"] <= v["export_tolerance_mm"] == 1e-3
