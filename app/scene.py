@@ -254,6 +254,8 @@ def _display_points(a) -> np.ndarray:
 
 LABEL_SHARE = 0.025  # a label's height in a preset view: of the view's height
 PHI_LEGS = 0.2  # the pressure-angle construction's legs at most: of the view's height
+ARROW_SHARE = 0.33  # the longest force arrow at most: of the view's height
+CONTACT_SHARE = 0.008  # a contact point's sphere's radius at most: of the view's height
 
 
 def label_height(pos, look, fov: float) -> float:
@@ -316,13 +318,37 @@ class SceneView:
         self.label_h = 0.005  # the labels' height [m] (set_label_height)
 
     def set_label_height(self, height: float) -> None:
-        """Size every label ``height`` [m] high (label_height of the preset view)."""
+        """Size every label ``height`` [m] high (label_height of the preset view), and
+        the contact points and force arrows to the view with them."""
         self.label_h = height
         for name in ("label0", "label1", "q_label", "phi_label"):
             if name in self.nodes:
                 self.nodes[name].font_scene_height = height
         if self.a is not None:
+            self._size_contacts(self.a)
             self.pose(self.k)  # the phi label stands a label's height below the contact
+
+    def _view_height(self) -> float:
+        """What the preset view shows, top to bottom [m] (the labels are a share of it)."""
+        return self.label_h / LABEL_SHARE
+
+    def _arrow_max(self) -> float:
+        """The longest force arrow [m]: half the base radius, or a third of the view (a
+        teacher's review: in the close-up a 137 N arrow ran off the top of the frame)."""
+        assert self.a is not None
+        return min(0.5 * self.a.geo.r_b, ARROW_SHARE * self._view_height())
+
+    def _size_contacts(self, a) -> None:
+        """The contact points' spheres: 3 % of r_b, at most CONTACT_SHARE of the view (a
+        teacher's review: 60 px across in the close-up, they hid the contact)."""
+        r = min(0.03 * a.geo.r_b + 0.5e-3, CONTACT_SHARE * self._view_height())
+        for i in range(len(a.geo.faces)):
+            key = f"contact{i}"
+            if key in self.nodes and self._made.get(key) != r:
+                self._made[key] = r
+                self.nodes[key] = self.scene.add_icosphere(
+                    f"/ov/{key}", radius=r, color=CONTACT_RGB, position=(0, 0, self.zt)
+                )
 
     # --- build once per analysis ---------------------------------------------------
     def build(self, a) -> None:
@@ -337,7 +363,8 @@ class SceneView:
             self._geometry = key
             self.builds += 1
             self._build_geometry(a, w, zt, thick)
-        self.fn_scale = 0.5 * a.geo.r_b / max(1e-9, float(np.max(np.abs(a.guide.FN))))
+        self.fn_max = max(1e-9, float(np.max(np.abs(a.guide.FN))))  # the arrows' scale
+        self._size_contacts(a)  # (to the view: set_label_height)
         self._build_bad(a, zt + 1e-4, thick * 2.5)
         self._wear_at = (zt + 3e-4, thick * 6.0)
         self._build_wear(a)
@@ -533,6 +560,7 @@ class SceneView:
                 self.nodes[key] = s.add_icosphere(
                     f"/ov/{key}", radius=r, color=CONTACT_RGB, position=(0, 0, zt + r)
                 )
+                self._made[key] = r
             elif key in self.nodes:
                 self.nodes.pop(key).remove()
         one = np.zeros((1, 2, 3))
@@ -578,7 +606,7 @@ class SceneView:
         segs = []
         for i in np.flatnonzero(on):
             p, n = pw[i], a.normal[i, k]
-            L = float(a.FN[i, k]) * self.fn_scale
+            L = float(a.FN[i, k]) * self._arrow_max() / self.fn_max
             if L <= 0:
                 continue
             tip = p + n * L
@@ -613,17 +641,21 @@ class SceneView:
         # contact, out on the cam
         L = min(0.45 * a.geo.r_b, PHI_LEGS * self.label_h / LABEL_SHARE)
         phi = float(a.pressure_angle[i, k])
+        # drawn below the contact, on the cam: the stroke's line and the normal's (the
+        # line of action, on through Q) run on through the contact, and the angle between
+        # them is the same there (a teacher's review: drawn upward, into the follower, its
+        # arc hid under the force arrow and its label stood apart from it)
         pts = [
-            ((p[0], p[1], z), (p[0], p[1] + L, z)),
-            ((p[0], p[1], z), (p[0] + n[0] * L, p[1] + n[1] * L, z)),
+            ((p[0], p[1], z), (p[0], p[1] - L, z)),
+            ((p[0], p[1], z), (p[0] - n[0] * L, p[1] - n[1] * L, z)),
         ]
         t = np.linspace(0, 1, 12)
-        ang0 = math.atan2(n[1], n[0])
+        ang0 = math.atan2(-n[1], -n[0])
         arc = np.array(
             [
                 (
-                    p[0] + 0.6 * L * math.cos(ang0 + (math.pi / 2 - ang0) * u),
-                    p[1] + 0.6 * L * math.sin(ang0 + (math.pi / 2 - ang0) * u),
+                    p[0] + 0.6 * L * math.cos(ang0 + (-math.pi / 2 - ang0) * u),
+                    p[1] + 0.6 * L * math.sin(ang0 + (-math.pi / 2 - ang0) * u),
                     z,
                 )
                 for u in t
@@ -635,11 +667,11 @@ class SceneView:
         touching = bool(on.any())
         self.nodes["phi"].visible = self.show["pressure_angle"] and touching
         lab = self.nodes["phi_label"]
-        # below the contact, on the cam and outward of the driving face: clear of the
-        # follower (pad, roller, plate and yoke all lie above the contact), of the angle
-        # arc (above it too) and of the normals to Q (they run inward, down to the axis)
-        side = -1.0 if p[0] <= 0 else 1.0  # (its top edge a label's height lower still)
-        lab.position = (p[0] + side * 0.3 * L, p[1] - 0.2 * L - self.label_h, z)
+        # beside the arc, on the stroke's side away from the normal: clear of both legs
+        # and of the follower (pad, roller, plate and yoke all lie above the contact)
+        side = 1.0 if n[0] >= 0 else -1.0  # (the normal's leg runs to -n[0] below)
+        half = 0.55 * self.label_h * len("φ = 00.0°") / 2  # a label's half width
+        lab.position = (p[0] + side * (half + 0.3 * self.label_h), p[1] - 0.6 * L, z)
         # its size, as the paper gives it (Eqs. 5, 13: "phi remains positive" in the
         # fall; a teacher's review: students read "-7.3°" against the paper); the curve
         # keeps the sign, which says the side the normal leans to

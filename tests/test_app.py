@@ -961,6 +961,26 @@ def test_labels_read_on_a_projector_in_every_preset_view(tab, kind):
             assert 17 < px < 19, (view, name, px)
 
 
+def test_markers_fit_the_close_up(tab):
+    """In every preset view the contact points and the force arrows are sized to what
+    the view shows (a teacher's review: in the close-up the spheres were 60 px across
+    and a 137 N arrow ran off the top of the frame); the Front view keeps its own."""
+    from app.scene import ARROW_SHARE, CONTACT_SHARE
+
+    tab.goto_station(1)  # the cycle's largest force nearby
+    sizes = {}
+    for view in ("Front", "Contact close-up"):
+        tab.ui.view_btns.value = view
+        cam = tab.client.camera
+        seen = 2 * np.linalg.norm(np.subtract(cam.position, cam.look_at)) * math.tan(cam.fov / 2)
+        r = tab.view.nodes["contact0"].radius
+        seg = np.asarray(tab.view.nodes["forces"].points)
+        longest = np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).max()
+        assert r <= CONTACT_SHARE * seen * 1.001 and longest <= ARROW_SHARE * seen * 1.001
+        sizes[view] = r
+    assert sizes["Contact close-up"] < 0.5 * sizes["Front"]
+
+
 def test_the_camera_reframes_when_the_cam_changes_size_a_lot(tab):
     """r_b 80 -> 5000 mm had left the camera inside the cam (a magenta blob); a small
     change keeps the user's own view."""
