@@ -231,7 +231,7 @@ def _status_boxes(error, violations, lift_error, verified, mesh_error) -> str:
                 bg="#fff3d6",
                 fg="#e08a00",
                 body=f"<b>⚠ {len(violations)} design-limit violation"
-                f"{'s' if len(violations) > 1 else ''}</b> (red on the cam and the curves)"
+                f"{'s' if len(violations) > 1 else ''}</b> ({_where_red(violations)})"
                 f"<ul style='margin:4px 0 0 0;padding-left:18px'>{items}</ul>",
             )
         )
@@ -364,6 +364,23 @@ def headline_html(s: dict) -> str:
         "curvature, largest contact stress / its limit, the speed where the follower "
         "leaves the cam; all figures in Design › Key numbers'>" + " · ".join(kept) + "</div>"
     )
+
+
+def _where_red(violations) -> str:
+    """Where the status's violations are marked: red spans on the cam and the curves,
+    but a jump at one cam angle spans none (a teacher's review: the promised red was
+    nowhere for a harmonic law's acceleration jumps)."""
+    spans = [hi - lo > SPAN_DEG for v in violations for lo, hi in v.ranges_deg]
+    if not spans:  # (a hub wall, a self-crossing profile: no cam angle)
+        return "listed below"
+    if all(spans):
+        return "red on the cam and the curves"
+    if any(spans):
+        return "red on the cam and the curves where they span an angle"
+    return "at the cam angles listed"
+
+
+SPAN_DEG = 0.05  # a violation's range narrower than this is a single angle [deg]
 
 
 def summary_markdown(s: dict) -> str:

@@ -260,7 +260,11 @@ class Session:
             self.ui.history_md.content = self.history.text()  # (also when none is left)
             if design is None and self.error is not None:
                 design = self.design  # an input error undone: the design on screen
-            if design is None:
+            if design is None:  # said, not silent (a teacher's review after a reload)
+                which = "undo" if label == HISTORY_BUTTONS[0] else "redo"
+                self.ui.history_md.content = (
+                    f"Nothing to {which}: the history starts when this tab opened."
+                )
                 return
             self._travelling = True
             try:

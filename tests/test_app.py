@@ -2290,7 +2290,8 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     first = s.design
     undo, redo = (lambda: s.travel("↶ Undo")), (lambda: s.travel("↷ Redo"))
     undo()
-    assert s.design == first  # nothing to undo
+    assert s.design == first  # nothing to undo, and it says so (after a reload too)
+    assert "Nothing to undo: the history starts when this tab opened." in s.ui.history_md.content
     monkeypatch.setattr(history, "SETTLE_S", 60.0)  # (a loaded machine's slow drag too)
     for r_b in (82.0, 85.0, 90.0):  # a drag: one step
         s.ui.controls["cam.base_radius_mm"].value = r_b

@@ -802,3 +802,17 @@ def test_station_lines_are_numbered_above_the_plots():
     ax = station_axis(np.array([0.0, 100.0, 107.4, 162.6, 170.0, 300.0]))
     assert ax["values"] == ["0", "1,2", "3,4", "5"]
     assert ax["splits"] == pytest.approx([0.0, 103.7, 166.3, 300.0])
+
+
+def test_the_status_says_where_its_violations_are_marked():
+    """Red spans mark the cam and the curves; a jump at one cam angle spans none, so the
+    status does not promise red there (a teacher's review of a harmonic law)."""
+    from types import SimpleNamespace as V
+
+    from app.panels import _where_red
+
+    point, span = V(ranges_deg=((100.0, 100.0),)), V(ranges_deg=((40.0, 60.0),))
+    assert _where_red([point, point]) == "at the cam angles listed"
+    assert _where_red([span]) == "red on the cam and the curves"
+    assert _where_red([span, point]) == "red on the cam and the curves where they span an angle"
+    assert _where_red([V(ranges_deg=())]) == "listed below"  # (a hub wall: no angle)
