@@ -21,6 +21,7 @@ from .model import (
     Design,
     FollowerKind,
     allowable_contact_stress_MPa,
+    contact_stress_limit_MPa,
     load_preset,
     omega_rad_s,
 )
@@ -512,10 +513,24 @@ def inputs_text(design) -> str:
             f"{design.limits.contact_stress_safety_factor:g}), E {m.cam_E_GPa:g} GPa "
             f"nu {m.cam_nu:g}; follower E {m.follower_E_GPa:g} GPa nu {m.follower_nu:g}",
         ),
+        ("limits", _limits_text(design)),
         ("making", _making_text(c)),
     ]
     width = max(len(k) for k, _ in lines)
     return "\n".join(f"{k.ljust(width)}  {v}" for k, v in lines)
+
+
+def _limits_text(design) -> str:
+    """The limits the design is checked against (a designer's review: the printable
+    report said "all limits met" without saying which)."""
+    lim = design.limits
+    acc = "continuous" if lim.require_continuous_acceleration else "jumps accepted"
+    return (
+        f"|phi| <= {lim.max_pressure_angle_deg:g} deg, sigma_H <= "
+        f"{contact_stress_limit_MPa(design):g} MPa, hub wall >= {lim.min_hub_wall_mm:g} mm "
+        f"(with a bore), profile within {lim.export_tolerance_mm:g} mm, acceleration "
+        f"{acc}; no jump at {design.cam.speed_rpm:g} rpm"
+    )
 
 
 def _making_text(c) -> str:
