@@ -187,6 +187,12 @@ class ExplorePanel:
             lo, hi = sorted((0.7 * v, 1.3 * v)) if v else (0.0, 10.0)
             rng.value = (round(lo, 1), round(hi, 1))
 
+    def suggest_ranges(self) -> None:
+        """Both fields' ranges around the design on screen (a tab with no kept setup:
+        a designer's review found fixed ranges far from a small cam's)."""
+        self._suggest(self.x, self.x_range, "x")
+        self._suggest(self.y, self.y_range, "y")
+
     # --- the sweep ----------------------------------------------------------------
     def start(self) -> None:
         """Run the sweep the widgets describe, unless one runs already (one per tab)."""

@@ -734,7 +734,10 @@ class Session:
         # after the design: a kept field whose range the setup cannot give gets one
         # around the restored design's value, not the default's
         try:  # a setup the browser kept must never cost the design or the saved list
-            self.ui.explore.apply_setup(setup)
+            if setup is None:
+                self.ui.explore.suggest_ranges()  # around the design on screen
+            else:
+                self.ui.explore.apply_setup(setup)
         except Exception:
             logging.getLogger(__name__).exception("a kept Explore setup failed; ignored")
         self.ui.explore.keep_setup_with(

@@ -1130,6 +1130,28 @@ def test_explore_ranks_by_a_third_figure(tab):
     assert any(f"{least:.4g} °" in o for o in offers)
 
 
+def test_explore_ranges_start_around_the_design_on_screen(app, monkeypatch):
+    """A tab with no kept Explore setup proposes its two fields' ranges around the
+    design it opens on, +-30 % (a designer's review: fixed 60-110 mm beside an 18 mm
+    cam); a kept setup keeps its own."""
+    from app import storage
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"], data["follower"]["offset_mm"] = 30.0, 5.0
+    stored = {storage.WORKING_KEY: design_to_json(Design.model_validate(data))}
+    with restored_tab(app, monkeypatch, stored) as s:
+        e = s.ui.explore
+        assert s.design.cam.base_radius_mm == 30.0
+        assert e.x.value == "Base radius r_b [mm]" and tuple(e.x_range.value) == (21.0, 39.0)
+        assert e.y.value == "Offset e (double) [mm]" and tuple(e.y_range.value) == (3.5, 6.5)
+    kept = {
+        **stored,
+        storage.EXPLORE_KEY: json.dumps({"x": "Base radius r_b [mm]", "x_range": [50, 60]}),
+    }
+    with restored_tab(app, monkeypatch, kept) as s:
+        assert tuple(s.ui.explore.x_range.value) == (50.0, 60.0)
+
+
 def test_explore_setup_round_trips_and_refuses_junk(tab):
     """The Explore setup kept in the browser: what setup() gives, apply_setup() puts
     back (the kept range wins over the one a restored field proposes); entries a
