@@ -19,7 +19,7 @@ import numpy as np
 
 from camcore.model import Design, FollowerKind, design_to_json
 from camcore.motion import segment_word
-from camcore.report import machine_rows, unbounded_notes
+from camcore.report import machine_rows, rho_range_text, unbounded_notes
 from camcore.units import to_mm
 
 from .controls import LABEL_OF_LAW
@@ -404,8 +404,8 @@ def summary_markdown(s: dict) -> str:
             else "– (one contact)",
         ),
         ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
-        ("ρ rise", f"{f(rho['rise'], 1)} mm"),
-        ("ρ fall", f"{f(rho['fall'], 1)} mm"),
+        ("ρ rise", rho_range_text(rho["rise"], lambda x, _nd: f(x, 1))),
+        ("ρ fall", rho_range_text(rho["fall"], lambda x, _nd: f(x, 1))),
         (
             "ρ convex min / concave min (cutter at most 2×)",
             f"{f(s['radius_of_curvature_mm']['convex_min'], 1)} / "

@@ -624,6 +624,15 @@ def _face_x_text(s: dict) -> str:
     return " / ".join(shown) + " mm" if shown else "-"
 
 
+def rho_range_text(rng: list[float] | None, fmt) -> str:
+    """A signed rho range [mm] as "min .. max mm", or, where rho changes sign (it passes
+    through infinity at an inflection, so its ends say nothing), that it does (a
+    designer's review read "-5148 .. 24045 mm")."""
+    if rng is not None and rng[0] < 0 < rng[1]:
+        return "changes sign (an inflection): see convex / concave min"
+    return f"{fmt(rng, 2)} mm"
+
+
 def _psi_text(s: dict) -> str:
     """psi_h / psi_l, or a dash for a single follower, as for every figure that does
     not apply: its one contact hands over to nothing (Eqs. 23, 25 are about two faces;
@@ -669,8 +678,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
             f"{_fmt_against(s['pressure_angle_max_deg']['rise'], limit, 2)} / "
             f"{_fmt_against(s['pressure_angle_max_deg']['fall'], limit, 2)} deg",
         ),
-        ("rho rise (min .. max)", f"{_fmt(s['curvature_radius_mm']['rise'], 2)} mm"),
-        ("rho fall (min .. max)", f"{_fmt(s['curvature_radius_mm']['fall'], 2)} mm"),
+        ("rho rise (min .. max)", rho_range_text(s["curvature_radius_mm"]["rise"], _fmt)),
+        ("rho fall (min .. max)", rho_range_text(s["curvature_radius_mm"]["fall"], _fmt)),
         (
             "rho convex min / concave min",
             f"{_fmt(s['radius_of_curvature_mm']['convex_min'], 2)} / "

@@ -427,3 +427,13 @@ def test_an_instant_drop_in_velocity_jumps_at_any_speed():
     assert "jump speed                           at any speed\n" in text
     assert "none: the follower leaves the cam at any speed" in text
     assert machine.velocity_drop(motion.segments(load_preset("paper_example"))) is None
+
+
+def test_a_rho_range_through_an_inflection_is_said_not_printed():
+    """rho passes through infinity where the cam inflects: a signed range across 0 says
+    so (a designer's review read "-5148.02 .. 24045.31 mm"); one side prints."""
+    from camcore.report import _fmt, rho_range_text
+
+    assert rho_range_text([-5148.02, 24045.31], _fmt).startswith("changes sign")
+    assert rho_range_text([56.2, 126.8], _fmt) == "56.20 .. 126.80 mm"
+    assert rho_range_text(None, _fmt) == "- mm"
