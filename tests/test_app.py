@@ -436,6 +436,8 @@ def test_compare_tab(tab):
     # the paper's point in a row: the stress while both faces share the load, beside a
     # single follower's in its dwell (a teacher's review: the cycle's peaks, in the
     # one-face windows, had double concave no better than single concave)
+    # (Eq. 42 by hand: 212.15, 150.4 and 32.96 MPa for the rollers and the shared pair,
+    # tests/test_followers.py; the single face's 46.6 is 32.96 at twice the force)
     assert "| σ_H high dwell [MPa]¹ | 212.2 | 150.4 | 46.6 | 33.0 |" in md
     view = s.ui.compare_view
     # the paper's column speaks of its own example only (a review saw it beside any cam)

@@ -371,3 +371,19 @@ def test_double_rollers_must_not_touch(e, broken):
     if broken and e < 8.0:
         (v,) = [v for v in analyze(d, verify=False).violations if v.code == "rollers_overlap"]
         assert "overlap by 6 mm" in v.message and v.amount == pytest.approx(6.0)
+
+
+def test_the_shared_load_stress_is_eq42_by_hand():
+    """contact_stress_max_MPa.high_dwell_two_contact of the paper's double concave
+    faces, by hand: F_N = F_t / (2 cos psi_h) with F_t = M g + k (h + s_p) (Eqs. 29,
+    36-38), on the dwell arc R (Eq. 20) against the face r_f = -250 mm, line contact of
+    width w between two steels (Eq. 42): 32.96 MPa, the Compare tab's "σ_H high dwell"."""
+    d = load_preset("paper_example")
+    s = summary(analyze(d, verify=False))
+    Ft = 0.108 * d.dynamics.gravity_m_s2 + 6772.5 * (15e-3 + 5e-3)
+    FN = Ft / (2 * math.cos(math.radians(s["psi_h_deg"])))
+    curv = 1 / (s["dwell_radius_mm"] * 1e-3) - 1 / 0.250  # 1/rho - 1/|r_f|
+    compliance = 2 * (1 - 0.29**2) / 210e9
+    p = math.sqrt(FN / 15e-3 * curv / (math.pi * compliance))
+    assert s["contact_stress_max_MPa"]["high_dwell_two_contact"] == pytest.approx(p / 1e6, rel=1e-6)
+    assert p / 1e6 == pytest.approx(32.96, abs=0.01)
