@@ -37,6 +37,7 @@ from camcore.model import load_preset as load_preset_design
 
 from . import controls, plots, storage
 from .analyst import Analyst, Result
+from .history import MOST as HISTORY_MOST
 from .history import History
 from .layout import (
     DEFAULT_PRESET,
@@ -261,10 +262,7 @@ class Session:
             if design is None and self.error is not None:
                 design = self.design  # an input error undone: the design on screen
             if design is None:  # said, not silent (a teacher's review after a reload)
-                which = "undo" if label == HISTORY_BUTTONS[0] else "redo"
-                self.ui.history_md.content = (
-                    f"Nothing to {which}: the history starts when this tab opened."
-                )
+                self.ui.history_md.content = _nothing_to(label, self.history.text())
                 return
             self._travelling = True
             try:
@@ -1234,3 +1232,13 @@ def _near(p: tuple, q: tuple) -> bool:
         return False
     tol = 1e-5 * (1.0 + max(abs(v) for v in p + q))
     return all(abs(a - b) <= tol for a, b in zip(p, q, strict=True))
+
+
+def _nothing_to(label: str, counts: str) -> str:
+    """The line under the history buttons when ``label`` has no step to go to: why,
+    with the steps the other way (``counts``, History.text) kept in view."""
+    if label == HISTORY_BUTTONS[0]:
+        why = f"Nothing to undo: the history keeps this tab's last {HISTORY_MOST} changes."
+    else:
+        why = "Nothing to redo: Redo steps forward again after an Undo."
+    return f"{why} {counts}." if counts else why

@@ -443,8 +443,13 @@ def follower_dxf_bytes(a) -> bytes:
         rollers = "its rollers are bearings" if f.kind.is_double else "its roller is a bearing"
         what = "its tip is a point" if geo.r == 0 else f"{rollers} (r_c {to_mm(geo.r):g} mm)"
         raise ExportError(f"a {f.kind.label} follower has no face to draw: {what}")
-    spans = [v for v in _face_contact_x_mm(a).values() if v is not None]
-    if not spans:
+    # each face with its own stretch (a face that never touches is not drawn)
+    faces = [
+        (face, span)
+        for face, span in zip(geo.faces, _face_contact_x_mm(a).values(), strict=False)
+        if span is not None
+    ]
+    if not faces:
         raise ExportError("no face touches the cam: there is no working face to draw")
     doc = ezdxf.new("R2010", setup=True)
     doc.units = ezdxf.units.MM
@@ -459,7 +464,7 @@ def follower_dxf_bytes(a) -> bytes:
     msp = doc.modelspace()
     y0, sx = to_mm(geo.y0), to_mm(geo.stem_x)
     top = 0.0
-    for face, (lo, hi) in zip(geo.faces, spans, strict=False):
+    for face, (lo, hi) in faces:
         lo, hi = lo - FACE_MARGIN_MM, hi + FACE_MARGIN_MM
         if len(geo.faces) == 2:  # a double follower's faces stay on their own side
             lo, hi = (lo, min(hi, 0.0)) if face.x_c > 0 else (max(lo, 0.0), hi)
@@ -476,7 +481,7 @@ def follower_dxf_bytes(a) -> bytes:
     what = (
         "flat face"
         if geo.flat
-        else f"concave face{'s' if len(spans) == 2 else ''} r_f = {to_mm(-geo.r):g} mm"
+        else f"concave face{'s' if len(faces) == 2 else ''} r_f = {to_mm(-geo.r):g} mm"
     )
     for text, dy in (
         (f"{what}: the contact's stretch and {FACE_MARGIN_MM:g} mm beyond it", 8.0),

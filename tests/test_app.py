@@ -2315,7 +2315,10 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     undo, redo = (lambda: s.travel("↶ Undo")), (lambda: s.travel("↷ Redo"))
     undo()
     assert s.design == first  # nothing to undo, and it says so (after a reload too)
-    assert "Nothing to undo: the history starts when this tab opened." in s.ui.history_md.content
+    assert "Nothing to undo: the history keeps this tab's last" in s.ui.history_md.content
+    redo()  # nothing either way: said, no counts to keep
+    assert s.ui.history_md.content.startswith("Nothing to redo")
+    assert "to undo" not in s.ui.history_md.content
     monkeypatch.setattr(history, "SETTLE_S", 60.0)  # (a loaded machine's slow drag too)
     for r_b in (82.0, 85.0, 90.0):  # a drag: one step
         s.ui.controls["cam.base_radius_mm"].value = r_b
@@ -2339,6 +2342,8 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     s.ui.controls["cam.width_mm"].value = 20.0  # a new change: nothing to redo
     redo()
     assert s.design.cam.width_mm == 20.0 and s.design.motion == first.motion
+    assert s.ui.history_md.content.startswith("Nothing to redo")  # and the counts kept
+    assert s.ui.history_md.content.endswith(f"{s.history.text()}.")
     # an input error on screen and nothing left to undo: Undo gives back the design on
     # screen, its values in the controls; the steps' line follows (a review)
     monkeypatch.setattr(history, "SETTLE_S", 60.0)

@@ -1,5 +1,6 @@
 """Exports with a shaft bore: a watertight solid with the exact volume, a DXF circle."""
 
+import dataclasses
 import io
 import math
 import re
@@ -447,6 +448,24 @@ def test_the_follower_dxf_draws_faces_that_cover_every_contact(kind):
             ends = sorted((e.start_point.x, e.end_point.x))
         assert ends[0] <= p[:, 0].min() <= ends[0] + export.FACE_MARGIN_MM + 1e-9
         assert ends[1] - export.FACE_MARGIN_MM - 1e-9 <= p[:, 0].max() <= ends[1]
+
+
+def test_the_follower_dxf_draws_each_face_at_its_own_contact():
+    """A double follower whose first face never touched: only the second face is drawn,
+    over the second face's own stretch (a review: the spans were matched to the faces
+    by position once the empty one was dropped, so face 1 got face 2's stretch)."""
+    a = analyze(load_preset("paper_example"), verify=False)
+    on = a.in_contact.copy()
+    on[0] = False
+    b = dataclasses.replace(a, in_contact=on)
+    doc = ezdxf.read(io.StringIO(export.follower_dxf_bytes(b).decode()))
+    (arc,) = [e for e in doc.modelspace() if e.dxf.layer == "FACE"]
+    centre_x = (a.geo.faces[1].x_c - a.geo.stem_x) * 1e3
+    assert arc.dxf.center[0] == pytest.approx(centre_x)
+    x = (a.point_world[1, a.in_contact[1], 0] - a.geo.stem_x) * 1e3
+    ends = sorted((arc.start_point.x, arc.end_point.x))
+    assert ends[0] <= x.min() and x.max() <= ends[1]
+    assert "concave face r_f" in " ".join(e.dxf.text for e in doc.modelspace().query("TEXT"))
 
 
 @pytest.mark.parametrize(
