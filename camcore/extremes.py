@@ -67,6 +67,7 @@ def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndar
     peak = mask & np.isfinite(values)
     peak[:, 1:] &= (values[:, 1:] >= values[:, :-1]) | ~mask[:, :-1]
     peak[:, :-1] &= (values[:, :-1] >= values[:, 1:]) | ~mask[:, 1:]
+    peak = _first_of_ties(values, peak, C)
     many = np.count_nonzero(peak) > 4 * C * values.shape[0]
     if many and values.shape[1] > C:  # plateaus: keep only the C largest of each row first
         pv = np.where(peak, values, -np.inf)
@@ -80,6 +81,20 @@ def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndar
     row, k = row[order], k[order]
     keep = np.arange(row.size) - np.searchsorted(row, row, side="left") < C
     return row[keep], k[keep]
+
+
+def _first_of_ties(values: np.ndarray, peak: np.ndarray, c: int) -> np.ndarray:
+    """``peak`` without the samples of a run of equal peaks (a plateau: a dwell) past
+    its first ``c``: between equal values the earlier wins, so those can never be among
+    a row's c largest. A dwell's thousand samples then cost the sort nothing (they
+    made top_peaks a tenth of a sweep)."""
+    tied = np.zeros_like(peak)
+    tied[:, 1:] = peak[:, 1:] & peak[:, :-1] & (values[:, 1:] == values[:, :-1])
+    if not tied.any():
+        return peak
+    idx = np.arange(values.shape[1])
+    start = np.maximum.accumulate(np.where(tied, 0, idx), axis=1)  # its run's first
+    return peak & (idx - start < c)
 
 
 def distinct_rows(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -539,3 +539,43 @@ def test_a_run_through_theta_0_is_said_as_one():
 
     assert where_text(merged_deg([(0, 5), (0, 360)])) == "theta = 0-360 deg"
     assert where_text(merged_deg([(355, 360), (0, 3), (0, 5)])) == "theta = 355-5 (through 0) deg"
+
+
+def _top_peaks_by_hand(values, mask, c):
+    """top_peaks by its definition, one row and one sample at a time."""
+    out = []
+    for i, (v, m) in enumerate(zip(values, mask, strict=True)):
+        n = v.size
+        peaks = [
+            k
+            for k in range(n)
+            if m[k]
+            and np.isfinite(v[k])
+            and (k == 0 or not m[k - 1] or v[k] >= v[k - 1])
+            and (k == n - 1 or not m[k + 1] or v[k] >= v[k + 1])
+        ]
+        out += [(i, k) for k in sorted(peaks, key=lambda k: (-v[k], k))[:c]]
+    return out
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_top_peaks_takes_the_largest_local_maxima_the_earlier_of_ties(seed):
+    """extremes.top_peaks against its definition on rows with plateaus (a dwell), ties
+    between plateaus, masked stretches, NaN and -inf: the plateau's samples past the
+    first CANDIDATES are dropped before the sort (a sweep's spring needs spent a tenth
+    of the run sorting dwells), and nothing else changes."""
+    from camcore import extremes
+
+    rng = np.random.default_rng(seed)
+    values = np.round(rng.normal(size=(7, 400)), 1)  # coarse: many equal neighbours
+    values[0, 50:300] = 3.0  # a long plateau, the row's top
+    values[1, 10:200] = values[1, 250:390] = 2.0  # two equal plateaus
+    values[2] = 1.0  # all one plateau
+    values[3, ::7] = np.nan
+    values[4, 100:] = -np.inf
+    mask = rng.random(values.shape) > 0.1
+    mask[5] = False
+    row, k = extremes.top_peaks(values, mask)
+    assert list(zip(row.tolist(), k.tolist(), strict=True)) == _top_peaks_by_hand(
+        values, mask, extremes.CANDIDATES
+    )
