@@ -337,6 +337,15 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 hint="off: accept jumps in the acceleration (an infinite jerk), e.g. simple "
                 "harmonic next to a dwell; the status then says where",
             ),
+            Spec(
+                "limits.min_jump_speed_ratio",
+                "Min jump-speed ratio",
+                "number",
+                step=0.1,
+                hint="the follower must keep contact up to this many times the cam speed "
+                "(e.g. 1.2); 0 = only at the speed itself",
+                zero_is_none=True,
+            ),
             Spec("limits.resolution_deg", "Resolution [°]", "number", step=0.05),
             Spec(
                 "limits.min_hub_wall_mm",

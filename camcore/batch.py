@@ -649,12 +649,18 @@ def summaries(designs: list[Design]) -> list[dict]:
     trained, continuity, dynamic = _group_figures(bt)
     verdicts = _verdicts(bt, loc, on, worst, (continuity, dynamic))
     shaft = _shaft(bt, loc.torque.sum(axis=0).reshape(B, N), worst)
+    springs = _springs(bt, loc.prog)
+    lim = bt.designs[0].limits.min_jump_speed_ratio  # checks._jump_speed, run_all's last
+    for row, spring in zip(verdicts, springs, strict=True):
+        ratio = spring["jump_margin"]["jump_speed"]  # (None: it never jumps)
+        if lim is not None and ratio is not None and ratio < lim:
+            row.append("jump_speed")
     parts = zip(
         bt.designs,
         verdicts,
         _geometry_figures(bt),
         _grid_figures(bt, loc, worst),
-        _springs(bt, loc.prog),
+        springs,
         shaft,
         strict=True,
     )

@@ -28,6 +28,10 @@ verdict holds for the real cam, not only at the analysed angles:
   second can be waived (limits.require_continuous_acceleration).
 * ``jump``              Eqs. 29-41: contact force F_N <= 0 means the spring cannot
   keep the follower on the cam.
+* ``jump_speed``        Eq. 29 (camcore.machine): with limits.min_jump_speed_ratio
+  set, the speed at which the follower would leave the cam must be at least that many
+  times the cam speed (a designer's margin for a machine that runs faster or
+  overshoots; not in the paper).
 * ``guide_jam``         Eqs. 33-41: no guide-contact mode of Fig. 6 balances the
   follower with friction (self-locking).
 * ``profile_crossing``  the finished profile is not star-shaped about the axis (it
@@ -545,6 +549,35 @@ def _train(a) -> list[Violation]:
     ]
 
 
+def _jump_speed(a) -> list[Violation]:
+    """The jump speed (camcore.machine, from Eq. 29: F_N has the sign of F_t in every
+    guide mode that does not lock) against limits.min_jump_speed_ratio times the cam
+    speed; unchecked without that limit (the ``jump`` rule holds at the speed itself)."""
+    from .machine import spring
+
+    lim = a.design.limits.min_jump_speed_ratio
+    if lim is None:
+        return []
+    sp, speed = spring(a.design, a.theta, a.prog), a.design.cam.speed_rpm
+    ratio = sp.jump_speed_rpm / speed
+    if ratio >= lim:  # (never jumps: inf)
+        return []
+    at = to_deg(sp.jump_at) % 360.0
+    where = f"at theta = {at:.1f} deg" if ratio > 0 else "at any speed"
+    return [
+        Violation(
+            "jump_speed",
+            "Eq. 29 (jump speed)",
+            f"the follower leaves the cam {where} from {sp.jump_speed_rpm:.4g} rpm, "
+            f"{ratio:.3g} x the cam speed {speed:g} rpm, below the margin {lim:g} x "
+            "(limits.min_jump_speed_ratio): raise the spring rate or preload, or lower "
+            "the speed",
+            ((at, at),) if ratio > 0 else (),
+            lim - ratio,
+        )
+    ]
+
+
 def violation_mask(
     violations: list[Violation], theta_deg: np.ndarray, codes: set[str] | None = None
 ) -> np.ndarray:
@@ -621,6 +654,7 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
         + _continuity(a)
         + _forces(a)
         + _train(a)
+        + _jump_speed(a)
     )
     if not a.profile.is_star_shaped():
         out.append(

@@ -743,6 +743,13 @@ class Limits(_Part):
         le=10.0,
         description="the maximum Hertz stress times this must stay within the allowable",
     )
+    min_jump_speed_ratio: float | None = Field(
+        None,
+        ge=1.0,
+        le=100.0,
+        description="the follower must keep contact up to this many times the cam "
+        "speed (its jump speed / the speed); empty = only at the speed itself",
+    )
     min_hub_wall_mm: float = Field(
         2.0,
         ge=0.0,

@@ -529,8 +529,16 @@ def _limits_text(design) -> str:
         f"|phi| <= {lim.max_pressure_angle_deg:g} deg, sigma_H <= "
         f"{contact_stress_limit_MPa(design):g} MPa, hub wall >= {lim.min_hub_wall_mm:g} mm "
         f"(with a bore), profile within {lim.export_tolerance_mm:g} mm, acceleration "
-        f"{acc}; no jump at {design.cam.speed_rpm:g} rpm"
+        f"{acc}; {_no_jump_text(design)}"
     )
+
+
+def _no_jump_text(design) -> str:
+    """The jump rule: at the cam speed, or up to the margin limits.min_jump_speed_ratio."""
+    speed, m = design.cam.speed_rpm, design.limits.min_jump_speed_ratio
+    if m is None:
+        return f"no jump at {speed:g} rpm"
+    return f"no jump up to {m:g} x {speed:g} = {m * speed:.4g} rpm"
 
 
 def _making_text(c) -> str:

@@ -186,6 +186,18 @@ def test_material_and_allowable_stress_are_set_in_the_app(tab):
     assert s.analysis.valid
 
 
+def test_a_jump_speed_margin_is_set_in_the_limits(tab):
+    """A designer asks for contact up to 1.6 x the speed: the status names the broken
+    margin and where the follower would leave the cam; 0 takes the limit off again."""
+    s = tab
+    s.ui.controls["limits.min_jump_speed_ratio"].value = 1.6
+    assert s.design.limits.min_jump_speed_ratio == 1.6
+    assert "jump_speed" in {v.code for v in s.analysis.violations}
+    assert "below the margin 1.6 x" in s.ui.status.content
+    s.ui.controls["limits.min_jump_speed_ratio"].value = 0.0
+    assert s.design.limits.min_jump_speed_ratio is None and s.analysis.valid
+
+
 def test_bad_upload_keeps_design_then_good_upload_loads(tab):
     s = tab
     good = s.design

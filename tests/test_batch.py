@@ -65,6 +65,14 @@ VARIANTS = {
     "elastic": {"dynamics.train_stiffness_N_per_m": 5e4, "cam.speed_rpm": 3000.0},
     # the velocity drops instantly at the rise's end: no spring holds the follower
     "velocity_drop": {"motion.segments.0.law": "constant_velocity"},
+    # a jump-speed margin the paper's example misses (1.55 x), alone and after the
+    # elastic train's jump (the order of checks.run_all)
+    "margin": {"limits.min_jump_speed_ratio": 1.6},
+    "margin_elastic": {
+        "limits.min_jump_speed_ratio": 1.2,
+        "dynamics.train_stiffness_N_per_m": 5e4,
+        "cam.speed_rpm": 3000.0,
+    },
 }
 
 
@@ -125,6 +133,7 @@ def test_the_spread_has_broken_limits_too():
         "guide_jam",
         "contact_lost",
         "dynamic_jump",
+        "jump_speed",
     }
 
 

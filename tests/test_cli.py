@@ -72,7 +72,14 @@ def test_report_from_file_and_text(tmp_path, capsys):
         "plunge 50 mm/min, spindle not given, rapids 5 mm\n" in out.out
     )
     assert out.out.index("program   1. rise 100 deg 15 mm cycloidal") < out.out.index("Eq. 20")
+    assert "acceleration continuous; no jump at 1200 rpm\n" in out.out  # the limits line
     assert "flat face width needed               -\n" in out.out and "  - mm" not in out.out
+    data = json.loads(path.read_text())
+    data["limits"]["min_jump_speed_ratio"] = 1.6  # a margin (the design jumps at 1.55 x)
+    path.write_text(json.dumps(data))
+    assert main(["report", str(path)]) == 1
+    text = capsys.readouterr().out
+    assert "no jump up to 1.6 x 1200 = 1920 rpm\n" in text and "jump_speed" in text
 
 
 def test_a_file_leaving_inputs_out_says_which_took_defaults(tmp_path, capsys):

@@ -429,6 +429,38 @@ def test_an_instant_drop_in_velocity_jumps_at_any_speed():
     assert machine.velocity_drop(motion.segments(load_preset("paper_example"))) is None
 
 
+def test_a_jump_speed_margin_is_a_limit_when_set():
+    """limits.min_jump_speed_ratio (a designer's margin): the paper's design jumps at
+    1.55 x its speed, so a margin of 1.5 holds and 1.6 is broken, by 1.6 - 1.55 at the
+    angle that sets the jump speed; unset, nothing is checked beyond the speed itself.
+    The speed it names is the edge of jump: run there, the contact force reaches 0."""
+    from camcore.checks import run_all
+
+    a = analyze(PAPER, verify=False)
+    rpm, at = machine.jump_speed_rpm(PAPER, a.theta)
+    ratio = rpm / PAPER.cam.speed_rpm
+    assert 1.5 < ratio < 1.6
+
+    def margin(lim):
+        d = tweak(PAPER, limits__min_jump_speed_ratio=lim)
+        return [v for v in analyze(d, verify=False).violations if v.code == "jump_speed"]
+
+    assert margin(None) == [] and margin(1.5) == []
+    (v,) = margin(1.6)
+    assert v.amount == pytest.approx(1.6 - ratio, rel=1e-12)
+    assert v.ranges_deg == ((pytest.approx(math.degrees(at)),) * 2,)
+    assert f"from {rpm:.4g} rpm" in v.message and "limits.min_jump_speed_ratio" in v.message
+    assert v.equation == "Eq. 29 (jump speed)"
+    assert jumps(tweak(PAPER, cam__speed_rpm=rpm * 1.005))  # the named speed is jump's
+    # nothing holds the follower: it leaves at any speed, whatever the margin asks
+    loose = tweak(PAPER, limits__min_jump_speed_ratio=1.0, dynamics__spring_rate_N_per_m=0.0)
+    loose = tweak(loose, dynamics__gravity_m_s2=0.0, dynamics__preload_mm=0.0)
+    (v,) = [v for v in run_all(analyze(loose, verify=False), None) if v.code == "jump_speed"]
+    assert "at any speed" in v.message and v.ranges_deg == () and v.amount == 1.0
+    with pytest.raises(ValueError, match="min_jump_speed_ratio"):
+        tweak(PAPER, limits__min_jump_speed_ratio=0.5)  # below 1 it is no margin
+
+
 def test_a_rho_range_through_an_inflection_is_said_not_printed():
     """rho passes through infinity where the cam inflects: a signed range across 0 says
     so (a designer's review read "-5148.02 .. 24045.31 mm"); one side prints."""
