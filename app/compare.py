@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from camcore.model import PAPER_FOLLOWERS, Design
-from camcore.report import paper_table1_N
+from camcore.report import paper_table1_N, unbounded_notes
 
 from .panels import esc, largest_pressure_angle
 from .plots import COLORS, Curve
@@ -33,6 +33,15 @@ def table_markdown(results: dict, design: Design) -> str:
         st = s["contact_stress_max_MPa"]
         return st["high_dwell_two_contact"] if k.is_double else st["high_dwell"]
 
+    def bounded(s: dict, what: str, x: float | None, nd: int = 2) -> str:
+        """A cycle maximum, or "unbounded²" where it has no bound (report's notes: an
+        impulse or a jam for both, a cusp for the stress; a review read 2,004,164 MPa
+        in the table unflagged)."""
+        whys = {why for why, _ in unbounded_notes(s)}
+        if whys - ({"the cam has a cusp"} if what == "force" else set()):
+            return "unbounded²"
+        return f(x, nd)
+
     table1 = {k: paper_table1_N(design, k) for k in results}
     rows = [  # (label, figure of a follower's summary)
         ("F_N high dwell [N]¹", lambda k, s: f(dwell(k, s), 3)),
@@ -42,8 +51,11 @@ def table_markdown(results: dict, design: Design) -> str:
             else []
         ),
         ("σ_H high dwell [MPa]¹", lambda k, s: f(dwell_stress(k, s), 1)),
-        ("F_N max cycle [N]", lambda k, s: f(s["contact_force_max_N"]["cycle"], 2)),
-        ("σ_H max cycle [MPa]", lambda k, s: f(s["contact_stress_max_MPa"]["cycle"], 1)),
+        ("F_N max cycle [N]", lambda k, s: bounded(s, "force", s["contact_force_max_N"]["cycle"])),
+        (
+            "σ_H max cycle [MPa]",
+            lambda k, s: bounded(s, "stress", s["contact_stress_max_MPa"]["cycle"], 1),
+        ),
         ("φ max [°]", lambda k, s: f(largest_pressure_angle(s), 2)),
         ("ρ convex min [mm]", lambda k, s: f(s["radius_of_curvature_mm"]["convex_min"], 1)),
         ("wear max [µm/10⁶ cycles]", lambda k, s: f(s["wear_depth_max_um_per_Mcycle"], 4)),
@@ -65,6 +77,12 @@ def table_markdown(results: dict, design: Design) -> str:
         ]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     notes = [f"- *{k.label}*: {esc(a)}" for k, a in results.items() if isinstance(a, str)]
+    notes += [  # (our words only: nothing a user typed)
+        f"- ² *{k.label}*: {note}"
+        for k, a in results.items()
+        if not isinstance(a, str)
+        for _, note in unbounded_notes(a["summary"])
+    ]
     text = "\n".join(lines)
     text += (
         "\n\n¹ The largest contact force and stress per face in the high dwell; for double "

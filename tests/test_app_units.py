@@ -816,3 +816,36 @@ def test_the_status_says_where_its_violations_are_marked():
     assert _where_red([span]) == "red on the cam and the curves"
     assert _where_red([span, point]) == "red on the cam and the curves where they span an angle"
     assert _where_red([V(ranges_deg=())]) == "listed below"  # (a hub wall: no angle)
+
+
+def test_the_compare_table_says_unbounded_maxima_not_their_samples():
+    """A designer's review: a follower whose cam has a cusp (or whose velocity jumps)
+    showed the samples' largest stress, millions of MPa, as a figure. Such a cell says
+    unbounded, with the report's note under the table; a cusp leaves the force bounded."""
+    from app.compare import table_markdown
+    from camcore.analysis import analyze
+    from camcore.model import FollowerKind, load_preset
+    from camcore.report import summary
+
+    d = load_preset("paper_example")
+    data = d.model_dump()
+    data["cam"]["base_radius_mm"] = 15.0  # the cam folds back under the concave faces
+    cusped = type(d).model_validate(data)
+    data = d.model_dump()
+    data["motion"]["segments"][0]["law"] = "constant_velocity"
+    jolted = type(d).model_validate(data)
+    concave, roller = FollowerKind.double_concave, FollowerKind.single_roller
+    results = {
+        concave: {"summary": summary(analyze(cusped.with_kind(concave), verify=False))},
+        roller: {"summary": summary(analyze(jolted.with_kind(roller), verify=False))},
+    }
+    md = table_markdown(results, d)
+    row = {ln.split(" | ")[0]: ln.rstrip(" |").split(" | ")[1:] for ln in md.splitlines()}
+    force, stress = row["| F_N max cycle [N]"], row["| σ_H max cycle [MPa]"]
+    assert force[0] != "unbounded²" and float(force[0]) > 0  # a cusp: the force is bounded
+    assert stress[0] == "unbounded²"
+    assert force[1] == stress[1] == "unbounded²"
+    assert f"- ² *{concave.label}*: the profile has a cusp" in md
+    assert f"- ² *{roller.label}*: the velocity jumps" in md
+    plain = {k: {"summary": summary(analyze(d.with_kind(k), verify=False))} for k in results}
+    assert "unbounded" not in table_markdown(plain, d)
