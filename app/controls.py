@@ -348,6 +348,15 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
             ),
             Spec("limits.resolution_deg", "Resolution [°]", "number", step=0.05),
             Spec(
+                "limits.max_outer_diameter_mm",
+                "Max outer Ø [mm]",
+                "number",
+                step=1,
+                hint="the largest the cam may be across (its envelope, or your stock); "
+                "0 = not checked",
+                zero_is_none=True,
+            ),
+            Spec(
                 "limits.min_hub_wall_mm",
                 "Min hub wall [mm]",
                 "number",

@@ -440,6 +440,7 @@ def summary_markdown(s: dict) -> str:
             ),
         ),
         ("Profile area", f"{f(s['profile']['area_mm2'], 1)} mm²"),
+        ("Outer diameter (stock)", f"{f(s['profile']['outer_diameter_mm'], 2)} mm"),
     ]
     double = FollowerKind(s["follower"]).is_double
     spans = [

@@ -56,7 +56,13 @@ BATCHED_FIELDS = (
 )
 
 # the violations this core cannot decide: they need the profile (module docstring)
-PROFILE_CHECKS = ("profile_crossing", "export_tolerance", "hub_wall", "geometric_check")
+PROFILE_CHECKS = (
+    "profile_crossing",
+    "export_tolerance",
+    "hub_wall",
+    "outer_diameter",
+    "geometric_check",
+)
 
 
 def group_key(design: Design) -> str:

@@ -40,6 +40,9 @@ verdict holds for the real cam, not only at the analysed angles:
   limits.export_tolerance_mm of the exact cam (it has cusps or folds).
 * ``hub_wall``          with a shaft bore: the thinnest wall between the bore (and its
   keyway) and the profile must reach limits.min_hub_wall_mm (a maker's limit).
+* ``outer_diameter``    with limits.max_outer_diameter_mm set, the cam's outer
+  diameter (outer_diameter_mm: the exact cam's, from its profile) must stay within it
+  (a designer's envelope, a maker's stock).
 * ``geometric_check``   the independent check (camcore.verify) finds the profile
   does not produce S(theta) within the export tolerance over cos(pressure angle).
 """
@@ -623,6 +626,35 @@ def hub_wall_mm(a) -> float | None:
     return wall - to_mm(a.chord_error)
 
 
+def outer_diameter_mm(a) -> float:
+    """The cam's outer diameter [mm]: twice its farthest point from the axis, on the
+    exact cam (the profile's vertices lie on it and its chords within a.chord_error
+    inside it, so the farthest vertex plus the chord error bounds it from above: the
+    stock it is cut from)."""
+    p = a.profile.points
+    return 2.0 * to_mm(float(np.hypot(p[:, 0], p[:, 1]).max()) + a.chord_error)
+
+
+def _outer_diameter(a) -> list[Violation]:
+    """The cam's size against limits.max_outer_diameter_mm (not in the paper: a
+    designer's envelope, or a maker's stock)."""
+    lim = a.design.limits.max_outer_diameter_mm
+    size = outer_diameter_mm(a)
+    if lim is None or size <= lim:
+        return []
+    return [
+        Violation(
+            "outer_diameter",
+            "cam size",
+            f"the cam is {size:.4f} mm across, above the limit {lim:g} mm "
+            "(limits.max_outer_diameter_mm): a smaller base radius or lift, or a follower "
+            "that needs less room (its dwell radius, Eq. 20)",
+            (),
+            size - lim,
+        )
+    ]
+
+
 def _hub_wall(a) -> list[Violation]:
     """The hub's thinnest wall against limits.min_hub_wall_mm (not in the paper: a
     maker's limit; a wall of hundredths of a millimetre passed every other check)."""
@@ -680,7 +712,7 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
                 to_mm(a.chord_error) - tol,
             )
         )
-    out += _hub_wall(a)
+    out += _hub_wall(a) + _outer_diameter(a)
     if lift_error is not None and not lift_error <= lift_tolerance(a):
         out.append(
             Violation(

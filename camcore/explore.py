@@ -48,10 +48,12 @@ FIGURES: dict[str, Figure] = {
     "force": Figure("max contact force F_N", "N", ("contact_force_max_N.cycle",)),
     "torque": Figure("peak driving torque", "N m", ("cam_torque_max_Nm.drive",)),
     "wear": Figure("max wear depth", "µm/10⁶ cycles", ("wear_depth_max_um_per_Mcycle",)),
+    "outer_diameter": Figure("cam outer diameter", "mm", ("profile.outer_diameter_mm",)),
 }
 
 
-PROFILE_FIGURES = {"wear"}  # figures the batched core (sweep --fast) does not compute
+# figures the batched core (sweep --fast) does not compute
+PROFILE_FIGURES = {"wear", "outer_diameter"}
 
 
 def figure_values(rows: list[dict], names: list[str]) -> np.ndarray:

@@ -750,6 +750,13 @@ class Limits(_Part):
         description="the follower must keep contact up to this many times the cam "
         "speed (its jump speed / the speed); empty = only at the speed itself",
     )
+    max_outer_diameter_mm: float | None = Field(
+        None,
+        gt=0,
+        le=1e5,
+        description="the largest the cam may be across (its envelope, or the stock it is "
+        "cut from) [mm]; empty = not checked",
+    )
     min_hub_wall_mm: float = Field(
         2.0,
         ge=0.0,

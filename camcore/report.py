@@ -338,6 +338,7 @@ def summary(a: Analysis) -> dict:
             "area_mm2": a.profile.area * 1e6,
             "perimeter_mm": a.profile.perimeter * 1e3,
             "vertices": int(a.profile.points.shape[0]),
+            "outer_diameter_mm": checks.outer_diameter_mm(a),
             "hub_wall_mm": checks.hub_wall_mm(a),  # None without a bore
         },
         "verification": {
@@ -525,10 +526,12 @@ def _limits_text(design) -> str:
     report said "all limits met" without saying which)."""
     lim = design.limits
     acc = "continuous" if lim.require_continuous_acceleration else "jumps accepted"
+    d_max = lim.max_outer_diameter_mm
+    size = "" if d_max is None else f"outer diameter <= {d_max:g} mm, "
     return (
         f"|phi| <= {lim.max_pressure_angle_deg:g} deg, sigma_H <= "
         f"{contact_stress_limit_MPa(design):g} MPa, hub wall >= {lim.min_hub_wall_mm:g} mm "
-        f"(with a bore), profile within {lim.export_tolerance_mm:g} mm, acceleration "
+        f"(with a bore), {size}profile within {lim.export_tolerance_mm:g} mm, acceleration "
         f"{acc}; {_no_jump_text(design)}"
     )
 
@@ -733,6 +736,7 @@ def report_text(s: dict, design: Design | None = None) -> str:
             "profile area / perimeter",
             f"{_fmt(s['profile']['area_mm2'], 2)} mm2 / {_fmt(s['profile']['perimeter_mm'], 3)} mm",
         ),
+        ("outer diameter (stock)", f"{_fmt(s['profile']['outer_diameter_mm'], 3)} mm"),
         *(
             [("hub wall (thinnest, bore to profile)", f"{_fmt(s['profile']['hub_wall_mm'], 3)} mm")]
             if s["profile"]["hub_wall_mm"] is not None

@@ -186,9 +186,9 @@ def test_material_and_allowable_stress_are_set_in_the_app(tab):
     assert s.analysis.valid
 
 
-def test_a_jump_speed_margin_is_set_in_the_limits(tab):
-    """A designer asks for contact up to 1.6 x the speed: the status names the broken
-    margin and where the follower would leave the cam; 0 takes the limit off again."""
+def test_a_jump_speed_margin_and_a_largest_cam_are_set_in_the_limits(tab):
+    """A designer asks for contact up to 1.6 x the speed, then a cam within 150 mm:
+    the status names the broken limit; 0 takes each off again."""
     s = tab
     s.ui.controls["limits.min_jump_speed_ratio"].value = 1.6
     assert s.design.limits.min_jump_speed_ratio == 1.6
@@ -196,6 +196,11 @@ def test_a_jump_speed_margin_is_set_in_the_limits(tab):
     assert "below the margin 1.6 x" in s.ui.status.content
     s.ui.controls["limits.min_jump_speed_ratio"].value = 0.0
     assert s.design.limits.min_jump_speed_ratio is None and s.analysis.valid
+    s.ui.controls["limits.max_outer_diameter_mm"].value = 150.0  # the cam is ~190 mm
+    assert "outer_diameter" in {v.code for v in s.analysis.violations}
+    assert "above the limit 150 mm" in s.ui.status.content
+    s.ui.controls["limits.max_outer_diameter_mm"].value = 0.0
+    assert s.design.limits.max_outer_diameter_mm is None and s.analysis.valid
 
 
 def test_bad_upload_keeps_design_then_good_upload_loads(tab):

@@ -281,8 +281,10 @@ def test_key_numbers_typeset_units_as_the_curves_do(paper_analysis):
     assert "µm per million" in text and "N·m" in text and "kg·m²" in text
     assert " um " not in text and " N m " not in text
     assert "Hub wall" not in text  # no bore, no hub wall
-    bored = {**summary(paper_analysis), "profile": {"area_mm2": 1.0, "hub_wall_mm": 4.25}}
+    profile = {"area_mm2": 1.0, "hub_wall_mm": 4.25, "outer_diameter_mm": 189.944}
+    bored = {**summary(paper_analysis), "profile": profile}
     assert "| Hub wall (thinnest, bore to profile) | 4.25 mm |" in panels.summary_markdown(bored)
+    assert "| Outer diameter (stock) | 189.94 mm |" in panels.summary_markdown(bored)
     # the stress limit in significant figures (an allowable of 1e-300 MPa read "0 MPa")
     assert "| 1000 MPa / 1.25 = 800 MPa |" in text
     tiny = {**summary(paper_analysis), "contact_stress_allowable_MPa": 1e-300}

@@ -246,7 +246,7 @@ def test_a_batch_refuses_designs_it_cannot_hold():
 def test_explore_reads_the_same_map_and_front_from_batched_rows():
     """The Explore tab's figures, map codes and Pareto front are the same whether its
     rows come from the batched core or from one full analysis per design."""
-    from camcore.explore import FIGURES, figure_values, pareto
+    from camcore.explore import FIGURES, PROFILE_FIGURES, figure_values, pareto
 
     base = json.loads(load_preset("paper_example").model_dump_json())
     points = [
@@ -257,7 +257,7 @@ def test_explore_reads_the_same_map_and_front_from_batched_rows():
     ]
     fast = sweep.run_chunk(base, points, verify=False, fast=True)
     full = sweep.run_chunk(base, points, verify=False)
-    names = [n for n in FIGURES if n != "wear"]  # wear needs the profile
+    names = [n for n in FIGURES if n not in PROFILE_FIGURES]  # (they need the profile)
     np.testing.assert_array_equal(figure_values(fast, names), figure_values(full, names))
     assert [sweep.first_violation(r) for r in fast] == [sweep.first_violation(r) for r in full]
     assert any(sweep.first_violation(r) for r in fast)  # the grid breaks limits too

@@ -344,6 +344,35 @@ def test_keyway_limits(change, message):
         Design.model_validate(data)
 
 
+def test_the_outer_diameter_is_the_exact_cams_and_a_limit_when_set():
+    """The cam's size (a maker's stock, a designer's envelope; no figure gave it): for
+    the paper's double concave faces the farthest points are on the high dwell arc of
+    radius R (Eq. 20), so the outer diameter is 2R, up to twice the chord error above
+    it (an upper bound: the stock); a single roller's cam, against its own farthest
+    vertex. limits.max_outer_diameter_mm, when set, is checked against it."""
+    from camcore import checks
+    from camcore.report import summary
+
+    def cam(limit=None, kind="double_concave"):
+        data = load_preset("paper_example").with_kind(kind).model_dump()
+        data["limits"]["max_outer_diameter_mm"] = limit
+        return analyze(Design.model_validate(data), verify=False)
+
+    a = cam()
+    size, two_r = checks.outer_diameter_mm(a), 2e3 * a.geo.dwell_radius
+    assert two_r <= size <= two_r + 2e3 * a.chord_error + 1e-9
+    assert summary(a)["profile"]["outer_diameter_mm"] == size
+    roller = cam(kind="single_roller")
+    far = 2e3 * np.hypot(*roller.profile.points.T).max()
+    assert far <= checks.outer_diameter_mm(roller) <= far + 2e3 * roller.chord_error + 1e-9
+    assert "outer_diameter" not in {v.code for v in cam(190.0).violations}
+    (v,) = [v for v in cam(189.0).violations if v.code == "outer_diameter"]
+    assert v.amount == pytest.approx(size - 189.0) and f"{size:.4f} mm across" in v.message
+    assert "limits.max_outer_diameter_mm" in v.message
+    with pytest.raises(ValidationError, match="max_outer_diameter_mm"):
+        Design.model_validate({"limits": {"max_outer_diameter_mm": -1.0}})
+
+
 def test_a_hub_wall_below_the_limit_is_a_violation():
     """A bore that leaves a wall a maker cannot make (0.05 mm in the paper cam) passed
     every check and exported with exit 0 (a maker's review): limits.min_hub_wall_mm
