@@ -573,12 +573,29 @@ def _jump_speed(a) -> list[Violation]:
             "Eq. 29 (jump speed)",
             f"the follower leaves the cam {where} from {sp.jump_speed_rpm:.4g} rpm, "
             f"{ratio:.3g} x the cam speed {speed:g} rpm, below the margin {lim:g} x "
-            "(limits.min_jump_speed_ratio): raise the spring rate or preload, or lower "
-            "the speed",
+            f"(limits.min_jump_speed_ratio): {_spring_for(a, lim * speed)}",
             ((at, at),) if ratio > 0 else (),
             lim - ratio,
         )
     ]
+
+
+def _spring_for(a, rpm: float) -> str:
+    """What keeps the follower on the cam up to ``rpm``: the spring rate that does at
+    the design's preload (machine.spring_rate_min of the design run at rpm, rounded
+    up as machine.proposed_rate: the figure a user types in meets it), if any."""
+    from .machine import proposed_rate, spring_rate_min
+
+    cam = a.design.cam.model_copy(update={"speed_rpm": rpm})
+    k_min, _ = spring_rate_min(a.design.model_copy(update={"cam": cam}), a.theta, a.prog)
+    k = a.design.dynamics.spring_rate_N_per_m
+    if not math.isfinite(k_min):
+        return "no spring rate does at this preload: more preload, or a lower speed"
+    return (
+        f"a spring rate of {proposed_rate(1.0, k_min):g} N/m or more does at this preload "
+        f"(it is {k:g} "
+        "N/m), or more preload, or a lower speed"
+    )
 
 
 def violation_mask(

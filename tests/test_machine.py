@@ -6,6 +6,7 @@ the power balance through the instant centre, and the energy balance over a cycl
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -452,6 +453,12 @@ def test_a_jump_speed_margin_is_a_limit_when_set():
     assert f"from {rpm:.4g} rpm" in v.message and "limits.min_jump_speed_ratio" in v.message
     assert v.equation == "Eq. 29 (jump speed)"
     assert jumps(tweak(PAPER, cam__speed_rpm=rpm * 1.005))  # the named speed is jump's
+    # the spring it proposes meets the margin as typed in; 1 % less does not
+    k = float(re.search(r"a spring rate of (\S+) N/m or more", v.message).group(1))
+    stiff = tweak(PAPER, limits__min_jump_speed_ratio=1.6, dynamics__spring_rate_N_per_m=k)
+    assert "jump_speed" not in {v.code for v in analyze(stiff, verify=False).violations}
+    soft = tweak(stiff, dynamics__spring_rate_N_per_m=0.99 * k)
+    assert "jump_speed" in {v.code for v in analyze(soft, verify=False).violations}
     # nothing holds the follower: it leaves at any speed, whatever the margin asks
     loose = tweak(PAPER, limits__min_jump_speed_ratio=1.0, dynamics__spring_rate_N_per_m=0.0)
     loose = tweak(loose, dynamics__gravity_m_s2=0.0, dynamics__preload_mm=0.0)
