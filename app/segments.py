@@ -9,6 +9,7 @@ that makes a valid design. Values the session writes in (``show``) fire no edit.
 from __future__ import annotations
 
 import contextlib
+import math
 import threading
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -141,7 +142,7 @@ class SegmentTable:
         if self._writer == threading.get_ident():
             return  # the session's own write
         with self._rows_lock:
-            if widget.value != value:
+            if not (widget.value is value or widget.value == value):  # (NaN is itself)
                 return
             segs = self.as_dicts()
         self.on_change(segs)
@@ -173,13 +174,17 @@ class SegmentTable:
             "kind": gui.add_dropdown(f"{n} kind", KINDS, initial_value=g.kind),
             "angle": fine(
                 gui.add_number(
-                    f"{n} angle [°]", g.angle_deg, min=ANGLE_RANGE[0], max=ANGLE_RANGE[1], step=0.5
+                    f"{n} angle [°]",
+                    _in_range(g.angle_deg, ANGLE_RANGE, 0.0),
+                    min=ANGLE_RANGE[0],
+                    max=ANGLE_RANGE[1],
+                    step=0.5,
                 )
             ),
             "lift": fine(
                 gui.add_number(
                     f"{n} lift [mm]",
-                    g.lift_mm or 5.0,
+                    _in_range(g.lift_mm or 5.0, LIFT_RANGE, 5.0),
                     min=LIFT_RANGE[0],
                     max=LIFT_RANGE[1],
                     step=0.5,
@@ -200,3 +205,13 @@ class SegmentTable:
             row[key].on_update(lambda e: self._edited(e.target, e.target.value))
         row["move"].on_click(lambda e, j=i: self.act(j, e.target.value))
         return row
+
+
+def _in_range(value: float, bounds: tuple[float, float], default: float) -> float:
+    """A row's value as its new number box may start: within the box's bounds (viser
+    refuses others), ``default`` if not finite. Only a value a hostile client sent past
+    the box's bounds is changed (a review: a lift of 5000 mm left the table half built
+    at the next redraw); the design had refused it already, and the status said why."""
+    if not math.isfinite(value):
+        return default
+    return min(max(value, bounds[0]), bounds[1])

@@ -29,6 +29,10 @@ MAX_IN_FLIGHT_BYTES = 2 * MAX_UPLOAD_BYTES  # declared bytes of one tab's unfini
 MAX_IN_FLIGHT = 4  # unfinished uploads of one tab, whatever they declare (a second
 # review's transfers declaring 0 bytes were never counted, and never finished)
 MAX_NAME_CHARS = 1000  # of an upload's file name and type (kept while it is unfinished)
+# the smallest part a transfer may announce on average: viser's browser sends 512 KiB
+# parts, so a 1 MB file comes in 2; a review announced 2^62 parts and sent 300,000
+# empty ones, each kept (22 MB for nothing, until the tab closed)
+MIN_PART_BYTES = 16 * 1024
 
 _state: dict = {"max_bytes": MAX_UPLOAD_BYTES, "on_refused": None, "installed": False}
 
@@ -54,6 +58,9 @@ def install(
         if len(name) > MAX_NAME_CHARS or len(mime) > MAX_NAME_CHARS:
             _refuse(client_id, name, size, "its name is too long")
             return
+        if not 0 <= message.part_count <= max(1, -(-size // MIN_PART_BYTES)):
+            _refuse(client_id, name, size, f"it announced {message.part_count:,} parts")
+            return
         mine = [
             s["total_bytes"]
             for s in list(self._current_file_upload_states.values())
@@ -68,6 +75,8 @@ def install(
     def guarded_part(self, client_id, message):
         state = self._current_file_upload_states.get(message.transfer_uuid)
         if state is not None:
+            if not message.content:  # (an empty part carries nothing: never kept)
+                return
             cap, declared = _state["max_bytes"], state["total_bytes"]
             got = state["transferred_bytes"] + len(message.content)
             if got > min(cap, declared):

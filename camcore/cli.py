@@ -37,7 +37,7 @@ from .model import (
     with_given,
 )
 
-EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_VALID, EXIT_BREAKS_LIMITS, EXIT_BAD_INPUT, EXIT_INTERNAL = 0, 1, 2, 3
 
 
 def _apply_set(data: dict, assignment: str) -> None:
@@ -53,7 +53,7 @@ def _apply_set(data: dict, assignment: str) -> None:
         )
     try:
         value = json.loads(raw)
-    except ValueError:
+    except (ValueError, RecursionError):  # (5000 nested brackets: not a value either)
         value = raw  # a bare word, e.g. follower.kind=double_roller
     set_field(data, path.strip(), value, "--set ")
 
@@ -551,6 +551,16 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except BrokenPipeError:
         return 0
+    except Exception as exc:  # a defect of ours: not 1 ("breaks a limit") nor 2 (input)
+        import traceback
+
+        traceback.print_exc()
+        print(
+            f"camcore: internal error ({type(exc).__name__}): please report it with the "
+            "command and the design file",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

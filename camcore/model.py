@@ -18,6 +18,7 @@ import functools
 import json
 import math
 import re
+import unicodedata
 from enum import Enum, StrEnum
 from pathlib import Path
 from typing import Final, Literal, get_args
@@ -40,6 +41,10 @@ MIN_MOTION_DEG = 0.01  # a rise or fall over less than this: V, A, J (~ h / beta
 
 
 NAME_MAX: Final = 200  # characters of a design's name
+# Unicode categories a name may not hold: control, format, line and paragraph separators;
+# but the zero-width (non-)joiner, which Persian words and emoji sequences need
+NAME_REFUSED: Final = frozenset({"Cc", "Cf", "Zl", "Zp"})
+NAME_JOINERS: Final = frozenset({"\u200c", "\u200d"})
 
 
 class FollowerKind(StrEnum):
@@ -779,6 +784,20 @@ class Design(_Part):
     wear: Wear = Wear()
     limits: Limits = Limits()
 
+    @field_validator("name")
+    @classmethod
+    def _printable_name(cls, v: str) -> str:
+        """A name prints in files, terminals and the app: no control or format
+        characters (a review: a pasted U+FEFF broke the PDF, and ESC sequences in a
+        name could rewrite a terminal's report, e.g. hide its violations)."""
+        for i, ch in enumerate(v):
+            if unicodedata.category(ch) in NAME_REFUSED and ch not in NAME_JOINERS:
+                raise ValueError(
+                    f"U+{ord(ch):04X} at character {i + 1} is a control or format character "
+                    "(invisible, or it moves a terminal's cursor): type the name without it"
+                )
+        return v
+
     @model_validator(mode="after")
     def _equations_can_be_evaluated(self) -> Design:
         """Geometry for which Eqs. 3 and 20 have no real answer is not a design."""
@@ -990,7 +1009,7 @@ def format_validation_error(exc) -> str:
     """One line per problem: 'field.path: message'."""
     parts = []
     for err in exc.errors()[:8]:
-        loc = ".".join(str(p) for p in err["loc"])
+        loc = ".".join(_printable(str(p)) for p in err["loc"])  # (a file's own keys)
         msg = err["msg"].removeprefix("Value error, ")
         head, sep, tail = msg.partition(": ")
         if loc and sep and head.replace(".", "").replace("_", "").isalnum():
@@ -1008,6 +1027,14 @@ def format_validation_error(exc) -> str:
 BOUND_MEANS = {
     "follower.face_radius_mm": "a concave face's radius is negative, r_f < 0 (Eq. 3)",
 }
+
+
+def _printable(text: str, limit: int = 60) -> str:
+    """A key from the user's file as an error may print it: non-printable characters
+    as \\uXXXX (an ESC in a key had reached the terminal) and at most ``limit`` of them
+    (a 900 kB key came back whole)."""
+    out = "".join(ch if ch.isprintable() else f"\\u{ord(ch):04x}" for ch in text[:limit])
+    return out + ("…" if len(text) > limit else "")
 
 
 def _shown_value(x) -> str | None:
@@ -1071,7 +1098,7 @@ def field_table() -> list[dict]:
         {
             "path": "name",
             "default": defaults.name,
-            "range": f"at most {NAME_MAX} characters",
+            "range": f"at most {NAME_MAX} characters, no control or format characters",
             "description": "the design's name (files, headers, the app's title)",
             "followers": None,
         }

@@ -201,7 +201,7 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     elif isinstance(base, dict) and set(base) == {"file"}:
         if base_dir is None or not isinstance(base["file"], str) or not base["file"]:
             raise DesignError('base: {"file": NAME} names a design file beside the spec file')
-        design, base_text = read_design(Path(base_dir) / base["file"])
+        design, base_text = read_design(_beside(Path(base_dir), base["file"]))
     elif isinstance(base, dict):
         design = design_from_json(json.dumps(base))
     else:
@@ -284,6 +284,20 @@ def flatten(node, prefix: str = "", out: dict | None = None) -> dict:
     else:
         out[prefix] = node
     return out
+
+
+def _beside(folder: Path, name: str) -> Path:
+    """The design file ``name`` in the spec file's ``folder`` or below it, nowhere else
+    (a review: "/home/me/secret.json" or "../x" was read, and its keys quoted in the
+    error: a spec handed round must not read the user's other files)."""
+    root = folder.resolve()
+    path = (root / name).resolve()
+    if root not in path.parents:
+        raise DesignError(
+            f'base: {{"file": ...}} names a design file in the spec file\'s folder or '
+            f"below it, not {name[:80]!r}"
+        )
+    return path
 
 
 def design_at(base: dict, point: dict) -> Design:

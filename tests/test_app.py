@@ -294,6 +294,9 @@ def test_archard_k_is_entered_in_its_own_scale(tab):
         ("future.json", b'{"schema_version": 7}', "written by a newer program"),
         ("list.json", b"[1, 2]", "a design is a JSON object"),
     ],
+    # short ids: a 30 MB id went into PYTEST_CURRENT_TEST, and a worker process started
+    # under it (the app fixture, when this test runs first) could not be spawned
+    ids=["huge", "deep", "photo", "future", "list"],
 )
 def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content, message):
     s = tab
@@ -627,7 +630,7 @@ def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
         transfer_uuid="t-liar",
         filename="liar.json",
         mime_type="application/json",
-        part_count=3,
+        part_count=1,
         size_bytes=10,
     )
     gui_api._handle_file_transfer_start(cid, liar)
@@ -638,6 +641,27 @@ def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
     gui_api._handle_file_transfer_part(cid, part)
     assert "t-liar" not in gui_api._current_file_upload_states  # dropped, not buffered
     assert uploads.MAX_UPLOAD_BYTES == 1_000_000
+    # a review announced 2^62 parts of a "1 MB" file and sent 300,000 empty ones, each
+    # kept: a transfer announces at most one part per MIN_PART_BYTES, and an empty
+    # part is never kept
+    from dataclasses import replace
+
+    many = replace(liar, transfer_uuid="t-many", part_count=2**62, size_bytes=1_000_000)
+    gui_api._handle_file_transfer_start(cid, many)
+    assert "t-many" not in gui_api._current_file_upload_states
+    assert "announced 4,611,686,018,427,387,904 parts" in s.ui.files_md.content
+    two = replace(many, transfer_uuid="t-two", part_count=2)  # as a browser sends it
+    gui_api._handle_file_transfer_start(cid, two)
+    state = gui_api._current_file_upload_states["t-two"]
+    for i in range(5):
+        gui_api._handle_file_transfer_part(
+            cid,
+            _messages.FileTransferPart(
+                source_component_uuid=button, transfer_uuid="t-two", part_index=i, content=b""
+            ),
+        )
+    assert state["parts"] == {}
+    gui_api._current_file_upload_states.pop("t-two")
 
 
 def test_browser_storage_values_are_untrusted():
@@ -841,6 +865,25 @@ def test_a_table_edit_made_while_the_table_is_redrawn_counts(tab):
             assert got == [[{**shown[0], "angle_deg": 55.0}, *shown[1:]]]
         else:  # row 4, written over by the redraw: dropped, the screen shows the redraw
             assert got == [] and widget.value == shown[3]["angle_deg"]
+
+
+def test_segment_values_past_the_boxes_are_refused_and_the_table_stays_whole(tab):
+    """A hostile client's review: a lift of 5000 mm (past its box) left the table half
+    built at the next move (viser refused the new box's start value): three of four
+    rows, no Add button. And a NaN was dropped without a word (NaN != NaN read as an
+    edit written over)."""
+    s = tab
+    table, good = s.ui.segments, s.design
+    n_handles = len([h for r in table.rows for h in r.values()])
+    table.rows[2]["lift"].value = 5000.0
+    assert s.error is not None and "lift" in s.error and s.design == good
+    table.act(3, "↑")  # rebuilds the rows: every one of them, and the Add button
+    assert len(table.rows) == 4 and len(table._extra) == 2
+    assert len([h for r in table.rows for h in r.values()]) == n_handles
+    assert s.error is not None and s.design == good
+    s.load_preset("paper_example")
+    table.rows[0]["angle"].value = float("nan")
+    assert s.error is not None and "angle" in s.error and s.design == load_preset("paper_example")
 
 
 def test_segment_table_edits_the_program(tab):

@@ -438,3 +438,25 @@ def test_a_cutter_without_a_toolpath_is_an_error(tmp_path, capsys):
     js = tmp_path / "design.json"  # a design file keeps it (a review: not ignored there)
     args = ["export", "--preset", "paper_example", "--json", str(js), "--cutter-diameter-mm", "6"]
     assert main(args) == 0 and json.loads(js.read_text())["cam"]["cutter_diameter_mm"] == 6.0
+
+
+def test_a_defect_of_ours_exits_3_not_1(tmp_path, capsys, monkeypatch):
+    """A review: an internal error (a PDF font's IndexError) printed a traceback and
+    exited 1, which a script reads as "analysed, breaks a limit"; 2 is bad input. It
+    exits 3, saying so after the traceback. And --set's value nested 5000 deep is a
+    bare word, not a RecursionError."""
+    from camcore import document
+
+    def broken(_a):
+        raise IndexError("list index out of range")
+
+    monkeypatch.setattr(document, "pdf_report", broken)
+    rc = main(["report", "--preset", "paper_example", "--pdf", str(tmp_path / "r.pdf")])
+    err = capsys.readouterr().err
+    assert rc == 3 and "Traceback" in err
+    assert err.rstrip().endswith(
+        "camcore: internal error (IndexError): please report it with the command and the "
+        "design file"
+    )
+    assert main(["report", "--preset", "paper_example", "--set", "name=" + "[" * 5000]) == 2
+    assert "RecursionError" not in capsys.readouterr().err

@@ -157,3 +157,30 @@ def test_geometry_errors_name_the_quantities_and_the_fix():
     text = error(face_radius_mm=90.0)
     assert "face_radius_mm: Input should be less than 0, a concave face's radius" in text
     assert text.endswith("(got 90.0)")
+
+
+@pytest.mark.parametrize(
+    "bad", ["Pump cam \ufeff", "evil\x1b[2K", "a\u200bb", "line\nbreak", "x\u2028y"]
+)
+def test_a_name_holds_no_control_or_format_characters(bad):
+    """A review: a pasted U+FEFF made the PDF fail, and ESC sequences in a name could
+    rewrite a terminal's report (hide its violations). Such a name is refused, saying
+    which character where; a name in any script, emoji sequences and the zero-width
+    (non-)joiner Persian needs are fine."""
+    with pytest.raises(ValidationError, match=r"U\+[0-9A-F]{4} at character \d+ is a control"):
+        Design(name=bad)
+    with pytest.raises(DesignError, match="name: U\\+"):
+        design_from_json(json.dumps({"name": bad}))
+    for good in ("Ünïcödé 凸轮 ✓", "می\u200cرود", "\U0001f468\u200d\U0001f527 tool cam"):
+        assert Design(name=good).name == good
+
+
+def test_an_error_prints_a_files_own_keys_escaped_and_short():
+    """Keys come from the user's file: an ESC in one reached the terminal, and a 900 kB
+    key came back whole in the error."""
+    text = json.dumps({"cam": {"\x1b[2Kbad": 1, "k" * 5000: 2}})
+    with pytest.raises(DesignError) as err:
+        design_from_json(text)
+    said = str(err.value)
+    assert "\x1b" not in said and "cam.\\u001b[2Kbad" in said
+    assert len(said) < 400 and "k" * 60 + "…" in said

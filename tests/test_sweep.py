@@ -1002,3 +1002,19 @@ def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
     )
     with pytest.raises(DesignError, match="absent.json"):
         sweep.load_spec(spec_path)
+    # only the spec's folder or below (a review: a shared spec read ~/secret.json and
+    # quoted its keys); a subfolder is fine
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "sub" / "spec.json").write_text("{}")
+    (tmp_path / "sub" / "deeper").mkdir()
+    (tmp_path / "sub" / "deeper" / "mine.json").write_text(design_to_json(d))
+    for name in ("../mine.json", str(tmp_path / "mine.json"), "deeper/../../mine.json"):
+        (tmp_path / "sub" / "spec.json").write_text(
+            json.dumps({"base": {"file": name}, "grid": grid})
+        )
+        with pytest.raises(DesignError, match="in the spec file's folder or below it"):
+            sweep.load_spec(tmp_path / "sub" / "spec.json")
+    (tmp_path / "sub" / "spec.json").write_text(
+        json.dumps({"base": {"file": "deeper/mine.json"}, "grid": grid})
+    )
+    assert sweep.load_spec(tmp_path / "sub" / "spec.json").size == 2
