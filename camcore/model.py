@@ -787,16 +787,17 @@ class Design(_Part):
     @field_validator("name")
     @classmethod
     def _printable_name(cls, v: str) -> str:
-        """A name prints in files, terminals and the app: no control or format
-        characters (a review: a pasted U+FEFF broke the PDF, and ESC sequences in a
-        name could rewrite a terminal's report, e.g. hide its violations)."""
-        for i, ch in enumerate(v):
-            if unicodedata.category(ch) in NAME_REFUSED and ch not in NAME_JOINERS:
-                raise ValueError(
-                    f"U+{ord(ch):04X} at character {i + 1} is a control or format character "
-                    "(invisible, or it moves a terminal's cursor): type the name without it"
-                )
-        return v
+        """A name prints in files, terminals and the app: its control and format
+        characters are dropped, a line break or tab made a space (a review: a pasted
+        U+FEFF broke the PDF, and ESC sequences in a name could rewrite a terminal's
+        report, e.g. hide its violations). Dropped, not refused: a design kept in a
+        browser or a file under such a name still opens (nothing a user made is lost)."""
+        return "".join(
+            (" " if ch.isspace() else "")
+            if unicodedata.category(ch) in NAME_REFUSED and ch not in NAME_JOINERS
+            else ch
+            for ch in v
+        )
 
     @model_validator(mode="after")
     def _equations_can_be_evaluated(self) -> Design:
@@ -1098,7 +1099,7 @@ def field_table() -> list[dict]:
         {
             "path": "name",
             "default": defaults.name,
-            "range": f"at most {NAME_MAX} characters, no control or format characters",
+            "range": f"at most {NAME_MAX} characters (control and format characters dropped)",
             "description": "the design's name (files, headers, the app's title)",
             "followers": None,
         }
