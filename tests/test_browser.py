@@ -349,6 +349,9 @@ def test_trust_in_the_browser(tmp_path):
             _field(page, "Cutter diameter").scroll_into_view_if_needed()
             page.wait_for_timeout(500)
             assert _field(page, "Lift h").bounding_box()["y"] < lift_y - 100  # it scrolled
+            # (a redraw replaces the status element: on a loaded machine the box was
+            # read in between once, and found none)
+            page.locator("#cam-status").wait_for(state="visible", timeout=T)
             box = page.locator("#cam-status").bounding_box()
             assert box is not None and top is not None and 0 <= box["y"] <= top["y"] + 5
             # a window 800 px high or less: the status scrolls past a fifth of it

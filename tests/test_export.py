@@ -52,8 +52,11 @@ def test_cut_only_dxf_and_what_the_files_say_they_are():
     STL header and a DATUM note say the program, the design and the tolerance; the
     design's name, user text, cannot break out of them."""
     data = _keyed().model_dump()
-    data["name"] = 'evil\n  0\nSECTION"(x)'
-    a = analyze(Design.model_validate(data), verify=False)
+    data["name"] = 'evil"(x)'
+    # a line break is a space already in the model (its name rule); the files' own
+    # sanitizing is tested past it, on a design made without validation
+    evil = Design.model_validate(data).model_copy(update={"name": 'evil\n  0\nSECTION"(x)'})
+    a = analyze(evil, verify=False)
     full = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
     cut = ezdxf.read(io.StringIO(export.EXPORTS["dxf_cut"].write(a).decode()))
     assert {e.dxf.layer for e in cut.modelspace()} == {"PROFILE", "BORE"}
