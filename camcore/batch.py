@@ -14,7 +14,8 @@ Out come fixed-size figures per design: the grid maxima and ranges of the report
 (the zoom search of camcore.extremes, batched), the shaft figures, and the verdict of
 the paper's limits (camcore.checks, the same rules in the same order). What needs the
 ragged profile is not built here: the profile's area, perimeter and vertices, its
-chord error and the export tolerance, the star-shape check, the hub wall, wear along
+chord error and the export tolerance, the star-shape check, the hub wall and the outer
+diameter (a design with a bore or a diameter limit is not batched), wear along
 the profile and the geometric check (``camcore.sweep`` runs those through the single analysis when
 asked). What depends on neither the geometry nor the grid (the elastic train, the
 program's continuity) is computed once per batch; the spring figures depend on the
@@ -22,8 +23,10 @@ grid (their search starts from its samples), so each design gets its own, in one
 batched search. The numbers are the single analysis' (tested to 1e-15 relative).
 
 Sliding faces with contact friction (mu_c > 0) are not batched: their force direction
-depends on the slip (camcore.analysis._contact_slide); ``batchable`` says so and the
-sweep falls back to the single analysis for them.
+depends on the slip (camcore.analysis._contact_slide). Nor are designs whose profile
+a limit judges (a bore: the hub wall; limits.max_outer_diameter_mm): their verdict
+needs the profile. ``batchable`` says so and the sweep falls back to the single
+analysis for them.
 """
 
 from __future__ import annotations
@@ -74,10 +77,16 @@ def group_key(design: Design) -> str:
 
 
 def batchable(design: Design) -> bool:
-    """False where the batched forces would differ from the single analysis: a sliding
-    face (concave, flat, knife edge) with contact friction."""
+    """False where the batch would not give the single analysis' verdict: a sliding face
+    (concave, flat, knife edge) with contact friction (its forces differ), and a design
+    with a limit on its profile, a bore (the hub wall) or a largest outer diameter (a
+    review: a --fast sweep's front offered cams past the user's own envelope as valid)."""
     kind = design.follower.kind
-    return design.dynamics.contact_friction == 0.0 or kind.is_roller
+    sliding = design.dynamics.contact_friction > 0.0 and not kind.is_roller
+    profile_limit = (
+        design.cam.bore_diameter_mm > 0.0 or design.limits.max_outer_diameter_mm is not None
+    )
+    return not (sliding or profile_limit)
 
 
 @dataclass(frozen=True)
@@ -111,7 +120,7 @@ def make_batch(designs: list[Design]) -> Batch:
     number of faces (ValueError otherwise)."""
     d0 = designs[0]
     if not all(batchable(d) for d in designs):
-        raise ValueError("a sliding face with contact friction is not batched")
+        raise ValueError("a sliding face with contact friction, a bore or a diameter limit")
     if len({group_key(d) for d in designs}) != 1:
         raise ValueError(f"a batch holds designs that differ only in {BATCHED_FIELDS}")
     segs = motion.segments(d0)

@@ -165,12 +165,17 @@ def test_fast_rows_equal_rows_and_fall_back_where_they_must():
                 or (isinstance(v, str) and json.loads(v) == pytest.approx(json.loads(w), rel=1e-15))
             ), k
     friction = dict(base, dynamics={**base["dynamics"], "contact_friction": 0.1})
-    (r,) = sweep.fast_rows(friction, [{"cam.base_radius_mm": 80.0}])
-    assert r["profile_checked"] is True and "profile.vertices" in r
-    assert r == {
-        **sweep.row(friction, {"cam.base_radius_mm": 80.0}, verify=False),
-        "profile_checked": True,
-    }
+    bored = dict(base, cam={**base["cam"], "bore_diameter_mm": 30.0})
+    envelope = dict(base, limits={**base["limits"], "max_outer_diameter_mm": 150.0})
+    for full_only in (friction, bored, envelope):  # (the profile's limits decide too)
+        (r,) = sweep.fast_rows(full_only, [{"cam.base_radius_mm": 80.0}])
+        assert r["profile_checked"] is True and "profile.vertices" in r
+        assert r == {
+            **sweep.row(full_only, {"cam.base_radius_mm": 80.0}, verify=False),
+            "profile_checked": True,
+        }
+    (r,) = sweep.fast_rows(envelope, [{"cam.base_radius_mm": 80.0}])
+    assert r["valid"] is False and "outer_diameter" in r["violations"]
 
 
 def test_batch_is_faster_than_one_analysis_each():
