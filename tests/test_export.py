@@ -348,26 +348,36 @@ def test_keyway_limits(change, message):
 
 
 def test_the_outer_diameter_is_the_exact_cams_and_a_limit_when_set():
-    """The cam's size (a maker's stock, a designer's envelope; no figure gave it): for
-    the paper's double concave faces the farthest points are on the high dwell arc of
-    radius R (Eq. 20), so the outer diameter is 2R, up to twice the chord error above
-    it (an upper bound: the stock); a single roller's cam, against its own farthest
-    vertex. limits.max_outer_diameter_mm, when set, is checked against it."""
+    """The cam's size (a maker's stock, a designer's envelope; no figure gave it),
+    against closed forms: the paper's double concave faces' farthest points are on the
+    high dwell arc of radius R (Eq. 20), 2R across; a radial single roller's cam is
+    2 (r_b + h) across, at any export tolerance (a review: the chord error added to it
+    had made 190.0013 mm, and 191.1 at a 1 mm tolerance). A cam whose farthest point is
+    on a rise (a program without a high dwell) is found between the samples: never
+    below the farthest vertex, and above it by less than the chord error.
+    limits.max_outer_diameter_mm, when set, is checked against it."""
     from camcore import checks
     from camcore.report import summary
 
-    def cam(limit=None, kind="double_concave"):
+    def cam(limit=None, kind="double_concave", **limits):
         data = load_preset("paper_example").with_kind(kind).model_dump()
-        data["limits"]["max_outer_diameter_mm"] = limit
+        data["limits"].update(max_outer_diameter_mm=limit, **limits)
         return analyze(Design.model_validate(data), verify=False)
 
     a = cam()
-    size, two_r = checks.outer_diameter_mm(a), 2e3 * a.geo.dwell_radius
-    assert two_r <= size <= two_r + 2e3 * a.chord_error + 1e-9
+    size = checks.outer_diameter_mm(a)
+    assert size == pytest.approx(2e3 * a.geo.dwell_radius, abs=1e-9)
     assert summary(a)["profile"]["outer_diameter_mm"] == size
-    roller = cam(kind="single_roller")
-    far = 2e3 * np.hypot(*roller.profile.points.T).max()
-    assert far <= checks.outer_diameter_mm(roller) <= far + 2e3 * roller.chord_error + 1e-9
+    for tol in (0.001, 1.0):
+        roller = cam(kind="single_roller", export_tolerance_mm=tol)
+        assert checks.outer_diameter_mm(roller) == pytest.approx(2 * (80.0 + 15.0), abs=1e-9)
+    assert "outer_diameter" not in {v.code for v in cam(190.0, "single_roller").violations}
+    peaked = Design.model_validate(
+        {"motion": {"lift_mm": 20, "rise_deg": 180, "high_dwell_deg": 0, "fall_deg": 180}}
+    )
+    p = analyze(peaked.with_kind("single_roller"), verify=False)
+    far = 2e3 * np.hypot(*p.profile.points.T).max()
+    assert far <= checks.outer_diameter_mm(p) <= far + 2e3 * p.chord_error
     assert "outer_diameter" not in {v.code for v in cam(190.0).violations}
     (v,) = [v for v in cam(189.0).violations if v.code == "outer_diameter"]
     assert v.amount == pytest.approx(size - 189.0) and f"{size:.4f} mm across" in v.message
