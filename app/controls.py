@@ -342,8 +342,8 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "Min jump-speed ratio",
                 "number",
                 step=0.1,
-                hint="the follower must keep contact up to this many times the cam speed "
-                "(e.g. 1.2); 0 = only at the speed itself",
+                hint="the rigid follower must keep contact up to this many times the cam "
+                "speed (e.g. 1.2; the spring proposed meets it); 0 = only at the speed itself",
                 zero_is_none=True,
             ),
             Spec("limits.resolution_deg", "Resolution [°]", "number", step=0.05),

@@ -375,6 +375,8 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
     d0 = bt.designs[0]
     B, N = bt.theta.shape
     needs = [machine._rate_need(d0), machine._preload_need(d0), machine._jump_need(d0)]
+    margin = machine.margin_rate_need(d0)  # (limits.min_jump_speed_ratio: the group's)
+    needs += [margin] if margin is not None else []
     grid = np.stack([fn(prog) for fn in needs]).reshape(len(needs) * B, N)
     with np.errstate(all="ignore"):
         row, k = extremes.top_peaks(grid, np.isfinite(grid) & np.tile(bt.real, (len(needs), 1)))
@@ -395,7 +397,10 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
     sup = np.where(unbounded.any(axis=2).ravel(), np.inf, np.maximum(sup, 0.0))
     if machine.velocity_drop(bt.segs) is not None:  # machine._sups: A = -inf there
         sup[:] = np.inf
-    k_min, s_min, inv_w2 = sup.reshape(len(needs), B)
+    k_min, s_min, inv_w2 = sup.reshape(len(needs), B)[:3]
+    k_margin: list[float | None] = (
+        [float(x) for x in sup.reshape(len(needs), B)[3]] if margin is not None else [None] * B
+    )
     n = d0.dynamics.spring_safety_factor
     return [
         {
@@ -403,7 +408,7 @@ def _springs(bt: Batch, prog: motion.Program) -> list[dict]:
             "preload_min_mm": _finite(s_min[b], 1e3),
             "spring_proposal": {
                 "safety_factor": n,
-                "spring_rate_N_per_m": _finite(machine.proposed_rate(n, float(k_min[b]))),
+                "spring_rate_N_per_m": _finite(machine.proposal(n, float(k_min[b]), k_margin[b])),
                 "preload_mm": d0.dynamics.preload_mm,
             },
             "jump_speed_rpm": _finite(machine._rpm(float(inv_w2[b]))),

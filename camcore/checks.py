@@ -554,10 +554,12 @@ def _train(a) -> list[Violation]:
 
 
 def _jump_speed(a) -> list[Violation]:
-    """The jump speed (camcore.machine, from Eq. 29: F_N has the sign of F_t in every
-    guide mode that does not lock) against limits.min_jump_speed_ratio times the cam
-    speed; unchecked without that limit (the ``jump`` rule holds at the speed itself)."""
-    from .machine import spring
+    """The rigid follower's jump speed (camcore.machine, from Eq. 29: F_N has the sign
+    of F_t in every guide mode that does not lock) against limits.min_jump_speed_ratio
+    times the cam speed; unchecked without that limit (the ``jump`` rule holds at the
+    speed itself; the elastic train's jump, ``dynamic_jump``, at the speed itself)."""
+    from .machine import spring, velocity_drop
+    from .motion import segments
 
     lim = a.design.limits.min_jump_speed_ratio
     if lim is None:
@@ -566,36 +568,41 @@ def _jump_speed(a) -> list[Violation]:
     ratio = sp.jump_speed_rpm / speed
     if ratio >= lim:  # (never jumps: inf)
         return []
-    at = to_deg(sp.jump_at) % 360.0
-    where = f"at theta = {at:.1f} deg" if ratio > 0 else "at any speed"
-    return [
-        Violation(
-            "jump_speed",
-            "Eq. 29 (jump speed)",
-            f"the follower leaves the cam {where} from {sp.jump_speed_rpm:.4g} rpm, "
-            f"{ratio:.3g} x the cam speed {speed:g} rpm, below the margin {lim:g} x "
-            f"(limits.min_jump_speed_ratio): {_spring_for(a, lim * speed)}",
-            ((at, at),) if ratio > 0 else (),
-            lim - ratio,
+    drop = velocity_drop(segments(a.design))
+    at = to_deg(sp.jump_at if drop is None else drop) % 360.0
+    head = f"below the margin {lim:g} x the cam speed {speed:g} rpm (limits.min_jump_speed_ratio)"
+    if drop is not None:  # no spring, no preload, no speed helps there (a review)
+        said = (
+            f"the velocity drops instantly at theta = {at:.1f} deg (an infinite "
+            f"deceleration): the follower leaves the cam there at any speed, {head}; no "
+            "spring holds it: a law without the drop (e.g. cycloidal) does"
         )
-    ]
+    elif ratio == 0.0:
+        said = f"nothing holds the follower on the cam: it leaves it at any speed, {head}"
+        said += f"; {_spring_for(a, sp.margin_rate)}"
+    else:  # the ratio rounded down, as the report's margin is (1.5999 is not "1.6")
+        shown = math.floor(ratio * 100 * (1 + 1e-9)) / 100
+        said = (
+            f"the follower leaves the cam at theta = {at:.1f} deg from "
+            f"{sp.jump_speed_rpm:.0f} rpm, {shown:.2f} x the cam speed, {head}: "
+            f"{_spring_for(a, sp.margin_rate)}"
+        )
+    ranges = ((at, at),) if ratio > 0 or drop is not None else ()
+    return [Violation("jump_speed", "Eq. 29 (jump speed)", said, ranges, lim - ratio)]
 
 
-def _spring_for(a, rpm: float) -> str:
-    """What keeps the follower on the cam up to ``rpm``: the spring rate that does at
-    the design's preload (machine.spring_rate_min of the design run at rpm, rounded
-    up as machine.proposed_rate: the figure a user types in meets it), if any."""
-    from .machine import proposed_rate, spring_rate_min
+def _spring_for(a, margin_rate: float | None) -> str:
+    """What keeps the follower on the cam up to the margin's speed: the spring rate
+    that does at the design's preload (machine.Spring.margin_rate, rounded up as
+    machine.proposed_rate: the figure a user types in meets it), if any."""
+    from .machine import proposed_rate
 
-    cam = a.design.cam.model_copy(update={"speed_rpm": rpm})
-    k_min, _ = spring_rate_min(a.design.model_copy(update={"cam": cam}), a.theta, a.prog)
     k = a.design.dynamics.spring_rate_N_per_m
-    if not math.isfinite(k_min):
+    if margin_rate is None or not math.isfinite(margin_rate):
         return "no spring rate does at this preload: more preload, or a lower speed"
     return (
-        f"a spring rate of {proposed_rate(1.0, k_min):g} N/m or more does at this preload "
-        f"(it is {k:g} "
-        "N/m), or more preload, or a lower speed"
+        f"a spring rate of {proposed_rate(1.0, margin_rate):g} N/m or more does at this "
+        f"preload (it is {k:g} N/m), or more preload, or a lower speed"
     )
 
 

@@ -6,7 +6,9 @@ Exit status (the same for every command, so scripts can rely on it):
 - 1: the design was analysed and breaks a limit: the report (text or JSON) is
   still printed, exports are still written, and the limits are listed;
 - 2: bad input (unreadable or invalid design file, bad value, impossible export):
-  one line starting with ``camcore: error:`` on stderr, never a traceback.
+  one line starting with ``camcore: error:`` on stderr, never a traceback;
+- 3: an internal error, a defect of ours: the traceback, then ``camcore: internal
+  error``.
 
 ``sweep`` exits 0 when its table is written (each row has its own verdict), 130
 when interrupted (the same command resumes) and 2 on bad input. ``pareto`` exits 0
@@ -336,7 +338,11 @@ def _pareto(args) -> int:
             + (f" and {more} more" if more else "")
         )
     if f.lacking:
-        why = " (rows of the batched core have no wear)" if "wear" in names else ""
+        from .explore import PROFILE_FIGURES
+
+        reasons = [f"rows of the batched core have no {n}" for n in names if n in PROFILE_FIGURES]
+        reasons += ["a knife edge has no contact stress"] if "stress" in names else []
+        why = f" ({'; '.join(reasons)})" if reasons else ""
         print(
             f"{_count(f.lacking, 'valid row')} without a value for {', '.join(names)} left out{why}"
         )
@@ -401,7 +407,8 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="camcore",
         description="Disk cam design after Chuang, Hsu & Chang (translating followers).",
-        epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input "
+        epilog="Exit status: 0 valid, 1 analysed but breaks a limit, 2 bad input, 3 a defect "
+        "of ours (please report it) "
         "(sweep: 0 table written, 130 interrupted, 2 bad input; pareto: 0 a front found, "
         "1 no valid design with the figures, 2 bad input).",
     )

@@ -23,6 +23,13 @@ class FileError(ValueError):
     """A file that cannot be read or written; the message says which and why."""
 
 
+def shown_path(path: str | Path, limit: int = 300) -> str:
+    """A path as a message prints it: non-printable characters as \\uXXXX, at most
+    ``limit`` characters (a spec's base file name had put an ESC on the terminal)."""
+    text = "".join(ch if ch.isprintable() else f"\\u{ord(ch):04x}" for ch in str(path))
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
 def read_capped(path: str | Path, max_bytes: int) -> bytes:
     """The bytes of the regular file *path*, refusing anything else or anything larger.
 
@@ -39,28 +46,31 @@ def read_capped(path: str | Path, max_bytes: int) -> bytes:
         declares and again on the bytes actually read, for files that grow).
     """
     path = Path(path)
+    shown = shown_path(path)
     try:
         # O_NONBLOCK: opening a FIFO with no writer returns at once instead of waiting.
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
     except OSError as exc:
-        raise FileError(f"cannot read {path}: {exc.strerror}") from None
+        raise FileError(f"cannot read {shown}: {exc.strerror}") from None
+    except ValueError:  # an embedded NUL: no file has such a name
+        raise FileError(f"cannot read {shown}: a file name holds no NUL character") from None
     try:
         info = os.fstat(fd)
         if not stat.S_ISREG(info.st_mode):
-            raise FileError(f"{path}: not a regular file")
+            raise FileError(f"{shown}: not a regular file")
         if info.st_size > max_bytes:
-            raise FileError(f"{path}: {info.st_size} bytes; the limit is {max_bytes}")
+            raise FileError(f"{shown}: {info.st_size} bytes; the limit is {max_bytes}")
         chunks, size = [], 0
         while size <= max_bytes and (chunk := os.read(fd, max_bytes + 1 - size)):
             chunks.append(chunk)
             size += len(chunk)
         data = b"".join(chunks)
     except OSError as exc:
-        raise FileError(f"cannot read {path}: {exc.strerror}") from None
+        raise FileError(f"cannot read {shown}: {exc.strerror}") from None
     finally:
         os.close(fd)
     if len(data) > max_bytes:
-        raise FileError(f"{path}: more than {max_bytes} bytes; the limit is {max_bytes}")
+        raise FileError(f"{shown}: more than {max_bytes} bytes; the limit is {max_bytes}")
     return data
 
 

@@ -13,7 +13,7 @@ extremes found between the grid samples, camcore.extremes.refine_maxes):
 * the smallest spring rate for the design's preload, and the smallest preload for its
   rate;
 * the jump speed: w^2 <= (M g + k (S + s_p)) / (-M A) wherever A < 0;
-* a proposed spring (rule below).
+* a proposed spring (rule below), which meets limits.min_jump_speed_ratio too when set.
 
 The shaft torque comes from the contact forces (forces.cam_torque); its peaks, the
 power, and the energy a flywheel must buffer follow from it.
@@ -197,15 +197,37 @@ class Spring:
     jump_speed_rpm: float  # inf: never jumps
     jump_at: float  # [rad]
     safety_factor: float
-    proposed_rate: float  # [N/m], n k_min at the design's preload, rounded up (proposed_rate)
+    proposed_rate: float  # [N/m] at the design's preload, rounded up (proposal)
+    margin_rate: float | None  # [N/m] k_min at limits.min_jump_speed_ratio x the speed
+    # (the design's preload; None without that limit)
+
+
+def margin_rate_need(design: Design):
+    """The rate need (spring_rate_min's) of ``design`` run at limits.min_jump_speed_ratio
+    times its speed, None without that limit: the spring that keeps contact up to the
+    margin (checks' jump_speed)."""
+    m = design.limits.min_jump_speed_ratio
+    if m is None:
+        return None
+    cam = design.cam.model_copy(update={"speed_rpm": m * design.cam.speed_rpm})
+    return _rate_need(design.model_copy(update={"cam": cam}))
+
+
+def proposal(n: float, k_min: float, margin_rate: float | None) -> float:
+    """The spring rate to propose [N/m]: n k_min (the spring rule), and at least the rate
+    the jump-speed margin asks, each rounded up (proposed_rate; a review: the proposal
+    had broken the user's own margin)."""
+    rate = proposed_rate(n, k_min)
+    return rate if margin_rate is None else max(rate, proposed_rate(1.0, margin_rate))
 
 
 def margins(design: Design, rate_min: float, jump_rpm: float) -> dict[str, float | None]:
     """How far the design is from jump, as ratios a designer compares with the
     spring's safety factor n: ``spring_rate`` = k / k_min and ``jump_speed`` = the jump
     speed / the running speed (both > 1 keeps contact; None where unbounded: no spring
-    suffices, nothing pulls the follower off, or k_min = 0). Not a limit: a design at
-    1.03 meets every limit, only closer to jump than n asks."""
+    suffices, nothing pulls the follower off, or k_min = 0). Not a limit in itself (a
+    design at 1.03 meets the spring rule's limits, only closer to jump than n asks);
+    limits.min_jump_speed_ratio makes the second one (checks' jump_speed)."""
     k = design.dynamics.spring_rate_N_per_m
     rate = k / rate_min if 0.0 < rate_min < math.inf else math.inf
     speed = jump_rpm / design.cam.speed_rpm  # (a crawling cam's can overflow)
@@ -219,9 +241,13 @@ def spring(design: Design, theta: np.ndarray, prog: motion.Program | None = None
     """Spring sizing and jump speed of ``design`` over the grid ``theta`` [rad] (``prog``:
     its program there, if at hand, e.g. an Analysis's)."""
     needs = [_rate_need(design), _preload_need(design), _jump_need(design)]
-    (k_min, k_at), (s_min, _), (inv_w2, at) = _sups(design, theta, needs, prog)
+    margin = margin_rate_need(design)
+    found = _sups(design, theta, needs + ([margin] if margin is not None else []), prog)
+    (k_min, k_at), (s_min, _), (inv_w2, at) = found[:3]
+    k_margin = found[3][0] if margin is not None else None
     n = design.dynamics.spring_safety_factor
-    return Spring(k_min, k_at, s_min, _rpm(inv_w2), at, n, proposed_rate(n, k_min))
+    rate = proposal(n, k_min, k_margin)
+    return Spring(k_min, k_at, s_min, _rpm(inv_w2), at, n, rate, k_margin)
 
 
 PROPOSAL_DIGITS = 4

@@ -752,8 +752,9 @@ class Limits(_Part):
         None,
         ge=1.0,
         le=100.0,
-        description="the follower must keep contact up to this many times the cam "
-        "speed (its jump speed / the speed); empty = only at the speed itself",
+        description="the rigid follower must keep contact up to this many times the "
+        "cam speed (its jump speed, Eq. 29, / the speed; the elastic train is checked at "
+        "the speed itself); empty = only at the speed itself",
     )
     max_outer_diameter_mm: float | None = Field(
         None,
@@ -1246,15 +1247,18 @@ def omega_rad_s(design: Design) -> float:
 def set_field(data: dict, path: str, value, what: str = "") -> None:
     """Write ``value`` at the dotted ``path`` of a design dict (``motion.segments.0.lift_mm``
     reaches into lists), refusing a path the design has no field at. ``what`` prefixes
-    the messages (e.g. "--set ")."""
+    the messages (e.g. "--set "); the path is the user's (a spec's key), shown escaped
+    and short."""
     keys = path.split(".")
+    path = _printable(path, 120)  # (for the messages only)
     if not all(keys):
         raise DesignError(f"{what}{path!r}: expected FIELD.PATH, e.g. cam.base_radius_mm")
     node = data
     for i, key in enumerate(keys[:-1]):
         node = _child(node, key, what)
         if not isinstance(node, dict | list):
-            raise DesignError(f"{what}{path}: {'.'.join(keys[: i + 1])} is not a group of fields")
+            head = _printable(".".join(keys[: i + 1]), 120)
+            raise DesignError(f"{what}{path}: {head} is not a group of fields")
     last = keys[-1]
     if isinstance(node, list):
         _child(node, last, what)  # the index must exist

@@ -291,7 +291,10 @@ def _beside(folder: Path, name: str) -> Path:
     (a review: "/home/me/secret.json" or "../x" was read, and its keys quoted in the
     error: a spec handed round must not read the user's other files)."""
     root = folder.resolve()
-    path = (root / name).resolve()
+    try:
+        path = (root / name).resolve()
+    except (ValueError, OSError):  # an embedded NUL, a loop of links: no file to read
+        path = root
     if root not in path.parents:
         raise DesignError(
             f'base: {{"file": ...}} names a design file in the spec file\'s folder or '

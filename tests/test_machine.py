@@ -450,15 +450,41 @@ def test_a_jump_speed_margin_is_a_limit_when_set():
     (v,) = margin(1.6)
     assert v.amount == pytest.approx(1.6 - ratio, rel=1e-12)
     assert v.ranges_deg == ((pytest.approx(math.degrees(at)),) * 2,)
-    assert f"from {rpm:.4g} rpm" in v.message and "limits.min_jump_speed_ratio" in v.message
+    assert f"from {rpm:.0f} rpm, 1.54 x the cam speed" in v.message  # (rounded down)
+    assert "limits.min_jump_speed_ratio" in v.message
     assert v.equation == "Eq. 29 (jump speed)"
     assert jumps(tweak(PAPER, cam__speed_rpm=rpm * 1.005))  # the named speed is jump's
     # the spring it proposes meets the margin as typed in; 1 % less does not
     k = float(re.search(r"a spring rate of (\S+) N/m or more", v.message).group(1))
     stiff = tweak(PAPER, limits__min_jump_speed_ratio=1.6, dynamics__spring_rate_N_per_m=k)
     assert "jump_speed" not in {v.code for v in analyze(stiff, verify=False).violations}
-    soft = tweak(stiff, dynamics__spring_rate_N_per_m=0.99 * k)
-    assert "jump_speed" in {v.code for v in analyze(soft, verify=False).violations}
+    soft = tweak(stiff, dynamics__spring_rate_N_per_m=0.999 * k)
+    (v,) = [v for v in analyze(soft, verify=False).violations if v.code == "jump_speed"]
+    assert "1.59 x the cam speed" in v.message  # not "1.6 x ..., below the margin 1.6 x"
+    # an instant drop in velocity: no spring helps, the law must change (a review)
+    drop = tweak(PAPER, limits__min_jump_speed_ratio=1.3)
+    data = drop.model_dump()
+    data["motion"]["segments"][0]["law"] = "constant_velocity"
+    (v,) = [
+        v
+        for v in analyze(Design.model_validate(data), verify=False).violations
+        if v.code == "jump_speed"
+    ]
+    assert "the velocity drops instantly at theta = 100.0 deg" in v.message
+    assert "a law without the drop" in v.message and "preload" not in v.message
+    assert v.ranges_deg == ((100.0, 100.0),)
+    # and the report's proposed spring meets the margin too (a review: the proposal,
+    # n k_min, had broken it), not less than the spring rule's n k_min
+    sp = report.summary(analyze(tweak(PAPER, limits__min_jump_speed_ratio=1.6), verify=False))
+    proposed = sp["spring_proposal"]["spring_rate_N_per_m"]
+    assert proposed == max(k, machine.proposed_rate(1.5, sp["spring_rate_min_N_per_m"]))
+    typed = tweak(stiff, dynamics__spring_rate_N_per_m=proposed)
+    assert "jump_speed" not in {v.code for v in analyze(typed, verify=False).violations}
+    low = tweak(PAPER, limits__min_jump_speed_ratio=1.1)  # the rule's n k_min is more
+    sp = report.summary(analyze(low, verify=False))
+    assert sp["spring_proposal"]["spring_rate_N_per_m"] == machine.proposed_rate(
+        1.5, sp["spring_rate_min_N_per_m"]
+    )
     # nothing holds the follower: it leaves at any speed, whatever the margin asks
     loose = tweak(PAPER, limits__min_jump_speed_ratio=1.0, dynamics__spring_rate_N_per_m=0.0)
     loose = tweak(loose, dynamics__gravity_m_s2=0.0, dynamics__preload_mm=0.0)
