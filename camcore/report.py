@@ -528,11 +528,13 @@ def _limits_text(design) -> str:
     acc = "continuous" if lim.require_continuous_acceleration else "jumps accepted"
     d_max = lim.max_outer_diameter_mm
     size = "" if d_max is None else f"outer diameter <= {d_max:g} mm, "
+    # (a knife edge has no Hertz stress to judge: Eq. 42 needs a radius)
+    knife = design.follower.kind is FollowerKind.knife_edge
+    sigma = "" if knife else f"sigma_H <= {contact_stress_limit_MPa(design):g} MPa, "
     return (
-        f"|phi| <= {lim.max_pressure_angle_deg:g} deg, sigma_H <= "
-        f"{contact_stress_limit_MPa(design):g} MPa, hub wall >= {lim.min_hub_wall_mm:g} mm "
-        f"(with a bore), {size}profile within {lim.export_tolerance_mm:g} mm, acceleration "
-        f"{acc}; {_no_jump_text(design)}"
+        f"|phi| <= {lim.max_pressure_angle_deg:g} deg, {sigma}hub wall >= "
+        f"{lim.min_hub_wall_mm:g} mm (with a bore), {size}profile within "
+        f"{lim.export_tolerance_mm:g} mm, acceleration {acc}; {_no_jump_text(design)}"
     )
 
 
@@ -541,7 +543,7 @@ def _no_jump_text(design) -> str:
     speed, m = design.cam.speed_rpm, design.limits.min_jump_speed_ratio
     if m is None:
         return f"no jump at {speed:g} rpm"
-    return f"no jump up to {m:g} x {speed:g} = {m * speed:.4g} rpm"
+    return f"no jump up to {m:g} x {speed:g} = {m * speed:.6g} rpm"
 
 
 def _making_text(c) -> str:
