@@ -29,9 +29,9 @@ verdict holds for the real cam, not only at the analysed angles:
 * ``jump``              Eqs. 29-41: contact force F_N <= 0 means the spring cannot
   keep the follower on the cam.
 * ``jump_speed``        Eq. 29 (camcore.machine): with limits.min_jump_speed_ratio
-  set, the speed at which the follower would leave the cam must be at least that many
-  times the cam speed (a designer's margin for a machine that runs faster or
-  overshoots; not in the paper).
+  set, the speed at which the rigid follower would leave the cam must be at least that
+  many times the cam speed (a designer's margin for a machine that runs faster or
+  overshoots; not in the paper; the elastic train is judged at the speed itself).
 * ``guide_jam``         Eqs. 33-41: no guide-contact mode of Fig. 6 balances the
   follower with friction (self-locking).
 * ``profile_crossing``  the finished profile is not star-shaped about the axis (it
