@@ -676,8 +676,8 @@ def _outer_diameter(a) -> list[Violation]:
             "outer_diameter",
             "cam size",
             f"the cam is {size:.4f} mm across, above the limit {lim:g} mm "
-            "(limits.max_outer_diameter_mm): a smaller base radius or lift, or a follower "
-            "that needs less room (its dwell radius, Eq. 20)",
+            f"(limits.max_outer_diameter_mm): about {(size - lim) / 2:.4g} mm less base "
+            "radius (the outer radius follows r_b about one for one), or less lift",
             (),
             size - lim,
         )

@@ -382,6 +382,14 @@ def test_the_outer_diameter_is_the_exact_cams_and_a_limit_when_set():
     (v,) = [v for v in cam(189.0).violations if v.code == "outer_diameter"]
     assert v.amount == pytest.approx(size - 189.0) and f"{size:.4f} mm across" in v.message
     assert "limits.max_outer_diameter_mm" in v.message
+    # what it proposes does it: the base radius less the half excess (and 1 % more)
+    cut = f"about {(size - 189.0) / 2:.4g} mm less base radius"
+    assert cut in v.message
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] -= 1.01 * (size - 189.0) / 2
+    data["limits"]["max_outer_diameter_mm"] = 189.0
+    smaller = analyze(Design.model_validate(data), verify=False)
+    assert "outer_diameter" not in {v.code for v in smaller.violations}
     with pytest.raises(ValidationError, match="max_outer_diameter_mm"):
         Design.model_validate({"limits": {"max_outer_diameter_mm": -1.0}})
 
