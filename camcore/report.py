@@ -795,6 +795,7 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
                 "pressure_angle_fall_deg": s["pressure_angle_max_deg"]["fall"],
                 "rho_convex_min_mm": s["radius_of_curvature_mm"]["convex_min"],
                 "rho_concave_min_mm": s["radius_of_curvature_mm"]["concave_min"],
+                "outer_diameter_mm": s["profile"]["outer_diameter_mm"],
                 "F1_max_N": s["guide_force_max_N"]["F1"],
                 "F2_max_N": s["guide_force_max_N"]["F2"],
                 "stress_max_MPa": s["contact_stress_max_MPa"]["cycle"],
@@ -850,17 +851,25 @@ def compare_text(rows: list[dict]) -> str:
             "design only: this one differs from it)"
         )
     # the geometry, where the followers differ most (a designer's review: not shown)
-    head3 = ("follower", "phi max rise", "phi max fall", "rho convex min", "rho concave min")
+    head3 = (
+        "follower",
+        "phi max rise",
+        "phi max fall",
+        "rho convex min",
+        "rho concave min",
+        "outer diameter",
+    )
     keys3 = (
         "pressure_angle_rise_deg",
         "pressure_angle_fall_deg",
         "rho_convex_min_mm",
         "rho_concave_min_mm",
+        "outer_diameter_mm",
     )
     lines += [
         "",
         "  ".join(f"{h:>14}" for h in head3),
-        "  ".join(f"{u:>14}" for u in ("", "deg", "deg", "mm", "mm")),
+        "  ".join(f"{u:>14}" for u in ("", "deg", "deg", "mm", "mm", "mm")),
     ]
     for r in rows:
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 2):>14}" for k in keys3))

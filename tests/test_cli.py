@@ -160,6 +160,9 @@ def test_compare_table(capsys):
     ]
     assert dc["pressure_angle_rise_deg"] == one["pressure_angle_max_deg"]["rise"]
     assert dc["rho_convex_min_mm"] == one["radius_of_curvature_mm"]["convex_min"]
+    assert dc["outer_diameter_mm"] == one["profile"]["outer_diameter_mm"]  # (the size too)
+    main(["compare", "--preset", "paper_example"])
+    assert "outer diameter" in capsys.readouterr().out
     kept = run_json(capsys, "compare", "--preset", "paper_example", "--set", same, "--json")
     assert [r["paper_table1_N"] for r in kept] == [133.496, 67.297, 129.161, 67.297]
     assert rows[2]["stress_max_MPa"] is None  # a knife edge has no Hertz stress
