@@ -459,6 +459,9 @@ def test_compare_tab(tab):
     # (Eq. 42 by hand: 212.15, 150.4 and 32.96 MPa for the rollers and the shared pair,
     # tests/test_followers.py; the single face's 46.6 is 32.96 at twice the force)
     assert "| σ_H high dwell [MPa]¹ | 212.2 | 150.4 | 46.6 | 33.0 |" in md
+    # each cam's size: 2 (r_b + h) = 190 mm where the follower's dwell contact sits at
+    # r_b + h, 2R (Eq. 20) for the double followers' shared dwell
+    assert "| outer Ø [mm] | 190.00 | 189.83 | 190.00 | 189.94 |" in md
     view = s.ui.compare_view
     # the paper's column speaks of its own example only (a review saw it beside any cam)
     s.ui.controls["cam.base_radius_mm"].value = 90.0
