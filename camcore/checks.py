@@ -579,30 +579,36 @@ def _jump_speed(a) -> list[Violation]:
         )
     elif ratio == 0.0:
         said = f"nothing holds the follower on the cam: it leaves it at any speed, {head}"
-        said += f"; {_spring_for(a, sp.margin_rate)}"
+        said += f"; {_spring_for(a, sp.margin_rate, slower=False)}"
     else:  # the ratio rounded down, as the report's margin is (1.5999 is not "1.6")
         shown = math.floor(ratio * 100 * (1 + 1e-9)) / 100
+        rpm = sp.jump_speed_rpm  # (in figures a crawling cam's 0.54 rpm keeps)
+        rpm_text = f"{rpm:.0f}" if rpm >= 100 else f"{rpm:.3g}"
         said = (
-            f"the follower leaves the cam at theta = {at:.1f} deg from "
-            f"{sp.jump_speed_rpm:.0f} rpm, {shown:.2f} x the cam speed, {head}: "
-            f"{_spring_for(a, sp.margin_rate)}"
+            f"the follower leaves the cam at theta = {at:.1f} deg from {rpm_text} rpm, "
+            f"{shown:.2f} x the cam speed, {head}: {_spring_for(a, sp.margin_rate)}"
         )
     ranges = ((at, at),) if ratio > 0 or drop is not None else ()
     return [Violation("jump_speed", "Eq. 29 (jump speed)", said, ranges, lim - ratio)]
 
 
-def _spring_for(a, margin_rate: float | None) -> str:
+def _spring_for(a, margin_rate: float | None, slower: bool = True) -> str:
     """What keeps the follower on the cam up to the margin's speed: the spring rate
     that does at the design's preload (machine.Spring.margin_rate, rounded up as
-    machine.proposed_rate: the figure a user types in meets it), if any."""
+    machine.proposed_rate: the figure a user types in meets it), if any; more preload
+    where there is a spring to load, a lower speed where some speed would do
+    (``slower``; a review read both offered for a follower nothing held)."""
     from .machine import proposed_rate
 
     k = a.design.dynamics.spring_rate_N_per_m
+    others = (["more preload"] if k > 0 else []) + (["a lower speed"] if slower else [])
     if margin_rate is None or not math.isfinite(margin_rate):
-        return "no spring rate does at this preload: more preload, or a lower speed"
+        return "no spring rate does at this preload: " + (
+            " or ".join(others) if others else "a preload"
+        )
     return (
         f"a spring rate of {proposed_rate(1.0, margin_rate):g} N/m or more does at this "
-        f"preload (it is {k:g} N/m), or more preload, or a lower speed"
+        f"preload (it is {k:g} N/m)" + "".join(f", or {o}" for o in others)
     )
 
 
@@ -652,16 +658,17 @@ def hub_wall_mm(a) -> float | None:
 
 
 def outer_diameter_mm(a) -> float:
-    """The cam's outer diameter [mm], the stock it is cut from: twice the exact cam's
-    farthest point from the axis. The profile's vertices lie on the exact cam, its
-    dwells are arcs about the axis, and between the samples of a rise or fall the
-    farthest contact point is found as every worst value is (camcore.extremes,
-    ``radius_max``). (Adding the chord error to the farthest vertex had overstated a
-    roller cam's 190 mm as 190.0013, past a 190 mm limit; 1.1 mm at a 1 mm tolerance.)"""
+    """The cam's outer diameter [mm], the stock it is cut from: twice its farthest
+    vertex from the axis. That is the exact cam's farthest point: there the profile's
+    normal passes through the axis, and the common normal passes through the instant
+    centre I23 at q = V(theta) from it (Eq. 4), so only where V = 0: on a dwell (an arc
+    about the axis) or at a rise's or fall's end, a station, where the grid and so the
+    profile has a vertex. (Adding the chord error to the farthest vertex had overstated
+    a roller cam's 190 mm as 190.0013, past a 190 mm limit; 1.1 mm at a 1 mm
+    tolerance. A law whose V passes through 0 inside a segment is within the chord
+    error of it.)"""
     p = a.profile.points
-    far = float(np.hypot(p[:, 0], p[:, 1]).max())
-    w = a.worst.get("radius_max")
-    return 2.0 * to_mm(max(far, w.value) if w is not None else far)
+    return 2.0 * to_mm(float(np.hypot(p[:, 0], p[:, 1]).max()))
 
 
 def _outer_diameter(a) -> list[Violation]:
@@ -676,12 +683,24 @@ def _outer_diameter(a) -> list[Violation]:
             "outer_diameter",
             "cam size",
             f"the cam is {size:.4f} mm across, above the limit {lim:g} mm "
-            f"(limits.max_outer_diameter_mm): about {(size - lim) / 2:.4g} mm less base "
-            "radius (the outer radius follows r_b about one for one), or less lift",
+            f"(limits.max_outer_diameter_mm): {_smaller(a, (size - lim) / 2)}",
             (),
             size - lim,
         )
     ]
+
+
+def _smaller(a, cut_mm: float) -> str:
+    """How to make the cam ``cut_mm`` smaller in radius: the outer radius follows the
+    base radius about one for one (0.9996-1.005 over the presets and followers), while
+    there is that much base radius to take."""
+    r_b = a.design.cam.base_radius_mm
+    if cut_mm < r_b:
+        return (
+            f"about {cut_mm:.4g} mm less base radius (the outer radius follows r_b about "
+            "one for one), or less lift"
+        )
+    return f"less base radius alone cannot (r_b is {r_b:g} mm): less lift, or a larger envelope"
 
 
 def _hub_wall(a) -> list[Violation]:

@@ -508,7 +508,9 @@ def _parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the batched core: designs that differ only in their geometry are analysed "
         "together (many times faster); the report's fixed-size figures and the paper's "
-        "limits, no profile figures, wear or geometric check (column profile_checked)",
+        "limits, no profile figures, wear or geometric check (column profile_checked); "
+        "a design with a bore, a diameter limit or contact friction on a sliding face "
+        "gets the full analysis",
     )
     w.set_defaults(run=_sweep)
 
@@ -549,10 +551,10 @@ def main(argv: list[str] | None = None) -> int:
         with np.errstate(all="ignore"):
             return args.run(args)
     except (DesignError, ExportError, FileError) as exc:
-        print(f"camcore: error: {exc}", file=sys.stderr)
+        print(f"camcore: error: {_shown(str(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except ValidationError as exc:
-        print(f"camcore: error: {format_validation_error(exc)}", file=sys.stderr)
+        print(f"camcore: error: {_shown(format_validation_error(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         return 130
@@ -568,6 +570,18 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_INTERNAL
+
+
+def _shown(message: str) -> str:
+    """An error as the terminal gets it: one line, its non-printable characters as
+    \\uXXXX, at most MESSAGE_CHARS (messages quote a file's or a spec's keys and values,
+    and an ESC in one had reached the terminal: a review)."""
+    from .model import _printable
+
+    return _printable(message, MESSAGE_CHARS)
+
+
+MESSAGE_CHARS = 2000
 
 
 if __name__ == "__main__":

@@ -38,9 +38,6 @@ QUANTITIES = {
     "stress_max": (lambda loc: loc.stress, 1.0),  # [Pa]
     "torque_max": (lambda loc: loc.torque, 1.0),  # [N m], driving
     "torque_min": (lambda loc: loc.torque, -1.0),  # braking
-    # the contact point's distance from the cam's axis [m]: the cam's outer radius
-    # (checks.outer_diameter_mm; the dwells are arcs about the axis, exact at samples)
-    "radius_max": (lambda loc: np.hypot(loc.point_world[..., 0], loc.point_world[..., 1]), 1.0),
 }
 
 

@@ -431,8 +431,9 @@ def fast_rows(base: dict, points: list[dict]) -> list[dict]:
     (a subset of the keys of ``row``, with the same values), ``violations`` as
     [{"code": ...}] and ``profile_checked`` = False: the profile's own figures and
     checks (area, vertices, chord error, star shape, wear, geometric check) are not
-    computed. Designs the batch cannot take (contact friction on a
-    sliding face) get the full analysis, with ``profile_checked`` = True."""
+    computed. Designs the batch cannot take (contact friction on a sliding face, a
+    bore or a diameter limit: batch.batchable) get the full analysis, with
+    ``profile_checked`` = True."""
     return _fast_rows(points, _made(base, points))
 
 

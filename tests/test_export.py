@@ -352,10 +352,8 @@ def test_the_outer_diameter_is_the_exact_cams_and_a_limit_when_set():
     against closed forms: the paper's double concave faces' farthest points are on the
     high dwell arc of radius R (Eq. 20), 2R across; a radial single roller's cam is
     2 (r_b + h) across, at any export tolerance (a review: the chord error added to it
-    had made 190.0013 mm, and 191.1 at a 1 mm tolerance). A cam whose farthest point is
-    on a rise (a program without a high dwell) is found between the samples: never
-    below the farthest vertex, and above it by less than the chord error.
-    limits.max_outer_diameter_mm, when set, is checked against it."""
+    had made 190.0013 mm, and 191.1 at a 1 mm tolerance). limits.max_outer_diameter_mm,
+    when set, is checked against it."""
     from camcore import checks
     from camcore.report import summary
 
@@ -372,12 +370,15 @@ def test_the_outer_diameter_is_the_exact_cams_and_a_limit_when_set():
         roller = cam(kind="single_roller", export_tolerance_mm=tol)
         assert checks.outer_diameter_mm(roller) == pytest.approx(2 * (80.0 + 15.0), abs=1e-9)
     assert "outer_diameter" not in {v.code for v in cam(190.0, "single_roller").violations}
-    peaked = Design.model_validate(
-        {"motion": {"lift_mm": 20, "rise_deg": 180, "high_dwell_deg": 0, "fall_deg": 180}}
-    )
-    p = analyze(peaked.with_kind("single_roller"), verify=False)
-    far = 2e3 * np.hypot(*p.profile.points.T).max()
-    assert far <= checks.outer_diameter_mm(p) <= far + 2e3 * p.chord_error
+    # why the farthest vertex is exact: the farthest point is where V = 0 (Eq. 4), at a
+    # station or on a dwell, and every station's contact point is a vertex
+    for kind in ("single_roller", "double_concave", "flat_face"):
+        c = cam(kind=kind)
+        for t in c.stations:
+            touching = np.flatnonzero(c.in_contact[:, np.argmin(abs(c.theta - t))])
+            for f in touching:
+                r = np.hypot(*c.local(np.array([t])).point_world[f, 0])  # (any frame)
+                assert np.isclose(np.hypot(*c.profile.points.T), r, rtol=0, atol=1e-12).any()
     assert "outer_diameter" not in {v.code for v in cam(190.0).violations}
     (v,) = [v for v in cam(189.0).violations if v.code == "outer_diameter"]
     assert v.amount == pytest.approx(size - 189.0) and f"{size:.4f} mm across" in v.message
@@ -385,6 +386,8 @@ def test_the_outer_diameter_is_the_exact_cams_and_a_limit_when_set():
     # what it proposes does it: the base radius less the half excess (and 1 % more)
     cut = f"about {(size - 189.0) / 2:.4g} mm less base radius"
     assert cut in v.message
+    (v,) = [v for v in cam(20.0).violations if v.code == "outer_diameter"]
+    assert "less base radius alone cannot (r_b is 80 mm)" in v.message  # (not "85 mm less")
     data = load_preset("paper_example").model_dump()
     data["cam"]["base_radius_mm"] -= 1.01 * (size - 189.0) / 2
     data["limits"]["max_outer_diameter_mm"] = 189.0

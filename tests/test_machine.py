@@ -490,6 +490,8 @@ def test_a_jump_speed_margin_is_a_limit_when_set():
     loose = tweak(loose, dynamics__gravity_m_s2=0.0, dynamics__preload_mm=0.0)
     (v,) = [v for v in run_all(analyze(loose, verify=False), None) if v.code == "jump_speed"]
     assert "at any speed" in v.message and v.ranges_deg == () and v.amount == 1.0
+    # a spring is what helps: no preload without a spring, no lower speed at any speed
+    assert "preload (it is 0 N/m)" in v.message and not v.message.endswith("speed")
     with pytest.raises(ValueError, match="min_jump_speed_ratio"):
         tweak(PAPER, limits__min_jump_speed_ratio=0.5)  # below 1 it is no margin
 
