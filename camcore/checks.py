@@ -675,8 +675,10 @@ def _outer_diameter(a) -> list[Violation]:
     """The cam's size against limits.max_outer_diameter_mm (not in the paper: a
     designer's envelope, or a maker's stock)."""
     lim = a.design.limits.max_outer_diameter_mm
+    if lim is None:
+        return []
     size = outer_diameter_mm(a)
-    if lim is None or size <= lim + ROUND_OFF_MM:
+    if size <= lim + ROUND_OFF_MM:
         return []
     return [
         Violation(

@@ -67,8 +67,10 @@ def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndar
     peak = mask & np.isfinite(values)
     peak[:, 1:] &= (values[:, 1:] >= values[:, :-1]) | ~mask[:, :-1]
     peak[:, :-1] &= (values[:, :-1] >= values[:, 1:]) | ~mask[:, 1:]
-    peak = _first_of_ties(values, peak, C)
     many = np.count_nonzero(peak) > 4 * C * values.shape[0]
+    if many:  # (a dwell's plateau, mostly: its samples past the first C go first)
+        peak = _first_of_ties(values, peak, C)
+        many = np.count_nonzero(peak) > 4 * C * values.shape[0]
     if many and values.shape[1] > C:  # plateaus: keep only the C largest of each row first
         pv = np.where(peak, values, -np.inf)
         kth = np.partition(pv, pv.shape[1] - C, axis=1)[:, -C][:, None]  # C-th largest
