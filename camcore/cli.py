@@ -1,4 +1,4 @@
-"""Command line: ``camcore report | compare | export | sweep | pareto | fields``.
+"""Command line: ``camcore report | compare | export | sweep | pareto | presets | fields``.
 
 Exit status (the same for every command, so scripts can rely on it):
 
@@ -293,6 +293,17 @@ def _figure_names(text: str) -> list[str]:
     return names
 
 
+def _presets(args) -> int:
+    """The shipped presets, a line each: the name --preset takes, and what it is (a
+    designer's review: their names were only in report's --help)."""
+    from .model import load_preset, preset_names
+
+    for name in preset_names():
+        d = load_preset(name)
+        print(f"{name:<20}  {d.name}")
+    return EXIT_VALID
+
+
 def _fields(args) -> int:
     """Every field a design file or --set can give: path, default, range, meaning."""
     from .model import field_table
@@ -431,6 +442,9 @@ def _parser() -> argparse.ArgumentParser:
             help="override one design field, e.g. --set cam.base_radius_mm=90 "
             "(repeatable; VALUE is JSON, or a bare word for names)",
         )
+
+    ps = sub.add_parser("presets", help="list the shipped designs --preset takes")
+    ps.set_defaults(run=_presets)
 
     fl = sub.add_parser("fields", help="list every design field (--set PATH=VALUE, design files)")
     fl.add_argument("--json", action="store_true", help="print JSON rows")

@@ -463,3 +463,11 @@ def test_a_defect_of_ours_exits_3_not_1(tmp_path, capsys, monkeypatch):
     )
     assert main(["report", "--preset", "paper_example", "--set", "name=" + "[" * 5000]) == 2
     assert "RecursionError" not in capsys.readouterr().err
+
+
+def test_presets_lists_every_shipped_design(capsys):
+    """A designer's review: the preset names were only in report's --help."""
+    assert main(["presets"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == list(preset_names())
+    assert any("Section 6 example" in line for line in lines if line.startswith("paper_example"))
