@@ -69,6 +69,17 @@ def _field(page, label: str):
     ).as_element()
 
 
+def _box(page, selector: str, timeout_s: float = 20.0):
+    """The bounding box of ``selector``, asked again while an update replaces the element
+    (None for a moment in between)."""
+    t0 = time.monotonic()
+    while (box := page.locator(selector).bounding_box()) is None:
+        if time.monotonic() - t0 > timeout_s:
+            return None
+        page.wait_for_timeout(100)
+    return box
+
+
 def _wait(pred, timeout_s: float = 60.0) -> None:
     t0 = time.monotonic()
     while not pred():
@@ -344,15 +355,14 @@ def test_trust_in_the_browser(tmp_path):
             assert session.design.motion.lift_mm == 70.0
             assert _field(page, "Lift h").input_value() == "70"
             # the status box stays in sight while the panel scrolls to a lower control
-            top = page.locator("#cam-status").bounding_box()
+            top = _box(page, "#cam-status")
             lift_y = _field(page, "Lift h").bounding_box()["y"]
             _field(page, "Cutter diameter").scroll_into_view_if_needed()
             page.wait_for_timeout(500)
             assert _field(page, "Lift h").bounding_box()["y"] < lift_y - 100  # it scrolled
-            # (a redraw replaces the status element: on a loaded machine the box was
-            # read in between once, and found none)
-            page.locator("#cam-status").wait_for(state="visible", timeout=T)
-            box = page.locator("#cam-status").bounding_box()
+            # (a status update, e.g. the background check's verdict arriving, replaces
+            # the status element: the box was read in between twice, and found none)
+            box = _box(page, "#cam-status")
             assert box is not None and top is not None and 0 <= box["y"] <= top["y"] + 5
             # a window 800 px high or less: the status scrolls past a fifth of it
             assert (
