@@ -590,9 +590,9 @@ def _shown(message: str) -> str:
     """An error as the terminal gets it: one line, its non-printable characters as
     \\uXXXX, at most MESSAGE_CHARS (messages quote a file's or a spec's keys and values,
     and an ESC in one had reached the terminal: a review)."""
-    from .model import _printable
+    from .files import printable
 
-    return _printable(message, MESSAGE_CHARS)
+    return printable(message, MESSAGE_CHARS)
 
 
 MESSAGE_CHARS = 2000

@@ -23,11 +23,12 @@ class FileError(ValueError):
     """A file that cannot be read or written; the message says which and why."""
 
 
-def shown_path(path: str | Path, limit: int = 300) -> str:
-    """A path as a message prints it: non-printable characters as \\uXXXX, at most
-    ``limit`` characters (a spec's base file name had put an ESC on the terminal)."""
-    text = "".join(ch if ch.isprintable() else f"\\u{ord(ch):04x}" for ch in str(path))
-    return text if len(text) <= limit else text[:limit] + "…"
+def printable(text: str, limit: int) -> str:
+    """User text (a file's key, a spec's path, a file name) as a message may print it:
+    non-printable characters as \\uXXXX (an ESC in one had reached the terminal) and
+    at most ``limit`` of the input's characters (a 900 kB key had come back whole)."""
+    out = "".join(ch if ch.isprintable() else f"\\u{ord(ch):04x}" for ch in text[:limit])
+    return out + ("…" if len(text) > limit else "")
 
 
 def read_capped(path: str | Path, max_bytes: int) -> bytes:
@@ -46,7 +47,7 @@ def read_capped(path: str | Path, max_bytes: int) -> bytes:
         declares and again on the bytes actually read, for files that grow).
     """
     path = Path(path)
-    shown = shown_path(path)
+    shown = printable(str(path), 300)
     try:
         # O_NONBLOCK: opening a FIFO with no writer returns at once instead of waiting.
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))

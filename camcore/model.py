@@ -25,6 +25,7 @@ from typing import Final, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from .files import printable
 from .units import DEG, MM, RPM  # noqa: F401  (MM, DEG re-exported for older imports)
 
 SCHEMA_VERSION: Final = 2
@@ -1011,7 +1012,7 @@ def format_validation_error(exc) -> str:
     """One line per problem: 'field.path: message'."""
     parts = []
     for err in exc.errors()[:8]:
-        loc = ".".join(_printable(str(p)) for p in err["loc"])  # (a file's own keys)
+        loc = ".".join(printable(str(p), 60) for p in err["loc"])  # (a file's own keys)
         msg = err["msg"].removeprefix("Value error, ")
         head, sep, tail = msg.partition(": ")
         if loc and sep and head.replace(".", "").replace("_", "").isalnum():
@@ -1029,14 +1030,6 @@ def format_validation_error(exc) -> str:
 BOUND_MEANS = {
     "follower.face_radius_mm": "a concave face's radius is negative, r_f < 0 (Eq. 3)",
 }
-
-
-def _printable(text: str, limit: int = 60) -> str:
-    """A key from the user's file as an error may print it: non-printable characters
-    as \\uXXXX (an ESC in a key had reached the terminal) and at most ``limit`` of them
-    (a 900 kB key came back whole)."""
-    out = "".join(ch if ch.isprintable() else f"\\u{ord(ch):04x}" for ch in text[:limit])
-    return out + ("…" if len(text) > limit else "")
 
 
 def _shown_value(x) -> str | None:
@@ -1250,14 +1243,14 @@ def set_field(data: dict, path: str, value, what: str = "") -> None:
     the messages (e.g. "--set "); the path is the user's (a spec's key), shown escaped
     and short."""
     keys = path.split(".")
-    path = _printable(path, 120)  # (for the messages only)
+    path = printable(path, 120)  # (for the messages only)
     if not all(keys):
         raise DesignError(f"{what}{path!r}: expected FIELD.PATH, e.g. cam.base_radius_mm")
     node = data
     for i, key in enumerate(keys[:-1]):
         node = _child(node, key, what)
         if not isinstance(node, dict | list):
-            head = _printable(".".join(keys[: i + 1]), 120)
+            head = printable(".".join(keys[: i + 1]), 120)
             raise DesignError(f"{what}{path}: {head} is not a group of fields")
     last = keys[-1]
     if isinstance(node, list):

@@ -460,8 +460,14 @@ def test_compare_tab(tab):
     # tests/test_followers.py; the single face's 46.6 is 32.96 at twice the force)
     assert "| σ_H high dwell [MPa]¹ | 212.2 | 150.4 | 46.6 | 33.0 |" in md
     # each cam's size: 2 (r_b + h) = 190 mm where the follower's dwell contact sits at
-    # r_b + h, 2R (Eq. 20) for the double followers' shared dwell
-    assert "| outer Ø [mm] | 190.00 | 189.83 | 190.00 | 189.94 |" in md
+    # r_b + h, 2R (Eq. 20, profile.dwell_radius) for the double followers' shared dwell
+    from camcore.profile import dwell_radius
+
+    two_r = [
+        2e3 * dwell_radius(r * 1e-3, 0.080, 0.010, 0.015) for r in (8.0, -250.0)
+    ]  # (the paper's r_c, r_f, e and h; SI in, SI out)
+    cells = ("190.00", f"{two_r[0]:.2f}", "190.00", f"{two_r[1]:.2f}")
+    assert f"| outer Ø [mm] | {' | '.join(cells)} |" in md
     view = s.ui.compare_view
     # the paper's column speaks of its own example only (a review saw it beside any cam)
     s.ui.controls["cam.base_radius_mm"].value = 90.0

@@ -450,7 +450,8 @@ def test_a_jump_speed_margin_is_a_limit_when_set():
     (v,) = margin(1.6)
     assert v.amount == pytest.approx(1.6 - ratio, rel=1e-12)
     assert v.ranges_deg == ((pytest.approx(math.degrees(at)),) * 2,)
-    assert f"from {rpm:.0f} rpm, 1.54 x the cam speed" in v.message  # (rounded down)
+    down = math.floor(ratio * 100) / 100  # rounded down: 1.5999 must not read "1.60"
+    assert f"from {rpm:.0f} rpm, {down:.2f} x the cam speed" in v.message
     assert "limits.min_jump_speed_ratio" in v.message
     assert v.equation == "Eq. 29 (jump speed)"
     assert jumps(tweak(PAPER, cam__speed_rpm=rpm * 1.005))  # the named speed is jump's
