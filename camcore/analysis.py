@@ -13,10 +13,11 @@ and lists the broken limits (camcore.checks).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
-from . import checks, extremes, forces, motion, profile, sampling, train
+from . import checks, extremes, forces, machine, motion, profile, sampling, train
 from .contact import contact_stress
 from .model import PAPER_FOLLOWERS, Design, FollowerKind
 from .units import MM
@@ -166,6 +167,12 @@ class Analysis(Local):
         """A per-face quantity at the face that touches (the rise face when both do)."""
         return np.where(self.in_contact[0], per_face[0], per_face[-1])
 
+    @cached_property
+    def spring(self) -> machine.Spring:
+        """machine.spring on this grid, searched once: the jump-speed check
+        (limits.min_jump_speed_ratio) and the summary both read it."""
+        return machine.spring(self.design, self.theta, self.prog)
+
     def local(self, theta: np.ndarray) -> Local:
         """The per-angle results at other cam angles (e.g. between the grid's)."""
         return evaluate(self.design, self.geo, self.segments, theta)
@@ -288,7 +295,10 @@ def _analyze(
 
         lift_error = max_lift_error(result)
     violations = checks.run_all(result, lift_error)
-    return replace(result, violations=violations, lift_error=lift_error)
+    done = replace(result, violations=violations, lift_error=lift_error)
+    if "spring" in vars(result):  # the check's spring search, kept for the summary
+        vars(done)["spring"] = result.spring
+    return done
 
 
 def compare(

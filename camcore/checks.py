@@ -558,13 +558,13 @@ def _jump_speed(a) -> list[Violation]:
     of F_t in every guide mode that does not lock) against limits.min_jump_speed_ratio
     times the cam speed; unchecked without that limit (the ``jump`` rule holds at the
     speed itself; the elastic train's jump, ``dynamic_jump``, at the speed itself)."""
-    from .machine import spring, velocity_drop
+    from .machine import velocity_drop
     from .motion import segments
 
     lim = a.design.limits.min_jump_speed_ratio
     if lim is None:
         return []
-    sp, speed = spring(a.design, a.theta, a.prog), a.design.cam.speed_rpm
+    sp, speed = a.spring, a.design.cam.speed_rpm
     ratio = sp.jump_speed_rpm / speed
     if ratio >= lim:  # (never jumps: inf)
         return []

@@ -217,7 +217,7 @@ def _finite(x: float, factor: float = 1.0) -> float | None:
 
 def _machine(a: Analysis) -> dict:
     """Spring sizing, jump speed, shaft torque, power and flywheel (camcore.machine)."""
-    sp, sh = machine.spring(a.design, a.theta, a.prog), machine.shaft(a)
+    sp, sh = a.spring, machine.shaft(a)
     return {
         "spring_rate_min_N_per_m": _finite(sp.rate_min),
         "preload_min_mm": _finite(sp.preload_min, 1e3),

@@ -505,3 +505,17 @@ def test_a_rho_range_through_an_inflection_is_said_not_printed():
     assert rho_range_text([-5148.02, 24045.31], _fmt).startswith("changes sign")
     assert rho_range_text([56.2, 126.8], _fmt) == "56.20 .. 126.80 mm"
     assert rho_range_text(None, _fmt) == "- mm"
+
+
+def test_the_jump_speed_check_and_the_summary_share_one_spring_search(monkeypatch):
+    """With limits.min_jump_speed_ratio set, the check's spring search is the one the
+    summary reports (not searched again), and its figures are machine.spring's."""
+    d = tweak(PAPER, limits__min_jump_speed_ratio=1.6)
+    direct = machine.spring(d, analyze(d, verify=False).theta)
+    calls = []
+    monkeypatch.setattr(machine, "spring", lambda *a: calls.append(1) or direct)
+    a = analyze(d, verify=False)
+    s = report.summary(a)
+    assert len(calls) == 1 and "jump_speed" in [v.code for v in a.violations]
+    assert s["jump_speed_rpm"] == direct.jump_speed_rpm
+    assert s["spring_rate_min_N_per_m"] == direct.rate_min
