@@ -261,11 +261,13 @@ def _sweep(args) -> int:
         print(f"note: {args.spec}: base {defaults_note(left_out, len(left_out))}", file=sys.stderr)
     if args.workers is not None and args.workers < 1:
         raise DesignError("--workers: at least 1")
-    if args.chunk < 1:
-        raise DesignError("--chunk: at least 1")
+    if not 1 <= args.chunk <= sweep.MAX_CHUNK:  # (memory: ~2 MB a design at 0.1 deg)
+        raise DesignError(f"--chunk: from 1 to {sweep.MAX_CHUNK} designs")
     if args.workers is not None and args.scheduler is not None:
         raise DesignError("--workers starts a cluster, --scheduler uses one: give one of them")
     _refuse_collisions({"out": args.out}, args.spec)
+    if spec.base_file is not None:  # (a review: the table had replaced the base design)
+        _refuse_collisions({"out": args.out}, str(spec.base_file))
     n = sweep.run(
         spec,
         args.out,
@@ -510,7 +512,11 @@ def _parser() -> argparse.ArgumentParser:
         help="run on an existing Dask cluster, e.g. tcp://host:8786",
     )
     w.add_argument(
-        "--chunk", type=int, default=32, metavar="N", help="designs per unit of work (default 32)"
+        "--chunk",
+        type=int,
+        default=32,
+        metavar="N",
+        help="designs per unit of work (default 32, at most 512)",
     )
     w.add_argument(
         "--no-verify",

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Final, Literal, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from .files import printable
 from .units import DEG, MM, RPM  # noqa: F401  (MM, DEG re-exported for older imports)
@@ -138,7 +139,9 @@ class _Part(BaseModel):
         """true / false is not a number: pydantic's lax mode reads true as 1.0 (a file
         with "base_radius_mm": true made a 1 mm cam without a word)."""
         if isinstance(v, bool) and info.field_name in _number_fields(cls):
-            raise ValueError("a number, not true or false")
+            # (its own type, not value_error: a sweep refuses it for every row, as a
+            # string for a number, not as a value that depends on the other fields)
+            raise PydanticCustomError("bool_as_number", "a number, not true or false")
         return v
 
 

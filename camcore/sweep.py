@@ -37,6 +37,7 @@ import numpy as np
 from . import code_fingerprint, package_version
 from .files import FileError, read_capped, write_atomic
 from .model import (
+    CLASSIC_KEYS,
     Design,
     DesignError,
     FollowerKind,
@@ -54,6 +55,7 @@ MAX_SPEC_BYTES = 1_000_000
 MAX_DESIGNS = 1_000_000  # designs per sweep
 MAX_VALUES = 100_000  # values per grid axis
 DEFAULT_CHUNK = 32
+MAX_CHUNK = 512  # designs per chunk: the batched core holds ~2 MB a design (0.1 deg grid)
 SPEC_METADATA = "camcore.sweep"  # the table's key-value metadata: its SPEC (Spec.document)
 VERSION_METADATA = "camcore.version"
 CODE_METADATA = "camcore.code"  # camcore.code_fingerprint of the code that made the rows
@@ -70,6 +72,9 @@ class Spec:
     # a base design file's inputs left out, which took their defaults and no grid axis
     # gives (model.defaulted_fields): the command line says them, as report does
     defaulted: tuple[str, ...] = field(default=(), compare=False)
+    # the base design file a {"file": NAME} base was read from (the command line
+    # refuses to write its table over it)
+    base_file: Path | None = field(default=None, compare=False)
 
     def document(self) -> str:
         """The spec as a SPEC document with its base resolved (a preset by its design):
@@ -115,6 +120,8 @@ def _axis(path: str, raw) -> tuple:
             raise DesignError(f"grid.{path}: from and to must be numbers")
         if not all(_finite(x) for x in (lo, hi)):
             raise DesignError(f"grid.{path}: from and to must be finite numbers")
+        if not math.isfinite(float(hi) - float(lo)):  # (linspace made NaN of it)
+            raise DesignError(f"grid.{path}: from and to span more than a float holds")
         if not isinstance(num, int) or isinstance(num, bool) or not 1 <= num <= MAX_VALUES:
             raise DesignError(f"grid.{path}.num: an integer from 1 to {MAX_VALUES}")
         return tuple(float(x) for x in np.linspace(lo, hi, num))
@@ -128,8 +135,8 @@ def _defaulted(text, design: Design, axes) -> tuple[str, ...]:
     follower kind the grid runs (model.with_given, as the command line's --set)."""
     kinds = {design.follower.kind}
     for path, values in axes:
-        if path == "follower.kind":
-            kinds |= {FollowerKind(v) for v in values if v in set(FollowerKind)}
+        if path == "follower.kind":  # the grid's kinds replace the base's own
+            kinds = {FollowerKind(v) for v in values if v in set(FollowerKind)} or kinds
     given = with_given(text, [path for path, _ in axes])
     return tuple(defaulted_fields(given, design, tuple(kinds)))
 
@@ -196,14 +203,19 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     _check_tree(data)
     base = data.get("base", {"preset": "paper_example"})
     base_text = None  # a base design file's text
+    base_file = None
     if isinstance(base, dict) and set(base) == {"preset"}:
         design = load_preset(str(base["preset"]))
     elif isinstance(base, dict) and set(base) == {"file"}:
         if base_dir is None or not isinstance(base["file"], str) or not base["file"]:
             raise DesignError('base: {"file": NAME} names a design file beside the spec file')
-        design, base_text = read_design(_beside(Path(base_dir), base["file"]))
+        base_file = _beside(Path(base_dir), base["file"])
+        design, base_text = read_design(base_file)
     elif isinstance(base, dict):
-        design = design_from_json(json.dumps(base))
+        try:
+            design = design_from_json(json.dumps(base))
+        except DesignError as exc:  # (its keys are the base's: "preset: ..." misled)
+            raise DesignError(f"base: {exc}") from None
     else:
         raise DesignError('base: a design object or {"preset": NAME}')
     grid = data["grid"]
@@ -216,18 +228,50 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
         many = f"{size}" if size < 10**15 else "over 10^15"
         raise DesignError(f"grid: {many} designs; at most {MAX_DESIGNS} per sweep")
     axes = tuple((str(path), _axis(path, raw)) for path, raw in grid.items())
-    for path, _ in axes:
-        inner = [p for p, _ in axes if p.startswith(path + ".")]
-        if inner:
-            raise DesignError(f"grid.{path} and grid.{inner[0]}: one sets a part of the other")
+    _one_field_each([p for p, _ in axes])
     base_dict = json.loads(design.model_dump_json())
     for path, values in axes:
         _check_values(base_dict, path, values)
     left_out = () if base_text is None else _defaulted(base_text, design, axes)
-    spec = Spec(base_dict, axes, grid, left_out)
+    spec = Spec(base_dict, axes, grid, left_out, base_file)
     if spec.size > MAX_DESIGNS:
         raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")
     return spec
+
+
+def _field_of(path: str) -> str:
+    """The field a grid path sets, its list indexes as numbers ("segments.00" is
+    "segments.0")."""
+    return ".".join(str(int(p)) if p.isascii() and p.isdigit() else p for p in path.split("."))
+
+
+def _classic(field: str) -> bool:
+    """A classic program's field (motion.rise_deg, ...): model.Motion makes the
+    segments of them, so it sets every part of motion.segments."""
+    head, _, name = field.partition(".")
+    return head == "motion" and name in CLASSIC_KEYS
+
+
+def _one_field_each(paths: list[str]) -> None:
+    """Refuse two grid paths that set one field, or one a part of the other (a review:
+    "motion.segments.0.law" beside "motion.rise_law" ran the second's law while the
+    table's column said the first's)."""
+    fields = [_field_of(p) for p in paths]
+    for i, (a, fa) in enumerate(zip(paths, fields, strict=True)):
+        for b, fb in zip(paths[i + 1 :], fields[i + 1 :], strict=True):
+            segments = (_classic(fa) and fb.startswith("motion.segments")) or (
+                _classic(fb) and fa.startswith("motion.segments")
+            )
+            if segments:
+                why = "both set the motion program (its classic fields make its segments)"
+            elif fa == fb:
+                why = "both set one field"
+            elif fb.startswith(fa + ".") or fa.startswith(fb + "."):
+                why = "one sets a part of the other"
+                a, b = (a, b) if len(fa) < len(fb) else (b, a)  # the whole first
+            else:
+                continue
+            raise DesignError(f"grid.{a} and grid.{b}: {why}")
 
 
 # Validation errors that depend on the other fields' values (a limit, a check across
@@ -559,7 +603,7 @@ def run(
     total = spec.size
     n_chunks = -(-total // chunk)
     parts = _parts_dir(out, stamp)  # a bad output fails before any work or cluster
-    todo = [i for i in range(n_chunks) if not (parts / f"chunk-{i:06d}.parquet").exists()]
+    todo = [i for i in range(n_chunks) if not _kept(parts / f"chunk-{i:06d}.parquet")]
     found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
     done = found
     # (a bad scheduler leaves parts with no chunk in them, which the next run takes over)
@@ -605,6 +649,19 @@ def run(
     write_atomic(out, buf.getvalue().to_pybytes())
     shutil.rmtree(parts)
     return table.num_rows
+
+
+def _kept(part: Path) -> bool:
+    """A finished chunk's file that reads back as a table (one damaged outside this
+    program, e.g. a disk that filled, is computed again, not met at the very end)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        pq.read_metadata(part)
+    except (OSError, pa.ArrowException):
+        return False
+    return True
 
 
 @contextlib.contextmanager

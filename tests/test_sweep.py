@@ -99,6 +99,12 @@ def test_an_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch)
     monkeypatch.setattr(sweep, "run_chunk", lambda *a: calls.append(a[1]) or real(*a))
     sweep.run(spec, out, chunk=2, progress=None)
     assert sum(len(c) for c in calls) == 2  # only the missing chunk
+    # a kept chunk damaged since (not by this program: it writes atomically) is redone
+    _interrupted(spec, out, 2)
+    (tmp_path / "r.parquet.parts" / "chunk-000000.parquet").write_bytes(b"not parquet")
+    calls.clear()
+    sweep.run(spec, out, chunk=2, progress=None)
+    assert calls == [spec.chunk(0, 2), spec.chunk(2, 2)]
     fresh = tmp_path / "fresh.parquet"
     monkeypatch.setattr(sweep, "run_chunk", real)
     sweep.run(spec, fresh, chunk=3, progress=None)
@@ -184,6 +190,27 @@ def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
             {"grid": {"cam.base_radius_mm": [70], "cam": [{"base_radius_mm": 90}]}},
             "grid.cam and grid.cam.base_radius_mm: one sets a part of the other",
         ),
+        # one field twice (a review: the later path won while the first's column stayed)
+        (
+            {"grid": {"motion.segments.0.law": ["poly_345"], "motion.rise_law": ["cycloidal"]}},
+            "both set the motion program",
+        ),
+        (
+            {"grid": {"motion.rise_deg": [100], "motion.segments.0.angle_deg": [90]}},
+            "both set the motion program",
+        ),
+        (
+            {"grid": {"motion.segments.0.law": ["poly_345"], "motion.segments.00.law": ["x"]}},
+            "segments.0.law and grid.motion.segments.00.law: both set one field",
+        ),
+        # true is no number, for every row (not a row each that says so)
+        ({"grid": {"cam.base_radius_mm": [True, False]}}, "true is not a value of this field"),
+        (
+            {"grid": {"cam.base_radius_mm": {"from": -1.7e308, "to": 1.7e308, "num": 3}}},
+            "span more than a float holds",
+        ),
+        # an inline base's keys are the base's
+        ({"base": {"preset": "paper_example", "x": 1}, "grid": {"cam.width_mm": [9]}}, "^base: "),
         (
             {
                 "grid": {
@@ -198,6 +225,19 @@ def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
 def test_bad_specs_are_refused_with_the_key_named(spec, message):
     with pytest.raises(DesignError, match=message):
         sweep.parse_spec(json.dumps(spec))
+
+
+def test_a_chunk_is_bounded(tmp_path, capsys):
+    """--chunk holds the batched core's memory (~2 MB a design): a value past
+    MAX_CHUNK is refused before any work, not met when the machine runs out."""
+    from camcore.cli import main
+
+    (tmp_path / "s.json").write_text(json.dumps(SPEC))
+    for n in (0, sweep.MAX_CHUNK + 1):
+        args = ["sweep", str(tmp_path / "s.json"), "--out", str(tmp_path / "r.parquet")]
+        assert main([*args, "--fast", "--chunk", str(n)]) == 2
+        assert f"--chunk: from 1 to {sweep.MAX_CHUNK} designs" in capsys.readouterr().err
+    assert not list(tmp_path.glob("r.parquet*"))
 
 
 def test_the_progress_line_says_how_long_is_left():
@@ -1001,6 +1041,20 @@ def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
     assert "base not in the file, so their defaults: cam.base_radius_mm = 80.0" in (
         capsys.readouterr().err
     )
+    # the table is never written over the base design (a review: it was, exit 0)
+    kept = (tmp_path / "mine.json").read_bytes()
+    for out in ("mine.json", "sub/../mine.json"):
+        (tmp_path / "sub").mkdir(exist_ok=True)
+        assert main(["sweep", str(spec_path), "--out", str(tmp_path / out), "--fast"]) == 2
+        assert "that is the input design file" in capsys.readouterr().err
+    assert (tmp_path / "mine.json").read_bytes() == kept
+    (tmp_path / "sub").rmdir()
+    # a grid of other kinds: the base's own kind's fields are not said (none runs it)
+    other = {"cam.width_mm": [10], "follower.kind": ["double_concave"]}
+    spec_path.write_text(json.dumps({"base": {"file": "mine.json"}, "grid": other}))
+    shown = sweep.load_spec(spec_path).defaulted
+    assert "follower.face_radius_mm = -250.0" in shown
+    assert not any("roller_radius" in x or "single_offset" in x for x in shown)
     spec_path.write_text(
         json.dumps({"base": {"file": "absent.json"}, "grid": {"cam.width_mm": [10]}})
     )
