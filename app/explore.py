@@ -13,14 +13,24 @@ most MAX_DESIGNS designs, cancellable between chunks.
 
 from __future__ import annotations
 
+import re
 import threading
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from camcore.explore import FIGURES, OFFERED, PROFILE_FIGURES, distinct, offered, pareto
-from camcore.model import PAPER_FOLLOWERS, Design, DesignError
+from camcore.explore import (
+    FIGURES,
+    OFFERED,
+    PROFILE_FIGURES,
+    distinct,
+    figure_values,
+    ignored_fields,
+    offered,
+    pareto,
+)
+from camcore.model import PAPER_FOLLOWERS, Design, DesignError, FollowerKind
 from camcore.sweep import design_at, with_point
 
 from .controls import SPECS, control_value, get_path
@@ -53,9 +63,10 @@ def grid_points(
     x: tuple[str, float, float], y: tuple[str, float, float], steps: int, kinds: list[str]
 ) -> list[dict]:
     """The sweep's points: kinds x (x values) x (y values), ``steps`` values per axis
-    (clipped to 2..MAX_STEPS), each a {path: value} dict."""
-    n = int(min(MAX_STEPS, max(2, steps)))
-    xv, yv = np.linspace(x[1], x[2], n), np.linspace(y[1], y[2], n)
+    (2..MAX_STEPS: ValueError otherwise), each a {path: value} dict."""
+    if steps not in range(2, MAX_STEPS + 1):
+        raise ValueError(f"steps: 2 to {MAX_STEPS}")
+    xv, yv = np.linspace(x[1], x[2], steps), np.linspace(y[1], y[2], steps)
     return [
         {"follower.kind": k, x[0]: float(a), y[0]: float(b)} for k in kinds for a in xv for b in yv
     ]
@@ -222,6 +233,14 @@ class ExplorePanel:
             return None
         assert self._design is not None  # bound before any click
         design = self._design()
+        for label, path in ((self.x.value, px), (self.y.value, py)):
+            if path.startswith("motion.") and design.motion.classic is None:
+                self.progress.content = (  # (a review: every point was "not a design")
+                    f"✖ {esc(label)}: this design's motion program is made of segments "
+                    "(the Motion table), which that field does not describe: sweep a cam "
+                    "or follower field, or load a rise-dwell-fall design."
+                )
+                return None
         kinds = (
             [k.value for k in PAPER_FOLLOWERS]
             if self.all_kinds.value
@@ -232,13 +251,19 @@ class ExplorePanel:
                 _finite_pair(self.x_range.value),
                 _finite_pair(self.y_range.value),
             )
-            steps = int(self.steps.value)
         except (TypeError, ValueError):
             self.progress.content = (
                 f"✖ Each range needs two finite numbers within ±{MAX_RANGE_ABS:g}."
             )
             return None
-        points = grid_points((px, x0, x1), (py, y0, y1), steps, kinds)
+        steps = self.steps.value
+        if not isinstance(steps, int | float) or steps not in range(2, MAX_STEPS + 1):
+            self.progress.content = f"✖ Steps per field: a whole number from 2 to {MAX_STEPS}."
+            return None
+        # the boxes show what runs (a box left empty sends nothing: a review ran the
+        # last range while the box stood blank)
+        self.x_range.value, self.y_range.value = (x0, x1), (y0, y1)
+        points = grid_points((px, x0, x1), (py, y0, y1), int(steps), kinds)
         base = design.model_dump(mode="json")
         return base, points, (px, self.x.value), (py, self.y.value), names
 
@@ -251,7 +276,7 @@ class ExplorePanel:
             same = self._analyst.same_designs(base, points)
             own = [i for i, j in enumerate(same) if i == j]
             repeats = len(points) - len(own)
-            note = f" ({repeats} more points repeat one of them)" if repeats else ""
+            note = f" ({repeats} more points repeat one)" if repeats else ""
             for c in range(0, len(own), CHUNK):
                 if self._cancel.is_set():
                     break
@@ -260,7 +285,8 @@ class ExplorePanel:
                 done.update(zip(idx, rows, strict=True))
                 ok = _valid_designs(list(done.values()))
                 self.progress.content = (
-                    f"Running: **{len(done)} / {len(own)}** designs{note}, {ok} valid so far…"
+                    f"Running: **{len(done)} / {len(own)}** distinct designs{note}, "
+                    f"{ok} valid so far…"
                 )
             rows = [
                 done[i] if i == j else with_point(done[j], p)
@@ -277,17 +303,20 @@ class ExplorePanel:
 
     def _show(self, base, rows, total, x, y, names, limits) -> None:
         if not rows:
+            self._clear()  # (a review: the last sweep's map stayed, loadable, unmarked)
             self.progress.content = "Cancelled before the first designs."
             return
         front = pareto(rows, names)
         png = self._analyst.explore_png(rows, x, y, names, front, limits)
+        values = figure_values(rows, names)
         offers = {}
-        for n, i in enumerate(offered(front, MAX_FRONT), start=1):
+        for n, i in enumerate(offered(front, values, MAX_FRONT), start=1):
             r = rows[i]
-            point = {k[5:]: v for k, v in r.items() if k.startswith("grid.")}
-            figs = ", ".join(f"{FIGURES[m].get(r):.4g} {FIGURES[m].unit}" for m in names)
-            pars = ", ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in point.values())
-            offers[f"{n}. {pars} → {figs}"] = point
+            point, shown = _offer(r)
+            figs = ", ".join(
+                f"{v:.4g} {FIGURES[m].unit}" for m, v in zip(names, values[i], strict=True)
+            )
+            offers[f"{n}. {shown} → {figs}"] = point
         with self._lock:
             self._base, self._offers, self._armed = base, offers, None
             self.front_dd.options = tuple(offers) or ("–",)
@@ -298,23 +327,18 @@ class ExplorePanel:
                     self.image = self.gui.add_image(_decode(png), format="png")
             else:
                 self.image.image = _decode(png)
-        first = distinct(rows)
-        ok = _valid_designs(rows)
-        done = "" if len(rows) == total else f" (cancelled after {len(rows)} of {total})"
-        same = (
-            ""
-            if first.all()
-            else f" ({int(first.sum())} distinct: a follower ignores a field it does not use)"
-        )
-        listed = (
-            ""
-            if len(front) <= MAX_FRONT
-            else f" ({MAX_FRONT} of them numbered and listed, spread along it)"
-        )
-        self.progress.content = (
-            f"**{len(rows)} designs**{done}{same}: {ok} valid, "
-            f"{len(front)} on the Pareto front{listed}."
-        )
+        self.progress.content = _summary(rows, total, front, names, limits)
+
+    def _clear(self) -> None:
+        """No results on show: no offers, no map."""
+        with self._lock:
+            self._offers, self._armed = {}, None
+            self.front_dd.options = ("–",)
+            self.front_dd.value = "–"
+            self.load_btn.disabled = True
+            if self.image is not None:
+                self.image.remove()
+                self.image = None
 
     def load(self, label: str) -> None:
         """Load a design of the front (the dropdown's value; anything else is ignored).
@@ -367,6 +391,63 @@ def edited_since(base: Design, now: Design, point: dict, most: int = 4) -> list[
     if not classic and base.motion.segments != now.motion.segments:
         out.append("the program's segments")
     return out[:most] + ([f"{len(out) - most} more"] if len(out) > most else [])
+
+
+def _offer(row: dict) -> tuple[dict, str]:
+    """A front design's grid point, less the fields its follower ignores (loading it
+    keeps the design's own value there: a review saw a concave face's design load with
+    the sweep's roller radius), and how the list shows it ("–" for those fields)."""
+    ignored = set(ignored_fields(row))
+    point, shown = {}, []
+    for key, v in row.items():
+        if not key.startswith("grid."):
+            continue
+        path = key[5:]
+        if path in ignored:
+            shown.append("–")
+            continue
+        point[path] = v
+        if path == "follower.kind" and isinstance(v, str) and v in FollowerKind.__members__:
+            shown.append(FollowerKind(v).label)
+        else:
+            shown.append(f"{v:.4g}" if isinstance(v, float) else str(v))
+    return point, ", ".join(shown)
+
+
+def _summary(rows: list[dict], total: int, front, names: list[str], limits) -> str:
+    """The line under a finished sweep: points and distinct designs, valid ones, the
+    front; why points are no designs; what a figure cannot tell apart."""
+    first = distinct(rows)
+    ok = _valid_designs(rows)
+    done = "" if len(rows) == total else f", cancelled after {len(rows)} of {total}"
+    designs = f"**{len(rows)} points**{done}, {int(first.sum())} distinct designs"
+    listed = (
+        f" ({MAX_FRONT} of them numbered and listed, spread along it)"
+        if len(front) > MAX_FRONT
+        else ""
+    )
+    out = f"{designs}: {ok} valid, {len(front)} on the Pareto front{listed}."
+    errors = [  # why, less the value each point had ("(got -10.0)")
+        re.sub(r" \(got [^()]*\)", "", str(r["error"]))
+        for r, f in zip(rows, first, strict=True)
+        if f and r.get("error")
+    ]
+    if errors:
+        common = max(sorted(set(errors)), key=errors.count)
+        out += (
+            f" {len(errors)} are no design at all; the commonest reason "
+            f"({errors.count(common)}): {esc(common[:300])}."
+        )
+    if not ok:
+        out += " No valid design: widen or move the ranges."
+    flat = [axis for axis, (lo, hi) in zip("xy", limits, strict=True) if lo == hi]
+    if flat:
+        out += f" The {' and '.join(flat)} range is one value."
+    kinds = {r.get("grid.follower.kind") for r in rows}
+    rollers = [k for k in kinds if isinstance(k, str) and k.endswith("_roller")]
+    if "wear" in names and rollers:
+        out += " Rollers roll: their sliding wear is 0, so they lead on wear."
+    return out
 
 
 def _valid_designs(rows: list[dict]) -> int:

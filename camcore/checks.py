@@ -58,6 +58,30 @@ from . import extremes
 from .model import FollowerKind
 from .units import MM, to_deg, to_mm
 
+# every violation code, in the order run_all reports them (a sweep's map gives each
+# its own colour, the same in every sweep)
+CODES = (
+    "curvature_convex",
+    "curvature_face",
+    "roller_undercut",
+    "pressure_angle",
+    "contact_stress",
+    "high_dwell_arc",
+    "rollers_overlap",
+    "velocity_jump",
+    "acceleration_jump",
+    "jump",
+    "guide_jam",
+    "contact_lost",
+    "dynamic_jump",
+    "jump_speed",
+    "profile_crossing",
+    "export_tolerance",
+    "hub_wall",
+    "outer_diameter",
+    "geometric_check",
+)
+
 LIFT_TOLERANCE_M = 1e-8  # 1e-5 mm: far above round-off, far below any real defect
 ROUND_OFF_MM = 1e-9  # a size this far past its limit meets it (190.00000000000003 mm)
 

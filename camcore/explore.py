@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .checks import CODES
 from .model import PAPER_FOLLOWERS, FollowerKind
 from .sweep import first_violation, pareto_mask
 
@@ -106,13 +107,24 @@ def distinct(rows: list[dict]) -> np.ndarray:
 OFFERED = 30  # designs of a front numbered on the map and listed for loading
 
 
-def offered(front: np.ndarray, most: int = OFFERED) -> np.ndarray:
+def offered(front: np.ndarray, values: np.ndarray, most: int = OFFERED) -> np.ndarray:
     """At most ``most`` designs of ``front`` (ordered by the first figure), spread
-    evenly along it, both ends included: the first ``most`` had offered only the
-    smallest cams of a 107-design front, none of the low-stress large ones."""
+    evenly along it in the plane of the figures (``values``: rows x figures; each
+    figure scaled to its extent on the front), both ends included: the first ``most``
+    had offered only the smallest cams of a 107-design front, and every n-th design
+    had offered groups of designs 0.01 mm apart where the front crowds (a review)."""
     if len(front) <= most:
         return front
-    return front[np.unique(np.linspace(0, len(front) - 1, most).round().astype(int))]
+    v = values[front]
+    span = np.ptp(v, axis=0)
+    steps = np.hypot.reduce(np.diff(v / np.where(span > 0, span, 1.0), axis=0), axis=1)
+    along = np.concatenate([[0.0], np.cumsum(steps)])  # distance along the front
+    if along[-1] == 0.0:  # (all at one point: by position)
+        along = np.arange(len(front), dtype=float)
+    targets = np.linspace(0.0, along[-1], most)
+    nearest = np.clip(np.searchsorted(along, targets), 1, len(front) - 1)
+    nearest -= targets - along[nearest - 1] < along[nearest] - targets  # the closer one
+    return front[np.unique(nearest)]
 
 
 def pareto(rows: list[dict], names: list[str]) -> np.ndarray:
@@ -319,8 +331,8 @@ def explore_figure(
 
     kinds = list(dict.fromkeys(_kind(r) for r in rows))
     causes = [first_violation(r) or _OK for r in rows]
-    legend = [_OK] + sorted({c for c in causes if c != _OK})
-    cmap = {c: _colour(i) for i, c in enumerate(legend)}
+    legend = sorted({_OK, *causes}, key=_outcome_rank)
+    cmap = {c: _colour(c) for c in legend}
     n = max(1, len(kinds))
     cols = min(n, 2)
     maps = math.ceil(n / cols)
@@ -416,7 +428,7 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
     span = np.nanmax(v[front, :2], axis=0) - np.nanmin(v[front, :2], axis=0)
     span = np.where(span > 0, span, 1.0)
     shown: list[np.ndarray] = []
-    for n, i in enumerate(offered(front), start=1):
+    for n, i in enumerate(offered(front, v), start=1):
         at = v[i, :2] / span
         if any(np.hypot(*(at - p)) < 0.04 for p in shown):
             continue
@@ -444,20 +456,31 @@ def _label(kind: str) -> str:
     return k.label if k is not None else kind or "design"
 
 
-def _colour(i: int) -> tuple[float, float, float]:
-    palette = [
-        (0.17, 0.63, 0.17),
-        (0.84, 0.15, 0.16),
-        (1.0, 0.5, 0.05),
-        (0.58, 0.4, 0.74),
-        (0.55, 0.34, 0.29),
-        (0.89, 0.47, 0.76),
-        (0.5, 0.5, 0.5),
-        (0.74, 0.74, 0.13),
-        (0.09, 0.75, 0.81),
-        (0.12, 0.47, 0.71),
-    ]
-    return palette[i % len(palette)]
+# the map's outcomes in a fixed order: each has its own colour in every sweep (a review:
+# red had meant another limit from one run to the next)
+OUTCOMES = (_OK, "not a design", *CODES, "invalid")
+
+
+def _outcome_rank(cause: str) -> int:
+    return OUTCOMES.index(cause) if cause in OUTCOMES else len(OUTCOMES)
+
+
+def _colour(cause: str) -> tuple[float, ...]:
+    """A cause's colour: green for valid, grey for no design at all, the limits from
+    matplotlib's tab20 (its strong colours first, greens and greys left out) and
+    tab20b, black for anything else."""
+    from matplotlib import colormaps
+
+    if cause == _OK:
+        return (0.17, 0.63, 0.17)
+    if cause == "not a design":
+        return (0.62, 0.62, 0.62)
+    tab20, tab20b = colormaps["tab20"], colormaps["tab20b"]  # (20 colours each)
+    strong = [tab20(i)[:3] for i in range(0, 20, 2) if i not in (4, 14)]  # the first
+    light = [tab20(i)[:3] for i in range(1, 20, 2) if i not in (5, 15)]  # limits: strong
+    palette = strong + light + [tab20b(i)[:3] for i in range(0, 20, 4)]
+    i = _outcome_rank(cause) - 2
+    return tuple(palette[i]) if 0 <= i < len(palette) else (0.0, 0.0, 0.0)
 
 
 def _patch(colour, label: str):

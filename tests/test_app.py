@@ -1130,8 +1130,8 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     e._analyst.sweep_chunk = lambda base, pts, *a: sent.extend(pts) or real(base, pts, *a)
     e.run_btn.value = True  # click
     assert wait_for(lambda: "on the Pareto front" in e.progress.content, 120.0), e.progress.content
-    assert "**16 designs**" in e.progress.content
-    assert "(12 distinct" in e.progress.content  # single followers ignore the offset e
+    # single followers ignore the offset e: 16 points make 12 designs
+    assert "**16 points**, 12 distinct designs" in e.progress.content
     assert len(sent) == 12  # ... so each of them is analysed once
     assert e.image is not None and e.image.image.shape[2] == 3
     offers = e.front_dd.options
@@ -1157,6 +1157,48 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     e.x.value = e.y.value
     e.run_btn.value = True
     assert "two different fields" in e.progress.content
+
+
+def test_explore_says_what_it_runs_and_why_points_are_no_designs(tab, monkeypatch):
+    """A designer's review: a step count out of range ran another count, a motion field
+    of a segment program made every point "not a design" without a reason, points the
+    model refuses said nothing of why, a cancel before the first designs left the last
+    map loadable, and a loaded design took the sweep's value of a field its follower
+    ignores."""
+    s, e = tab, tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Roller radius r_c [mm]"
+    e.all_kinds.value = False
+    e.steps._impl.value = 0  # a box accepts what the slider does not
+    e.run_btn.value = True
+    assert "Steps per field: a whole number from 2 to 15" in e.progress.content
+    e.steps.value = 2
+    e.x_range.value, e.y_range.value = (-50.0, -10.0), (5.0, 6.0)  # no base radius < 0
+    e.run_btn.value = True
+    assert wait_for(lambda: "Pareto front" in e.progress.content, 60.0), e.progress.content
+    text = e.progress.content
+    assert "0 valid" in text and "No valid design" in text
+    assert "2 are no design at all; the commonest reason (2): cam.base\\_radius\\_mm" in text
+    # a concave face ignores the roller radius: its front designs keep the design's own
+    assert s.design.follower.kind.value == "double_concave"
+    e.x_range.value = (70.0, 90.0)
+    e.run_btn.value = True
+    assert wait_for(lambda: not e.load_btn.disabled, 60.0), e.progress.content
+    assert all(", –" in o for o in e.front_dd.options), e.front_dd.options
+    roller = s.design.follower.roller_radius_mm
+    e.load_btn.value = True
+    assert wait_for(lambda: "Loaded design" in e.progress.content, 10.0)
+    assert s.design.follower.roller_radius_mm == roller
+    # cancelled before the first chunk: the last results go, not left as this run's
+    cancel_first = lambda base, points: e._cancel.set() or list(range(len(points)))  # noqa: E731
+    monkeypatch.setattr(e._analyst, "same_designs", cancel_first)  # (the app's analyst)
+    e.run_btn.value = True
+    assert wait_for(lambda: "Cancelled before" in e.progress.content, 10.0)
+    assert e.image is None and e.load_btn.disabled and e.front_dd.options == ("–",)
+    # a program of segments: its classic fields are no field of it
+    s.load_preset("double_index")
+    e.x.value = "Lift h [mm]"
+    e.run_btn.value = True
+    assert "made of segments" in e.progress.content
 
 
 def test_explore_with_a_profile_figure_runs_the_full_analysis(tab):

@@ -962,14 +962,65 @@ def test_a_point_that_changes_the_follower_renames_it():
 def test_the_offered_front_designs_spread_along_the_front():
     """A front longer than the list offers designs spread along it, both ends kept, in
     order (a review: the first 30 of a 107-design front were all small cams, and the
-    low-stress large ones could not be loaded)."""
+    low-stress large ones could not be loaded), evenly in the figures' plane: where
+    the front crowds (designs 0.01 mm apart) it offers one of the crowd, not many (a
+    second review)."""
     from camcore.explore import offered
 
     front = np.arange(100, 207)  # 107 row indices, ordered by the first figure
-    picks = offered(front, 30)
+    values = np.zeros((207, 2))
+    values[front, 0] = np.linspace(0.0, 1.0, 107)
+    values[front, 1] = 1.0 - values[front, 0]
+    picks = offered(front, values, 30)
     assert len(picks) == 30 and picks[0] == 100 and picks[-1] == 206
     assert np.all(np.diff(picks) > 0) and np.all(np.diff(picks) <= 5)  # no big gap
-    assert np.array_equal(offered(front[:12], 30), front[:12])  # short: all of it
+    assert np.array_equal(offered(front[:12], values, 30), front[:12])  # short: all of it
+    # 80 designs crowded within 1e-4 at one end, 27 spread over the rest
+    values[front, 0] = np.concatenate([np.linspace(0, 1e-4, 80), np.linspace(0.04, 1.0, 27)])
+    values[front, 1] = 1.0 - values[front, 0]
+    picks = offered(front, values, 30)
+    crowd = picks[picks < 180]
+    assert len(crowd) == 1 and set(front[80:]) <= set(picks)  # every spread design
+    gaps = np.diff(values[picks, 0])
+    assert gaps.max() < 0.06  # no stretch of the front left without an offer
+
+
+def test_each_limit_keeps_its_colour_from_sweep_to_sweep():
+    """The map's colour of a limit is its own, whichever others a sweep meets (a
+    review: red meant one limit in one run and another in the next); every code the
+    checks report has one, all distinct."""
+    import re
+    from pathlib import Path
+
+    from camcore import checks
+    from camcore.explore import OUTCOMES, _colour, explore_figure
+
+    source = Path(checks.__file__).read_text()
+    assert set(re.findall(r'Violation\(\s*"(\w+)"', source)) == set(checks.CODES)
+    assert len({_colour(c) for c in OUTCOMES}) == len(OUTCOMES)
+
+    def row(r_b: float, codes: list[str]) -> dict:
+        violations = json.dumps([{"code": c} for c in codes])
+        return {
+            "grid.follower.kind": "single_roller",
+            "grid.cam.base_radius_mm": r_b,
+            "grid.cam.width_mm": 10.0,
+            **{"valid": not codes, "error": None, "violations": violations},
+        }
+
+    def colour_of_first_cell(rows):
+        fig = explore_figure(
+            rows,
+            ("cam.base_radius_mm", "r_b"),
+            ("cam.width_mm", "w"),
+            ["cam_size", "stress"],
+            np.array([], int),
+        )
+        return tuple(fig.axes[0].collections[0].get_facecolors()[0])
+
+    one = colour_of_first_cell([row(60, ["pressure_angle"]), row(70, [])])
+    two = colour_of_first_cell([row(60, ["pressure_angle"]), row(70, ["curvature_convex"])])
+    assert one == two
 
 
 def test_a_grid_too_large_is_refused_before_its_values_are_made(monkeypatch):
