@@ -119,7 +119,7 @@ class ExplorePanel:
         for widget in self._setup_widgets():
             widget.on_update(lambda _: self._keep_setup())
         self.run_btn.on_click(lambda _: self.start())
-        self.cancel_btn.on_click(lambda _: self._cancel.set())
+        self.cancel_btn.on_click(lambda _: self.cancel())
         self.load_btn.on_click(lambda _: self.load(self.front_dd.value))
         self.x.on_update(lambda _: self._suggest(self.x, self.x_range, "x"))
         self.y.on_update(lambda _: self._suggest(self.y, self.y_range, "y"))
@@ -226,10 +226,11 @@ class ExplorePanel:
         names = [FIGURE_LABELS.get(f.value) for f in (self.fig_a, self.fig_b)]
         if self.fig_c.value != NO_FIGURE:
             names.append(FIGURE_LABELS.get(self.fig_c.value))
-        if px is None or py is None or px == py or None in names or len(set(names)) < len(names):
-            self.progress.content = (
-                "✖ Choose two different fields and two or three different figures."
-            )
+        if px is None or py is None or px == py:
+            self.progress.content = "✖ Choose two different fields (x and y)."
+            return None
+        if None in names or len(set(names)) < len(names):
+            self.progress.content = "✖ Choose two or three different figures (1, 2 and 3)."
             return None
         assert self._design is not None  # bound before any click
         design = self._design()
@@ -306,6 +307,7 @@ class ExplorePanel:
             self._clear()  # (a review: the last sweep's map stayed, loadable, unmarked)
             self.progress.content = "Cancelled before the first designs."
             return
+        self.progress.content = f"Drawing the map of {len(rows)} points…"
         front = pareto(rows, names)
         png = self._analyst.explore_png(rows, x, y, names, front, limits)
         values = figure_values(rows, names)
@@ -371,6 +373,13 @@ class ExplorePanel:
         self._load(design)
         number = label.split(" ", 1)[0].rstrip(".")
         self.progress.content = f"Loaded design {esc(number)} of the Pareto front."
+
+    def cancel(self) -> None:
+        """Stop the sweep after the chunk it is on (said at once: a chunk can take
+        seconds on the full-analysis path)."""
+        if self._thread is not None and self._thread.is_alive() and not self._cancel.is_set():
+            self._cancel.set()
+            self.progress.content = "Cancelling after the current designs…"
 
     def close(self) -> None:
         self._cancel.set()

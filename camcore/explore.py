@@ -360,7 +360,7 @@ def explore_figure(
         ax.set_xlabel(x[1], fontsize=11)
         ax.set_ylabel(y[1], fontsize=11)
         ax.tick_params(labelsize=10)
-    handles = [_patch(cmap[c], c) for c in legend]
+    handles = [_patch(cmap[c], c.replace("_", " ")) for c in legend]  # (words, not codes)
     fig.legend(
         handles=handles,
         loc="outside upper center",
