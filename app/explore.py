@@ -111,6 +111,7 @@ class ExplorePanel:
         self._thread: threading.Thread | None = None
         self._offers: dict[str, dict] = {}  # dropdown label -> grid point
         self._armed: str | None = None  # the offer a second click loads despite edits
+        self._drawing = False  # the sweep's results are being drawn (no Cancel)
         self._base: dict = {}
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
 
@@ -214,6 +215,7 @@ class ExplorePanel:
             if job is None:
                 return
             self._cancel.clear()
+            self._drawing = False
             self.run_btn.disabled, self.cancel_btn.disabled = True, False
             self._thread = threading.Thread(
                 target=self._sweep, args=job, daemon=True, name="cam-explore"
@@ -285,6 +287,8 @@ class ExplorePanel:
                 rows = self._analyst.sweep_chunk(base, [points[i] for i in idx], batched)
                 done.update(zip(idx, rows, strict=True))
                 ok = _valid_designs(list(done.values()))
+                if self._cancel.is_set():  # ("Cancelling…" stays)
+                    continue
                 self.progress.content = (
                     f"Running: **{len(done)} / {len(own)}** distinct designs{note}, "
                     f"{ok} valid so far…"
@@ -307,7 +311,9 @@ class ExplorePanel:
             self._clear()  # (a review: the last sweep's map stayed, loadable, unmarked)
             self.progress.content = "Cancelled before the first designs."
             return
-        self.progress.content = f"Drawing the map of {len(rows)} points…"
+        with self._lock:  # (a Cancel from now on has nothing left to stop)
+            self._drawing, self.cancel_btn.disabled = True, True
+            self.progress.content = f"Drawing the map of {len(rows)} points…"
         front = pareto(rows, names)
         png = self._analyst.explore_png(rows, x, y, names, front, limits)
         values = figure_values(rows, names)
@@ -329,7 +335,7 @@ class ExplorePanel:
                     self.image = self.gui.add_image(_decode(png), format="png")
             else:
                 self.image.image = _decode(png)
-        self.progress.content = _summary(rows, total, front, names, limits)
+            self.progress.content = _summary(rows, total, front, names, limits, len(offers))
 
     def _clear(self) -> None:
         """No results on show: no offers, no map."""
@@ -376,10 +382,12 @@ class ExplorePanel:
 
     def cancel(self) -> None:
         """Stop the sweep after the chunk it is on (said at once: a chunk can take
-        seconds on the full-analysis path)."""
-        if self._thread is not None and self._thread.is_alive() and not self._cancel.is_set():
-            self._cancel.set()
-            self.progress.content = "Cancelling after the current designs…"
+        seconds on the full-analysis path); nothing once its results are being drawn."""
+        with self._lock:
+            running = self._thread is not None and self._thread.is_alive()
+            if running and not self._drawing and not self._cancel.is_set():
+                self._cancel.set()
+                self.progress.content = "Cancelling after the current designs…"
 
     def close(self) -> None:
         self._cancel.set()
@@ -423,35 +431,31 @@ def _offer(row: dict) -> tuple[dict, str]:
     return point, ", ".join(shown)
 
 
-def _summary(rows: list[dict], total: int, front, names: list[str], limits) -> str:
+def _summary(rows: list[dict], total: int, front, names: list[str], limits, listed: int) -> str:
     """The line under a finished sweep: points and distinct designs, valid ones, the
     front; why points are no designs; what a figure cannot tell apart."""
     first = distinct(rows)
     ok = _valid_designs(rows)
     done = "" if len(rows) == total else f", cancelled after {len(rows)} of {total}"
     designs = f"**{len(rows)} points**{done}, {int(first.sum())} distinct designs"
-    listed = (
-        f" ({MAX_FRONT} of them numbered and listed, spread along it)"
-        if len(front) > MAX_FRONT
-        else ""
+    some = (
+        f" ({listed} of them numbered and listed, spread along it)" if len(front) > listed else ""
     )
-    out = f"{designs}: {ok} valid, {len(front)} on the Pareto front{listed}."
-    errors = [  # why, less the value each point had ("(got -10.0)")
-        re.sub(r" \(got [^()]*\)", "", str(r["error"]))
-        for r, f in zip(rows, first, strict=True)
-        if f and r.get("error")
-    ]
-    if errors:
-        common = max(sorted(set(errors)), key=errors.count)
+    out = f"{designs}: {ok} valid, {len(front)} on the Pareto front{some}."
+    errors = [str(r["error"]) for r, f in zip(rows, first, strict=True) if f and r.get("error")]
+    if errors:  # one reason is one message but for the numbers in it (each point's own)
+        reasons = [re.sub(r"-?[0-9][0-9.e+-]*", "#", e) for e in errors]
+        common = max(sorted(set(reasons)), key=reasons.count)
+        example = errors[reasons.index(common)]
         out += (
             f" {len(errors)} are no design at all; the commonest reason "
-            f"({errors.count(common)}): {esc(common[:300])}."
+            f"({reasons.count(common)}), e.g.: {esc(example[:300])}."
         )
     if not ok:
         out += " No valid design: widen or move the ranges."
     flat = [axis for axis, (lo, hi) in zip("xy", limits, strict=True) if lo == hi]
     if flat:
-        out += f" The {' and '.join(flat)} range is one value."
+        out += f" The {' and '.join(flat)} range{'s are' if len(flat) > 1 else ' is'} one value."
     kinds = {r.get("grid.follower.kind") for r in rows}
     rollers = [k for k in kinds if isinstance(k, str) and k.endswith("_roller")]
     if "wear" in names and rollers:

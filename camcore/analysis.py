@@ -13,7 +13,6 @@ and lists the broken limits (camcore.checks).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from functools import cached_property
 
 import numpy as np
 
@@ -167,11 +166,16 @@ class Analysis(Local):
         """A per-face quantity at the face that touches (the rise face when both do)."""
         return np.where(self.in_contact[0], per_face[0], per_face[-1])
 
-    @cached_property
+    @property
     def spring(self) -> machine.Spring:
         """machine.spring on this grid, searched once: the jump-speed check
-        (limits.min_jump_speed_ratio) and the summary both read it."""
-        return machine.spring(self.design, self.theta, self.prog)
+        (limits.min_jump_speed_ratio) and the summary both read it. (Kept by hand, not
+        a functools.cached_property: on Python 3.11 that holds one lock for every
+        Analysis, and threads' searches would queue.)"""
+        kept = vars(self).get("_spring")
+        if kept is None:
+            kept = vars(self)["_spring"] = machine.spring(self.design, self.theta, self.prog)
+        return kept
 
     def local(self, theta: np.ndarray) -> Local:
         """The per-angle results at other cam angles (e.g. between the grid's)."""
@@ -296,8 +300,8 @@ def _analyze(
         lift_error = max_lift_error(result)
     violations = checks.run_all(result, lift_error)
     done = replace(result, violations=violations, lift_error=lift_error)
-    if "spring" in vars(result):  # the check's spring search, kept for the summary
-        vars(done)["spring"] = result.spring
+    if "_spring" in vars(result):  # the check's spring search, kept for the summary
+        vars(done)["_spring"] = vars(result)["_spring"]
     return done
 
 

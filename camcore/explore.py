@@ -478,7 +478,7 @@ def _colour(cause: str) -> tuple[float, ...]:
     tab20, tab20b = colormaps["tab20"], colormaps["tab20b"]  # (20 colours each)
     strong = [tab20(i)[:3] for i in range(0, 20, 2) if i not in (4, 14)]  # the first
     light = [tab20(i)[:3] for i in range(1, 20, 2) if i not in (5, 15)]  # limits: strong
-    palette = strong + light + [tab20b(i)[:3] for i in range(0, 20, 4)]
+    palette = strong + light + [tab20b(i)[:3] for i in (0, 8, 12, 16, 2)]  # (4: olive)
     i = _outcome_rank(cause) - 2
     return tuple(palette[i]) if 0 <= i < len(palette) else (0.0, 0.0, 0.0)
 

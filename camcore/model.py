@@ -141,8 +141,15 @@ class _Part(BaseModel):
         if isinstance(v, bool) and info.field_name in _number_fields(cls):
             # (its own type, not value_error: a sweep refuses it for every row, as a
             # string for a number, not as a value that depends on the other fields)
-            raise PydanticCustomError("bool_as_number", "a number, not true or false")
+            raise _type_error("a number, not true or false")
         return v
+
+
+def _type_error(message: str) -> PydanticCustomError:
+    """A validation error that holds whatever the other fields are (a wrong type, a
+    field the design does not have): its own error type, not value_error, so a sweep
+    refuses the spec rather than making a row each (camcore.sweep)."""
+    return PydanticCustomError("design_type", "{message}", {"message": message})
 
 
 @functools.cache
@@ -275,12 +282,12 @@ class Motion(_Part):
             if k.endswith(("_mm", "_deg")) and (
                 isinstance(v, bool) or not isinstance(v, int | float)
             ):
-                raise ValueError(f"{k}: a number is required, got {v!r}")
+                raise _type_error(f"{k}: a number is required, got {v!r}")
         rest = {k: v for k, v in data.items() if k not in CLASSIC_KEYS}
         if "segments" in rest:  # edit the classic program the segments hold
             current = classic_of(rest["segments"])
             if current is None:
-                raise ValueError(
+                raise _type_error(
                     f"{', '.join(sorted(flat))}: these edit a rise-dwell-fall-dwell "
                     "program; this one has other segments, so edit motion.segments"
                 )

@@ -25,6 +25,7 @@ import hashlib
 import itertools
 import json
 import math
+import re
 import shutil
 import sys
 import time
@@ -242,7 +243,9 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
 def _field_of(path: str) -> str:
     """The field a grid path sets, its list indexes as numbers ("segments.00" is
     "segments.0")."""
-    return ".".join(str(int(p)) if p.isascii() and p.isdigit() else p for p in path.split("."))
+    return ".".join(  # (an index is 1-6 digits, as model._child reads one)
+        str(int(p)) if re.fullmatch(r"[0-9]{1,6}", p) else p for p in path.split(".")
+    )
 
 
 def _classic(field: str) -> bool:

@@ -205,6 +205,14 @@ def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
         ),
         # true is no number, for every row (not a row each that says so)
         ({"grid": {"cam.base_radius_mm": [True, False]}}, "true is not a value of this field"),
+        ({"grid": {"motion.rise_deg": [True, False]}}, "true is not a value of this field"),
+        ({"grid": {"motion.lift_mm": ["5"]}}, '"5" is not a value of this field'),
+        # a classic field of a program of other segments: no row could take it
+        (
+            {"base": {"preset": "double_index"}, "grid": {"motion.lift_mm": [5, 6]}},
+            "5 is not a value of this field: .*edit motion.segments",
+        ),
+        ({"grid": {"cam." + "1" * 5000: [1]}}, "no such field"),  # (int() of 5000 digits)
         (
             {"grid": {"cam.base_radius_mm": {"from": -1.7e308, "to": 1.7e308, "num": 3}}},
             "span more than a float holds",
