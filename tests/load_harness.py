@@ -27,7 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 LIFT = "Lift h [mm]"
 PLOT_S = "Displacement S"
 EXPLORE_RUN = "Run the sweep"  # app.explore's button
-EXPLORE_DONE = re.compile(r"^\*\*(\d+) designs\*\*")  # its message when a sweep ends
+EXPLORE_DONE = re.compile(r"^\*\*(\d+) points\*\*")  # its message when a sweep ends
 READY_RE = re.compile(r"running at http://[^:\s]+:(\d+)")
 CLK_TCK = os.sysconf("SC_CLK_TCK")
 

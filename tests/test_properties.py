@@ -26,6 +26,7 @@ import os
 import re
 import warnings
 from dataclasses import fields
+from typing import get_args
 
 import numpy as np
 import pytest
@@ -660,6 +661,11 @@ def hostile(draw) -> tuple[dict, list[tuple[tuple[str, ...], str]]]:
             continue  # that part was already deleted or replaced
         if how == "nan":
             data[part][name] = draw(NOT_A_NUMBER)
+            if data[part][name] is None and type(None) in get_args(LEAVES[part, name].annotation):
+                # null is a value of an optional field (a rigid train, no limit): the
+                # slow suite found dynamics.train_stiffness_N_per_m = None counted broken
+                done = [(t, h) for t, h in done if t != (part, name)]
+                continue
             if LEAVES[part, name].annotation is bool:
                 how = "bool"  # pydantic reads "yes", "t", 0, 1, ... as booleans
             # a bool field accepts some strings ("yes") and ints; enum fields reject all
