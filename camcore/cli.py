@@ -499,7 +499,7 @@ def _parser() -> argparse.ArgumentParser:
     w = sub.add_parser("sweep", help="analyse a grid of designs into one Parquet table")
     w.add_argument(
         "spec",
-        help='sweep JSON: {"base": {...} | {"preset": NAME}, "grid": '
+        help='sweep JSON: {"base": {...} | {"preset": NAME} | {"file": NAME}, "grid": '
         '{"cam.base_radius_mm": [60, 70] | {"from", "to", "num"}}}',
     )
     w.add_argument("--out", required=True, metavar="FILE", help="Parquet file to write")
@@ -521,7 +521,7 @@ def _parser() -> argparse.ArgumentParser:
     w.add_argument(
         "--no-verify",
         action="store_true",
-        help="skip the geometric check (faster; its columns are empty)",
+        help="skip the geometric check (faster; verification.max_lift_error_mm is empty)",
     )
     w.add_argument(
         "--fast",
