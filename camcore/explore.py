@@ -412,6 +412,18 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> 
         title = "valid designs; the numbered line is the Pareto front (smaller is better)"
     ax.set_title(title, fontsize=12)
     ax.tick_params(labelsize=10)
+    if not valid.any():  # (a review: empty axes of -0.04 .. 0.04 "MPa" said nothing)
+        ax.text(
+            0.5,
+            0.5,
+            "no valid design in this sweep",
+            transform=ax.transAxes,
+            ha="center",
+            va="center",
+            fontsize=13,
+        )
+        ax.set_xticks([])
+        ax.set_yticks([])
     if valid.any():
         handles = [  # grey markers: with a third figure the colour is its value
             Line2D(

@@ -1026,6 +1026,15 @@ def test_each_limit_keeps_its_colour_from_sweep_to_sweep():
         )
         return tuple(fig.axes[0].collections[0].get_facecolors()[0])
 
+    # a sweep of no valid design says so where the front would be
+    fig = explore_figure(
+        [row(60, ["pressure_angle"])],
+        ("cam.base_radius_mm", "r_b"),
+        ("cam.width_mm", "w"),
+        ["cam_size", "stress"],
+        np.array([], int),
+    )
+    assert "no valid design in this sweep" in [t.get_text() for t in fig.axes[-1].texts]
     one = colour_of_first_cell([row(60, ["pressure_angle"]), row(70, [])])
     two = colour_of_first_cell([row(60, ["pressure_angle"]), row(70, ["curvature_convex"])])
     assert one == two
