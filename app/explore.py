@@ -47,6 +47,10 @@ PARAMETERS = {
     "Rise β_r [°]": "motion.rise_deg",
     "Fall β_f [°]": "motion.fall_deg",
     "Cam speed [rpm]": "cam.speed_rpm",
+    # the machine's own trade-offs (a designer sizes the spring against the speed, the
+    # width against the stress): not batched fields, each value its own batch
+    "Cam width w [mm]": "cam.width_mm",
+    "Spring rate k [N/m]": "dynamics.spring_rate_N_per_m",
 }
 # labels of earlier versions, as a kept setup may hold them
 OLD_LABELS = {"Speed [rpm]": "Cam speed [rpm]"}

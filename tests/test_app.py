@@ -1204,6 +1204,30 @@ def test_explore_says_what_it_runs_and_why_points_are_no_designs(tab, monkeypatc
     assert "made of segments" in e.progress.content
 
 
+def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):
+    """The spring rate and the cam width are Explore fields too: the paper example's
+    spring (k_min 2800 N/m at 1200 rpm, jump speed 1855 rpm) over speed x rate shows
+    the follower leaving the cam where the spring is weak and the cam fast, and
+    holding where it is stiff and slow."""
+    e = tab.ui.explore
+    e.x.value, e.y.value = "Cam speed [rpm]", "Spring rate k [N/m]"
+    e.x_range.value, e.y_range.value = (600.0, 2400.0), (1000.0, 9000.0)
+    e.steps.value, e.all_kinds.value = 3, False
+    rows: list[dict] = []
+    real = e._analyst.sweep_chunk
+    monkeypatch.setattr(  # (the app's analyst: undone after the test)
+        e._analyst,
+        "sweep_chunk",
+        lambda base, pts, *a: rows.extend(real(base, pts, *a)) or rows[-len(pts) :],
+    )
+    e.run_btn.value = True
+    assert wait_for(lambda: "Pareto front" in e.progress.content, 120.0), e.progress.content
+    assert "**9 points**, 9 distinct designs" in e.progress.content
+    by = {(r["grid.cam.speed_rpm"], r["grid.dynamics.spring_rate_N_per_m"]): r for r in rows}
+    assert "jump" in by[2400.0, 1000.0]["violations"]
+    assert by[600.0, 9000.0]["valid"]
+
+
 def test_explore_with_a_profile_figure_runs_the_full_analysis(tab):
     """Wear needs the profile, which the batched core does not build: a sweep that
     ranks by wear runs one full analysis per design, and its front shows wear."""
