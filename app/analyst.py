@@ -198,9 +198,12 @@ class Analyst:
 
         return self._run("doc", stations_image, a)
 
-    def explore_png(self, rows, x, y, names, front, limits=None) -> bytes:
-        """camcore.explore.explore_png, drawn in the background worker."""
-        return self._run("bg", explore.explore_png, rows, x, y, names, front, 760, limits)
+    def explore_png(
+        self, rows, x, y, names, front, limits=None, shown_px: int = explore.PANEL_PX
+    ) -> bytes:
+        """camcore.explore.explore_png for a panel ``shown_px`` wide, drawn in the
+        background worker."""
+        return self._run("bg", explore.explore_png, rows, x, y, names, front, shown_px, limits)
 
     def close(self) -> None:
         with self._lock:

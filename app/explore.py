@@ -23,6 +23,7 @@ import numpy as np
 from camcore.explore import (
     FIGURES,
     OFFERED,
+    PANEL_PX,
     PROFILE_FIGURES,
     distinct,
     figure_values,
@@ -86,8 +87,8 @@ class ExplorePanel:
         gui.add_markdown(
             "Sweep two fields around the design on screen; each point is a whole analysis "
             "(the paper's limits; the profile and geometric checks run when you load a "
-            "design). The map reads best with *Curves → Wide panel* on, or full size "
-            "with the image's ⤢."  # (a review: its text is ~5 px in the narrow panel)
+            "design). The map is drawn for the panel's width: *Curves → Wide panel* "
+            "puts the followers' maps side by side; the image's ⤢ shows it twice as large."
         )
         self.x = gui.add_dropdown("x field", labels, initial_value=labels[0])
         self.x_range = gui.add_vector2(_range_label("x", labels[0]), (60.0, 110.0), step=0.5)
@@ -118,6 +119,8 @@ class ExplorePanel:
         self._armed: str | None = None  # the offer a second click loads despite edits
         self._drawing = False  # the sweep's results are being drawn (no Cancel)
         self._base: dict = {}
+        self.shown_px = PANEL_PX  # the panel's width: the map is drawn for it
+        self._drawn: tuple | None = None  # (rows, x, y, names, front, limits, px) on show
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
 
     def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
@@ -320,7 +323,8 @@ class ExplorePanel:
             self._drawing, self.cancel_btn.disabled = True, True
             self.progress.content = f"Drawing the map of {len(rows)} points…"
         front = pareto(rows, names)
-        png = self._analyst.explore_png(rows, x, y, names, front, limits)
+        px = self.shown_px
+        png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
         values = figure_values(rows, names)
         offers = {}
         for n, i in enumerate(offered(front, values, MAX_FRONT), start=1):
@@ -332,20 +336,56 @@ class ExplorePanel:
             offers[f"{n}. {shown} → {figs}"] = point
         with self._lock:
             self._base, self._offers, self._armed = base, offers, None
+            self._drawn = (rows, x, y, names, front, limits, px)
             self.front_dd.options = tuple(offers) or ("–",)
             self.front_dd.value = self.front_dd.options[0]
             self.load_btn.disabled = not offers
-            if self.image is None:
-                with self._folder:
-                    self.image = self.gui.add_image(_decode(png), format="png")
-            else:
-                self.image.image = _decode(png)
+            self._put_image(png)
             self.progress.content = _summary(rows, total, front, names, limits, len(offers))
+        if self.shown_px != px:  # the panel changed width while the map was drawn
+            self._redraw()
+
+    def _put_image(self, png: bytes) -> None:
+        """Show ``png`` as the map (under self._lock)."""
+        if self.image is None:
+            with self._folder:
+                self.image = self.gui.add_image(_decode(png), format="png")
+        else:
+            self.image.image = _decode(png)
+
+    def set_width(self, px: int) -> None:
+        """The panel is now ``px`` wide: the map on show is drawn again for it, in the
+        background (a sweep that is running draws for it when it ends)."""
+        with self._lock:
+            self.shown_px = px
+            busy = self._thread is not None and self._thread.is_alive()
+            if busy or self._drawn is None or self._drawn[-1] == px:
+                return
+            self._thread = threading.Thread(target=self._redraw, daemon=True, name="cam-map")
+            self._thread.start()
+
+    def _redraw(self) -> None:
+        """Draw the map on show for the panel's width, until it holds still."""
+        while True:
+            with self._lock:
+                drawn, px = self._drawn, self.shown_px
+            if drawn is None or drawn[-1] == px:
+                return
+            rows, x, y, names, front, limits, _ = drawn
+            try:
+                png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
+            except Exception:  # (a worker lost: the map drawn for the old width stays)
+                return
+            with self._lock:
+                if self._drawn is not drawn:  # cleared or replaced meanwhile
+                    return
+                self._drawn = (*drawn[:-1], px)
+                self._put_image(png)
 
     def _clear(self) -> None:
         """No results on show: no offers, no map."""
         with self._lock:
-            self._offers, self._armed = {}, None
+            self._offers, self._armed, self._drawn = {}, None, None
             self.front_dd.options = ("–",)
             self.front_dd.value = "–"
             self.load_btn.disabled = True

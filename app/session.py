@@ -1107,6 +1107,7 @@ class Session:
         with self.lock:
             self.panel_px = wide_panel_px(drawn) if on else NARROW_PANEL_PX
             self.client.gui.main_panel.set_width(self.panel_px)
+            self.ui.explore.set_width(self.panel_px)  # (its map is drawn for the panel)
             self.ui.where_md.content = self._where(self.view.k)  # its room follows
             if self.camera_view != "3D":  # the mechanism beside the panel's new width
                 self.reset_camera()
@@ -1129,6 +1130,7 @@ class Session:
             if self.ui.wide_box.value:
                 self.panel_px = wide_panel_px(w)
                 self.client.gui.main_panel.set_width(self.panel_px)
+                self.ui.explore.set_width(self.panel_px)
             if self.camera_view != "3D" and _near(pose, self._preset_pose):
                 self.reset_camera()
 

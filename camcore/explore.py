@@ -281,19 +281,31 @@ def _kind(r: dict) -> str:
     return str(r.get("grid.follower.kind") or r.get("follower") or "")
 
 
+# The map is drawn for the width it is shown at: one point of text is PT_PX pixels
+# there (9 pt: 12 px, legible in the app's 384 px panel as in its 1000 px wide one),
+# and the PNG has twice the pixels (sharp on a high-DPI screen; the image's full-size
+# view doubles the text). A review found the earlier 760 px drawing's text at ~5 px
+# once the narrow panel had scaled it down.
+PT_PX = 1.35  # shown pixels per point of text
+DPI = 2 * 72 * PT_PX  # the PNG's pixels per inch: twice the shown ones
+FONT, SMALL = 9, 8  # [pt] titles and axis labels; ticks, legends and the front's numbers
+PANEL_PX = 384  # the app's narrow panel (app.layout.NARROW_PANEL_PX)
+MAP_IN = 2.4  # [in] the least width of one follower's map (more fit side by side)
+
+
 def explore_png(
     rows: list[dict],
     x: tuple[str, str],
     y: tuple[str, str],
     names: list[str],
     front: np.ndarray,
-    width_px: int = 760,
+    shown_px: int = PANEL_PX,
     limits: tuple[tuple[float, float], tuple[float, float]] | None = None,
 ) -> bytes:
-    """The exploration as one PNG (explore_figure)."""
-    fig = explore_figure(rows, x, y, names, front, width_px, limits)
+    """The exploration as one PNG (explore_figure), 2 x ``shown_px`` pixels wide."""
+    fig = explore_figure(rows, x, y, names, front, shown_px, limits)
     buf = io.BytesIO()
-    fig.savefig(buf, format="png")
+    fig.savefig(buf, format="png", dpi=DPI)
     return buf.getvalue()
 
 
@@ -317,16 +329,18 @@ def explore_figure(
     y: tuple[str, str],
     names: list[str],
     front: np.ndarray,
-    width_px: int = 760,
+    shown_px: int = PANEL_PX,
     limits: tuple[tuple[float, float], tuple[float, float]] | None = None,
 ):
-    """The exploration as a matplotlib Figure: per follower kind, the (x, y) grid
-    coloured by the first limit each design breaks (green: valid), all on the same axes:
-    ``limits`` ((x0, x1), (y0, y1)), the sweep's ranges, else those of the rows (a
-    sweep cancelled midway leaves a kind part of the range, which must not look like
-    the whole); below, the valid designs in the plane of the first two figures with the
-    Pareto front of ``names`` (two or three figures; a third colours the points)
-    numbered as in the app's list. ``x`` and ``y`` are (grid path, axis label)."""
+    """The exploration as a matplotlib Figure, laid out to be shown ``shown_px`` wide
+    (PT_PX pixels per point of text): per follower kind, the (x, y) grid coloured by
+    the first limit each design breaks (green: valid), side by side as many as fit
+    (MAP_IN), all on the same axes: ``limits`` ((x0, x1), (y0, y1)), the sweep's
+    ranges, else those of the rows (a sweep cancelled midway leaves a kind part of the
+    range, which must not look like the whole); below, the valid designs in the plane
+    of the first two figures with the Pareto front of ``names`` (two or three figures;
+    a third colours the points) numbered as in the app's list. ``x`` and ``y`` are
+    (grid path, axis label)."""
     from matplotlib.figure import Figure as MplFigure
 
     kinds = list(dict.fromkeys(_kind(r) for r in rows))
@@ -334,49 +348,62 @@ def explore_figure(
     legend = sorted({_OK, *causes}, key=_outcome_rank)
     cmap = {c: _colour(c) for c in legend}
     n = max(1, len(kinds))
-    cols = min(n, 2)
+    width = max(shown_px, 240) / (72 * PT_PX)  # [in]
+    cols = min(n, max(2, int(width // MAP_IN)))
     maps = math.ceil(n / cols)
-    fig = MplFigure(figsize=(width_px / 100, 3.0 * maps + 4.2), dpi=100, layout="constrained")
-    grid = fig.add_gridspec(maps + 1, cols, height_ratios=[1.0] * maps + [1.35])
+    map_h = 0.72 * width / cols + 0.5  # [in] a map and its title and ticks
+    front_h = min(0.75 * width, 4.2) + 0.6
+    legend_h = 0.3 + 0.2 * math.ceil(len(legend) / (2 if width < 6 else 4))
+    fig = MplFigure(
+        figsize=(width, legend_h + maps * map_h + front_h), dpi=DPI, layout="constrained"
+    )
+    grid = fig.add_gridspec(maps + 1, cols, height_ratios=[map_h] * maps + [front_h])
     xs = np.array([float(r.get(f"grid.{x[0]}", np.nan)) for r in rows])
     ys = np.array([float(r.get(f"grid.{y[0]}", np.nan)) for r in rows])
+    xlim = _limits(xs if limits is None else limits[0])
+    ylim = _limits(ys if limits is None else limits[1])
+    cells = max(len(set(xs[np.isfinite(xs)])), len(set(ys[np.isfinite(ys)])), 2)
+    side = 0.8 * (72 * width / cols - 40) / cells  # [pt] a marker fills most of its cell
+    first = None
     for i, kind in enumerate(kinds):
-        ax = fig.add_subplot(grid[i // cols, i % cols])
+        ax = fig.add_subplot(grid[i // cols, i % cols], sharex=first, sharey=first)
+        first = first or ax
         m = np.array([_kind(r) == kind for r in rows])
         ax.scatter(
             xs[m],
             ys[m],
             c=[cmap[c] for c, k in zip(causes, m, strict=True) if k],
             marker="s",
-            s=38,
+            s=float(np.clip(side, 3.0, 11.0)) ** 2,
             edgecolors="none",
         )
         unused = {p for r in rows if _kind(r) == kind for p in ignored_fields(r)}
         note = [axis for axis, (path, _) in zip("xy", (x, y), strict=True) if path in unused]
-        title = _label(kind) + (f" (does not use {' or '.join(note)})" if note else "")
-        ax.set_xlim(*_limits(xs if limits is None else limits[0]))
-        ax.set_ylim(*_limits(ys if limits is None else limits[1]))
-        ax.set_title(title, fontsize=12)
-        ax.set_xlabel(x[1], fontsize=11)
-        ax.set_ylabel(y[1], fontsize=11)
-        ax.tick_params(labelsize=10)
+        title = _label(kind) + (f"\n(does not use {' or '.join(note)})" if note else "")
+        ax.set_xlim(*xlim)
+        ax.set_ylim(*ylim)
+        ax.set_title(title, fontsize=FONT)
+        bottom, left = i + cols >= n, i % cols == 0  # (no map below it; the first column)
+        ax.set_xlabel(x[1] if bottom else "", fontsize=FONT)
+        ax.set_ylabel(y[1] if left else "", fontsize=FONT)
+        ax.tick_params(labelsize=SMALL, labelbottom=bottom, labelleft=left)
     handles = [_patch(cmap[c], c.replace("_", " ")) for c in legend]  # (words, not codes)
     fig.legend(
         handles=handles,
         loc="outside upper center",
-        ncols=min(4, len(handles)),
-        fontsize=10,
+        ncols=min(2 if width < 6 else 4, len(handles)),
+        fontsize=SMALL,
         title="first limit broken",
-        title_fontsize=10,
+        title_fontsize=SMALL,
     )
-    _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front)
+    _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front, width)
     return fig
 
 
-def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> None:
+def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, width: float) -> None:
     """The valid designs in the plane of the first two figures, the front numbered; a
     third figure colours the points, and its front (which in this plane is no curve)
-    is ringed instead of joined."""
+    is ringed instead of joined. ``width``: the figure's [in]."""
     from matplotlib.colors import Normalize
     from matplotlib.lines import Line2D
 
@@ -398,20 +425,21 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> 
             ax.scatter(v[front, 0], v[front, 1], s=70, facecolors="none", edgecolors="k", lw=0.9)
         else:
             ax.plot(v[front, 0], v[front, 1], "k-", lw=0.8, alpha=0.6)
-        _number_front(ax, v, front)
-    ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=11)
-    ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=11)
+        _number_front(ax, v, front, gap=2.5 * SMALL / (72 * width))
+    ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=FONT)
+    ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=FONT)
     if third:
         from matplotlib.cm import ScalarMappable
 
         fc = FIGURES[names[2]]
         bar = ax.figure.colorbar(ScalarMappable(**colour), ax=ax)
-        bar.set_label(f"{fc.label} [{fc.unit}]", fontsize=10)
-        title = "valid designs; ringed and numbered: the Pareto front of all three figures"
+        bar.set_label(f"{fc.label} [{fc.unit}]", fontsize=FONT)
+        bar.ax.tick_params(labelsize=SMALL)
+        title = "valid designs; ringed and numbered:\nthe Pareto front of all three figures"
     else:
-        title = "valid designs; the numbered line is the Pareto front (smaller is better)"
-    ax.set_title(title, fontsize=12)
-    ax.tick_params(labelsize=10)
+        title = "valid designs; the numbered line is\nthe Pareto front (smaller is better)"
+    ax.set_title(title if width < 6 else title.replace("\n", " "), fontsize=FONT)
+    ax.tick_params(labelsize=SMALL)
     if not valid.any():  # (a review: empty axes of -0.04 .. 0.04 "MPa" said nothing)
         ax.text(
             0.5,
@@ -420,7 +448,7 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> 
             transform=ax.transAxes,
             ha="center",
             va="center",
-            fontsize=13,
+            fontsize=FONT + 2,
         )
         ax.set_xticks([])
         ax.set_yticks([])
@@ -431,22 +459,23 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray) -> 
             )
             for k in kinds
         ]
-        ax.legend(handles=handles if third else None, fontsize=10)
+        ax.legend(handles=handles if third else None, fontsize=SMALL)
 
 
-def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
-    """The front's numbers (the app's list), leaving out those closer than 4 % of the
-    front's extent to one already printed (they would print over each other)."""
+def _number_front(ax, v: np.ndarray, front: np.ndarray, gap: float) -> None:
+    """The front's numbers (the app's list), leaving out those closer than ``gap`` (a
+    fraction of the front's extent: about two lines of text) to one already printed
+    (they would print over each other)."""
     span = np.nanmax(v[front, :2], axis=0) - np.nanmin(v[front, :2], axis=0)
     span = np.where(span > 0, span, 1.0)
     shown: list[np.ndarray] = []
     for n, i in enumerate(offered(front, v), start=1):
         at = v[i, :2] / span
-        if any(np.hypot(*(at - p)) < 0.04 for p in shown):
+        if any(np.hypot(*(at - p)) < gap for p in shown):
             continue
         shown.append(at)
         ax.annotate(
-            str(n), (v[i, 0], v[i, 1]), fontsize=10, xytext=(3, 3), textcoords="offset points"
+            str(n), (v[i, 0], v[i, 1]), fontsize=SMALL, xytext=(3, 3), textcoords="offset points"
         )
 
 

@@ -1111,6 +1111,8 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     """The Explore tab (issue 12): a small sweep of base radius x offset over the four
     followers runs in the background, shows the map, offers the Pareto front of cam
     size vs. stress, and loads a design of it into the tab."""
+    from app.layout import NARROW_PANEL_PX
+
     s, e = tab, tab.ui.explore
     e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
     e.x_range.value, e.y_range.value = (70.0, 90.0), (25.0, 35.0)
@@ -1134,6 +1136,14 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     assert "**16 points**, 12 distinct designs" in e.progress.content
     assert len(sent) == 12  # ... so each of them is analysed once
     assert e.image is not None and e.image.image.shape[2] == 3
+    # the map is drawn for the panel (twice its pixels): again when the panel widens
+    assert e.image.image.shape[1] == 2 * NARROW_PANEL_PX
+    s.ui.wide_box.value = True
+    wide = 2 * s.panel_px
+    assert s.panel_px > NARROW_PANEL_PX
+    assert wait_for(lambda: e.image.image.shape[1] == wide, 30.0), e.image.image.shape
+    s.ui.wide_box.value = False
+    assert wait_for(lambda: e.image.image.shape[1] == 2 * NARROW_PANEL_PX, 30.0)
     offers = e.front_dd.options
     assert offers and offers[0].startswith("1. ") and not e.load_btn.disabled
     # the paper's claim over this little design space: the lowest stress is a concave face

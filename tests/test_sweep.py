@@ -599,7 +599,10 @@ def test_every_follower_s_map_spans_the_whole_sweep():
         pareto(rows, names),
     )
     maps = fig.axes[:2]
-    assert [ax.get_title()[:14] for ax in maps] == ["single roller ", "double concave"]
+    assert [ax.get_title() for ax in maps] == [
+        "single roller\n(does not use y)",  # (the single roller has no offset e)
+        "double concave",
+    ]
     (x0, x1), (y0, y1) = maps[0].get_xlim(), maps[0].get_ylim()
     assert x0 < 60 and x1 > 110 and y0 < 20 and y1 > 30
     assert maps[1].get_xlim() == (x0, x1) and maps[1].get_ylim() == (y0, y1)
@@ -614,6 +617,40 @@ def test_every_follower_s_map_spans_the_whole_sweep():
         limits=((60, 110), (20, 30)),
     )
     assert fig.axes[0].get_xlim() == (x0, x1) and fig.axes[0].get_ylim() == (y0, y1)
+
+
+def test_the_map_is_drawn_for_the_panel_it_is_shown_in():
+    """A review read the map's text at ~5 px: it was drawn 760 px wide and shown in the
+    app's 384 px panel. Now every text of it is at least 10 px as shown, in the narrow
+    panel as in the 1000 px wide one, the PNG has twice the shown pixels, and the
+    followers' maps stand side by side as many as fit (2 narrow, 4 wide)."""
+    from matplotlib.text import Text
+
+    from app.layout import NARROW_PANEL_PX
+    from camcore.explore import DPI, PANEL_PX, PT_PX, explore_figure, explore_png, pareto
+
+    assert PANEL_PX == NARROW_PANEL_PX
+    rows = _paper_rows(
+        {
+            "follower.kind": ["single_roller", "double_roller", "single_concave", "double_concave"],
+            "cam.base_radius_mm": [60, 85, 110],
+            "follower.offset_mm": [20, 30],
+        }
+    )
+    names = ["cam_size", "stress"]
+    front = pareto(rows, names)
+    axes = (("cam.base_radius_mm", "r_b [mm]"), ("follower.offset_mm", "e [mm]"))
+    for shown, side_by_side in ((PANEL_PX, 2), (1000, 4)):
+        fig = explore_figure(rows, *axes, names, front, shown)
+        assert fig.get_figwidth() * DPI == pytest.approx(2 * shown)
+        texts = [t for t in fig.findobj(Text) if t.get_text().strip() and t.get_visible()]
+        assert len(texts) > 20
+        assert min(t.get_fontsize() for t in texts) * PT_PX >= 10.0  # [px] as shown
+        fig.canvas.draw()
+        tops = [round(ax.get_position().y1, 3) for ax in fig.axes[:4]]
+        assert tops.count(tops[0]) == side_by_side
+        png = explore_png(rows, *axes, names, front, shown)
+        assert int.from_bytes(png[16:20], "big") == 2 * shown  # the PNG's width
 
 
 def test_a_third_figure_colours_the_designs_and_widens_the_front():

@@ -72,6 +72,7 @@ def explore_map() -> None:
         (y[0], "Offset e (double) [mm]"),
         names,
         explore.pareto(rows, names),
+        1000,  # as in the wide panel
     )
     (HERE / "explore.png").write_bytes(png)
 
