@@ -121,6 +121,7 @@ class ExplorePanel:
         self._base: dict = {}
         self.shown_px = PANEL_PX  # the panel's width: the map is drawn for it
         self._drawn: tuple | None = None  # (rows, x, y, names, front, limits, px) on show
+        self._map_busy = False  # a thread draws the map (a sweep's end or a new width)
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
 
     def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
@@ -321,29 +322,30 @@ class ExplorePanel:
             return
         with self._lock:  # (a Cancel from now on has nothing left to stop)
             self._drawing, self.cancel_btn.disabled = True, True
+            self._map_busy = True  # (a change of the panel's width waits for this map)
             self.progress.content = f"Drawing the map of {len(rows)} points…"
-        front = pareto(rows, names)
-        px = self.shown_px
-        png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
-        values = figure_values(rows, names)
-        offers = {}
-        for n, i in enumerate(offered(front, values, MAX_FRONT), start=1):
-            r = rows[i]
-            point, shown = _offer(r)
-            figs = ", ".join(
-                f"{v:.4g} {FIGURES[m].unit}" for m, v in zip(names, values[i], strict=True)
-            )
-            offers[f"{n}. {shown} → {figs}"] = point
-        with self._lock:
-            self._base, self._offers, self._armed = base, offers, None
-            self._drawn = (rows, x, y, names, front, limits, px)
-            self.front_dd.options = tuple(offers) or ("–",)
-            self.front_dd.value = self.front_dd.options[0]
-            self.load_btn.disabled = not offers
-            self._put_image(png)
-            self.progress.content = _summary(rows, total, front, names, limits, len(offers))
-        if self.shown_px != px:  # the panel changed width while the map was drawn
-            self._redraw()
+            px = self.shown_px
+        try:
+            front = pareto(rows, names)
+            png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
+            values = figure_values(rows, names)
+            offers = {}
+            for n, i in enumerate(offered(front, values, MAX_FRONT), start=1):
+                point, shown = _offer(rows[i])
+                figs = ", ".join(
+                    f"{v:.4g} {FIGURES[m].unit}" for m, v in zip(names, values[i], strict=True)
+                )
+                offers[f"{n}. {shown} → {figs}"] = point
+            with self._lock:
+                self._base, self._offers, self._armed = base, offers, None
+                self._drawn = (rows, x, y, names, front, limits, px)
+                self.front_dd.options = tuple(offers) or ("–",)
+                self.front_dd.value = self.front_dd.options[0]
+                self.load_btn.disabled = not offers
+                self._put_image(png)
+                self.progress.content = _summary(rows, total, front, names, limits, len(offers))
+        finally:
+            self._redraw()  # for a width the panel took meanwhile; frees the map
 
     def _put_image(self, png: bytes) -> None:
         """Show ``png`` as the map (under self._lock)."""
@@ -355,32 +357,35 @@ class ExplorePanel:
 
     def set_width(self, px: int) -> None:
         """The panel is now ``px`` wide: the map on show is drawn again for it, in the
-        background (a sweep that is running draws for it when it ends)."""
+        background (by whoever draws the map now, if anyone: a sweep's end or an
+        earlier change of width)."""
         with self._lock:
             self.shown_px = px
-            busy = self._thread is not None and self._thread.is_alive()
-            if busy or self._drawn is None or self._drawn[-1] == px:
+            if self._map_busy or self._drawn is None or self._drawn[-1] == px:
                 return
-            self._thread = threading.Thread(target=self._redraw, daemon=True, name="cam-map")
-            self._thread.start()
+            self._map_busy = True
+            threading.Thread(target=self._redraw, daemon=True, name="cam-map").start()
 
     def _redraw(self) -> None:
-        """Draw the map on show for the panel's width, until it holds still."""
-        while True:
-            with self._lock:
-                drawn, px = self._drawn, self.shown_px
-            if drawn is None or drawn[-1] == px:
-                return
-            rows, x, y, names, front, limits, _ = drawn
-            try:
+        """Draw the map on show for the panel's width until the two agree, then free
+        the map (self._map_busy) in the same step as the last look at the width, so
+        that no change of it goes unseen."""
+        try:
+            while True:
+                with self._lock:
+                    drawn, px = self._drawn, self.shown_px
+                    if drawn is None or drawn[-1] == px:
+                        self._map_busy = False
+                        return
+                rows, x, y, names, front, limits, _ = drawn
                 png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
-            except Exception:  # (a worker lost: the map drawn for the old width stays)
-                return
+                with self._lock:
+                    if self._drawn is drawn:  # (not cleared or replaced meanwhile)
+                        self._drawn = (*drawn[:-1], px)
+                        self._put_image(png)
+        except Exception:  # (a worker lost: the map drawn for the old width stays)
             with self._lock:
-                if self._drawn is not drawn:  # cleared or replaced meanwhile
-                    return
-                self._drawn = (*drawn[:-1], px)
-                self._put_image(png)
+                self._map_busy = False
 
     def _clear(self) -> None:
         """No results on show: no offers, no map."""

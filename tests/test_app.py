@@ -1169,6 +1169,30 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     assert "two different fields" in e.progress.content
 
 
+def test_explore_map_follows_a_width_change_during_its_drawing(tab, monkeypatch):
+    """The panel widens while the sweep's map is being drawn: the map on show is then
+    drawn again for the new width (not left at the width the drawing started with)."""
+    e = tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (70.0, 90.0), (25.0, 35.0)
+    e.steps.value, e.all_kinds.value = 2, False
+    real, widths = e._analyst.explore_png, []
+
+    def widening(*args):  # the tab's Wide panel ticked as the first map is drawn
+        widths.append(args[-1])
+        if len(widths) == 1:
+            e.set_width(900)
+        return real(*args)
+
+    monkeypatch.setattr(e._analyst, "explore_png", widening)  # (the app's analyst)
+    e.run_btn.value = True
+    assert wait_for(lambda: widths[-1:] == [900] and e.image is not None, 60.0), widths
+    assert wait_for(lambda: e.image.image.shape[1] == 1800, 30.0)
+    assert wait_for(lambda: not e._map_busy, 10.0) and widths == [384, 900]
+    e.set_width(900)  # no change: nothing drawn again
+    assert widths == [384, 900] and not e._map_busy
+
+
 def test_explore_says_what_it_runs_and_why_points_are_no_designs(tab, monkeypatch):
     """A designer's review: a step count out of range ran another count, a motion field
     of a segment program made every point "not a design" without a reason, points the
