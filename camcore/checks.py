@@ -327,34 +327,41 @@ def _contact_stress(a) -> list[Violation]:
         return []
     top = max(float(stress.max()), worst.value if worst else 0.0)
     ranges = runs_deg(a.theta, np.asarray(bad.any(0)), extra)
-    return [
-        Violation(
-            "contact_stress",
-            "Eq. 42",
-            f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = {top * sf / 1e6:.1f} MPa "
-            f"exceeds the allowable {allow / 1e6:g} MPa by {(top * sf - allow) / 1e6:.1f} MPa "
-            f"at {where_text(ranges)}{_near_cusp(a, stress, top, allow)}",
-            ranges,
-            (top * sf - allow) / 1e6,
+    rho = _near_cusp(a, stress, top, allow)
+    if rho is not None:  # (a review: "8335972.2 MPa" beside a headline of "unbounded")
+        message = (
+            f"Hertz stress without bound at {where_text(ranges)}: the cam's radius of "
+            f"curvature falls to {rho * 1e3:.3g} mm there (Eq. 21: a near cusp), where "
+            f"Eq. 42 grows without bound (on the grid, with the safety factor {sf:g}: "
+            f"more than {_times(top * sf / allow)} the allowable {allow / 1e6:g} MPa); "
+            "fix the curvature first"
         )
-    ]
+    else:
+        message = (
+            f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = "
+            f"{top * sf / 1e6:.1f} MPa exceeds the allowable {allow / 1e6:g} MPa by "
+            f"{(top * sf - allow) / 1e6:.1f} MPa at {where_text(ranges)}"
+        )
+    return [Violation("contact_stress", "Eq. 42", message, ranges, (top * sf - allow) / 1e6)]
 
 
-def _near_cusp(a, stress: np.ndarray, top: float, allow: float) -> str:
-    """Where the stress is many times the allowable because the cam's radius of
-    curvature nears zero (a cusp: Eq. 42 grows without bound as rho -> 0), say so: the
-    number is the formula's, not a stress the part could carry, and the curvature limit
-    (Eqs. 21-22) is what to fix."""
+def _times(ratio: float) -> str:
+    """ "ten times" .. "a million times": the power of ten a ratio (>= 10) passes."""
+    words = ("ten", "a hundred", "a thousand", "ten thousand", "a hundred thousand")
+    p = int(math.floor(math.log10(ratio))) if ratio >= 10 else 1
+    return f"{words[p - 1] if p <= len(words) else 'a million'} times"
+
+
+def _near_cusp(a, stress: np.ndarray, top: float, allow: float) -> float | None:
+    """The cam's radius of curvature [m] where the stress peaks, if the stress is many
+    times the allowable because that radius nears zero (a cusp: Eq. 42 grows without
+    bound as rho -> 0): the number is then the formula's, not a stress the part could
+    carry, and the curvature limit (Eqs. 21-22) is what to fix. None otherwise."""
     if top < 10 * allow:
-        return ""
+        return None
     f, k = np.unravel_index(int(np.argmax(stress)), stress.shape)
     rho = abs(float(a.rho[f, k]))
-    if not rho < 0.01 * a.design.cam.base_radius_mm * 1e-3:
-        return ""
-    return (
-        f" (there the cam's radius of curvature is only {rho * 1e3:.3g} mm, Eq. 21: a near "
-        "cusp, where Eq. 42 grows without bound; fix the curvature first)"
-    )
+    return rho if rho < 0.01 * a.design.cam.base_radius_mm * 1e-3 else None
 
 
 def _dwell_arcs(a) -> list[Violation]:

@@ -297,6 +297,11 @@ def test_a_stress_from_a_near_cusp_says_so():
     a = analyze(Design.model_validate(data), verify=False)
     (v,) = [v for v in a.violations if v.code == "contact_stress"]
     assert "near cusp" in v.message and "Eq. 21" in v.message
+    # no seven-digit "MPa" beside a headline that says unbounded: three digits at most
+    assert v.message.startswith("Hertz stress without bound at theta = ")
+    assert "more than a thousand times the allowable 1000 MPa" in v.message, v.message
+    assert checks._times(10.0) == "ten times" and checks._times(9.9e9) == "a million times"
+    assert checks._times(99_999.0) == "ten thousand times"
     data = PAPER.with_kind("double_roller").model_dump()
     data["limits"]["allowable_contact_stress_MPa"] = 10.0
     a = analyze(Design.model_validate(data), verify=False)
