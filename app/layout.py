@@ -229,7 +229,7 @@ def _files_tab(gui, h: dict, base: Design) -> None:
     h["preset_btn"] = gui.add_button("Load preset")
     h["upload_btn"] = gui.add_upload_button("Open design JSON…", mime_type="application/json")
     gui.add_markdown("**Kept in this browser** (only you see them)")
-    h["save_name"] = gui.add_text("Name", base.name[: storage.MAX_NAME].strip() or "my cam")
+    h["save_name"] = gui.add_text("Name", storage.proposed_name(base.name))
     h["save_btn"] = gui.add_button("Save in this browser")
     h["saved_dd"] = gui.add_dropdown("Saved designs", ("–",), initial_value="–")
     h["open_saved_btn"] = gui.add_button("Open saved")

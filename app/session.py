@@ -151,6 +151,7 @@ class Session:
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
+        self._replace_armed: str | None = None  # a kept name the next Save replaces
         self._persist = False  # on once the browser's stored design has been read
         self._view_edits = 0  # the user's view changes (a kept view never overrides one)
         self.history = History()  # the designs before and after the one on screen
@@ -383,7 +384,7 @@ class Session:
 
     def _propose_name(self, name: str) -> None:
         """The name the Save box proposes for the design on screen. Lock held."""
-        self.ui.save_name.value = name[: storage.MAX_NAME].strip() or "my cam"
+        self.ui.save_name.value = storage.proposed_name(name)
 
     def _widen_sliders(self) -> None:
         """A value typed into a slider's box beyond its range widens the range: the
@@ -876,13 +877,24 @@ class Session:
                     "✖ Not saved: this browser's storage did not answer when the tab "
                     "opened. Reload the page, or download the design."
                 )
+            name = str(name).strip()
+            kept = storage.parse_working(self.saved.get(name))
+            if kept is not None and kept != self.design and self._replace_armed != name:
+                self._replace_armed = name  # (a review: a variant went without a word)
+                return self._say(
+                    f"⚠ This browser already keeps another design as **{esc(name)}**: "
+                    "click *Save in this browser* again to replace it, or change the name."
+                )
+            self._replace_armed = None
             try:
-                saved = storage.with_saved(self.saved, str(name), self.design)
+                saved = storage.with_saved(self.saved, name, self.design)
             except ValueError as exc:
                 return self._say(f"✖ Not saved: {esc(exc)}.")
+            replaced = kept is not None and kept != self.design
+            replaced_note = " (it replaces the one kept before)" if replaced else ""
             self._show_saved(saved, write=True)
-            self.ui.saved_dd.value = str(name).strip()
-            self._say(f"Saved **{esc(str(name).strip())}** in this browser.")
+            self.ui.saved_dd.value = name
+            self._say(f"Saved **{esc(name)}** in this browser{replaced_note}.")
 
     def open_saved(self, name: str) -> None:
         text = self.saved.get(name) if isinstance(name, str) else None

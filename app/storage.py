@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import math
+import textwrap
 import threading
 
 from camcore.model import (
@@ -204,6 +205,17 @@ def parse_program(text: str | None) -> list[dict] | None:
         ):
             return None
     return raw
+
+
+def proposed_name(name: str) -> str:
+    """A name to keep ``name``'d design under that fits MAX_NAME: the name itself, or
+    without its closing parenthesis, or cut at a word with " …" (a review: the paper's
+    example was kept as "… (double concave faces", cut mid-parenthesis); "my cam" for
+    none."""
+    name = " ".join(str(name).split())
+    if len(name) > MAX_NAME and " (" in name:
+        name = name.split(" (")[0]
+    return textwrap.shorten(name, MAX_NAME, placeholder=" …") or "my cam"
 
 
 def _refuse(name: str):

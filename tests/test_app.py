@@ -2383,17 +2383,51 @@ def test_step_buttons_turn_the_cam_by_hand(tab):
 
 def test_the_name_to_keep_a_design_under_is_the_designs(tab):
     """A teacher's review: the 'Kept in this browser' name read 'my cam' whatever the
-    design; it proposes the design's own name (cut to the saved names' 60)."""
+    design; it proposes the design's own name, to fit the saved names' 60 characters
+    without its parenthesis, or cut at a word (a review: the paper's example was kept
+    as "… (double concave faces", cut mid-parenthesis)."""
+    from app.storage import proposed_name
+
     s = tab
-    assert s.ui.save_name.value == s.design.name[:60].strip()
+    assert s.design.name.startswith("Chuang, Hsu & Chang, Section 6 example (double")
+    assert s.ui.save_name.value == "Chuang, Hsu & Chang, Section 6 example"
+    cut = proposed_name("word " * 20)
+    assert len(cut) <= 60 and cut.endswith("word …") and proposed_name(" ") == "my cam"
+    assert proposed_name("short (with a note)") == "short (with a note)"
     s.load_preset("valve_lift_roller")
-    assert s.ui.save_name.value == load_preset("valve_lift_roller").name[:60].strip()
+    assert s.ui.save_name.value == proposed_name(load_preset("valve_lift_roller").name)
     # what the user typed stays through edits, a program-table edit too (a review:
     # it was replaced, and a save went under another name, over an earlier save)
     s.ui.save_name.value = "my version 2"
     s.ui.controls["cam.base_radius_mm"].value = 70.0
     s.ui.segments.act(0, "+")
     assert s.ui.save_name.value == "my version 2"
+
+
+def test_saving_over_another_kept_design_asks_first(app, monkeypatch):
+    """A maker's review: saving a variant under the proposed name replaced the design
+    kept under it without a word. The first Save says so; a second replaces it; saving
+    the same design again, or under a new name, just saves."""
+    import json
+
+    from app import storage
+
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {}, writes) as s:
+        s.save_named("mine")
+        first = json.loads(writes[storage.SAVED_KEY])["mine"]
+        s.save_named("mine")  # the same design: nothing to lose
+        assert "Saved **mine**" in s.ui.files_md.content
+        s.ui.controls["cam.base_radius_mm"].value = 95.0
+        s.save_named("mine")
+        assert "already keeps another design as **mine**" in s.ui.files_md.content
+        assert json.loads(writes[storage.SAVED_KEY])["mine"] == first  # not replaced
+        s.save_named("mine")  # the second click replaces it, and says so
+        assert "replaces the one kept before" in s.ui.files_md.content
+        assert json.loads(writes[storage.SAVED_KEY])["mine"] != first
+        s.ui.controls["cam.base_radius_mm"].value = 90.0
+        s.save_named("mine 2")
+        assert set(json.loads(writes[storage.SAVED_KEY])) == {"mine", "mine 2"}
 
 
 def test_a_kept_design_opens_under_its_own_name(app, monkeypatch):
