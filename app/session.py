@@ -566,9 +566,7 @@ class Session:
             d = design_from_json(content)
         except DesignError as exc:
             with self.lock:
-                self._show_file_error(
-                    f"file {name or 'upload'}: {exc} (the current design is kept)"
-                )
+                self._show_file_error(f"{name or 'the upload'}: {exc}")
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
         left_out = defaulted_fields(content, d)
         note = f" ⚠ {esc(defaults_note(left_out))}." if left_out else ""

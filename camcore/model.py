@@ -1003,8 +1003,22 @@ def design_from_json(text: str | bytes) -> Design:
 
     if len(text) > MAX_DESIGN_BYTES:
         raise DesignError(f"design file is {len(text)} bytes; the limit is {MAX_DESIGN_BYTES}")
+    if isinstance(text, bytes):  # (a review: an STL said "'utf-8' codec can't decode")
+        try:
+            text = text.decode(json.detect_encoding(text))  # (as json.loads: a BOM too)
+        except UnicodeDecodeError:
+            raise DesignError(
+                "not a text file: a design is a JSON text file (this one looks like a "
+                "binary file, such as an STL or an image)"
+            ) from None
+    if not text.strip():
+        raise DesignError("the file is empty: a design is a JSON text file")
     try:
         data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
+    except json.JSONDecodeError as exc:  # where the file stops being JSON, in words
+        raise DesignError(
+            f"not a JSON document: {exc.msg.lower()} at line {exc.lineno}, column {exc.colno}"
+        ) from None
     except (ValueError, RecursionError) as exc:
         raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None
     if not isinstance(data, dict):

@@ -290,13 +290,14 @@ def test_archard_k_is_entered_in_its_own_scale(tab):
     [
         ("huge.json", b'{"name": "' + b"x" * 30_000_000 + b'"}', "the limit is"),
         ("deep.json", b"[" * 100_000 + b"]" * 100_000, "not a JSON document"),
-        ("photo.png", bytes(range(256)) * 64, "not a JSON document"),
+        ("photo.png", bytes(range(256)) * 64, "not a text file"),
+        ("empty.json", b"", "the file is empty"),
         ("future.json", b'{"schema_version": 7}', "written by a newer program"),
         ("list.json", b"[1, 2]", "a design is a JSON object"),
     ],
     # short ids: a 30 MB id went into PYTEST_CURRENT_TEST, and a worker process started
     # under it (the app fixture, when this test runs first) could not be spawned
-    ids=["huge", "deep", "photo", "future", "list"],
+    ids=["huge", "deep", "photo", "empty", "future", "list"],
 )
 def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content, message):
     s = tab

@@ -193,3 +193,23 @@ def test_an_error_prints_a_files_own_keys_escaped_and_short():
     said = str(err.value)
     assert "\x1b" not in said and "cam.\\u001b[2Kbad" in said
     assert len(said) < 400 and "k" * 60 + "…" in said
+
+
+def test_a_file_that_is_no_json_design_says_what_it_is_in_words():
+    """A maker's review: an empty file said "Expecting value: line 1 column 1 (char 0)"
+    and an STL "'utf-8' codec can't decode byte 0xfc". Each now says what the file is;
+    a JSON text in UTF-8 with a byte-order mark, or in UTF-16, still opens (as
+    json.loads reads bytes)."""
+    d = load_preset("paper_example")
+    text = model.design_to_json(d)
+    assert design_from_json(b"\xef\xbb\xbf" + text.encode()) == d
+    assert design_from_json(text.encode("utf-16")) == d
+    for content, said in (
+        (b"", "the file is empty"),
+        (b" \n\t", "the file is empty"),
+        (b"solid cam\n" + bytes([0x80, 0xFC]) * 50, "not a text file"),
+        (b'{"name": }', "not a JSON document: expecting value at line 1, column 10"),
+        ('{\n"name": "x",\n', "at line 3, column 1"),
+    ):
+        with pytest.raises(DesignError, match=said):
+            design_from_json(content)
