@@ -99,13 +99,14 @@ def esc(text: object) -> str:
 # window (a fifth on a window 800 px high or less: at 1280x720 the status and the
 # Animation block had taken 530 px of the panel, a teacher's review): a long list of
 # violations never hides the controls. The panel itself stays 80 px narrower than the
-# window (the wide panel on a high-DPI screen: app.layout).
+# window, and the wide one within 62 % of it (app.layout reckons the wide panel in
+# device pixels: on a high-DPI screen, or zoomed in, it would cover the mechanism).
 STATUS_CSS = (
     "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important;min-width:0}"
     "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff}"
     "#cam-status{max-height:32vh;overflow-y:auto}"
     "@media (max-height:800px){#cam-status{max-height:20vh}}"
-    "[data-testid='floating-panel']{max-width:calc(100vw - 80px)}</style>"
+    "[data-testid='floating-panel']{max-width:min(calc(100vw - 80px),max(384px,62vw))}</style>"
 )
 
 
