@@ -27,7 +27,8 @@ RED_FILL = "rgba(220,20,30,0.18)"
 NONE = "rgba(0,0,0,0)"
 MARK = "rgba(0,0,0,0.55)"
 STATION_MARK = "rgba(90,90,90,0.45)"  # dashed: where the contacts change
-STATION_LABEL_DEG = 15.0  # stations nearer than this share a number label (~12 px)
+STATION_LABEL_DEG = 15.0  # stations nearer than this: numbers on two rows (~12 px)
+STATION_SAME_DEG = 0.5  # stations nearer than this share one number ("1,2")
 COLORS = ("#1f77b4", "#ff7f0e", "#2ca02c", "#9467bd", "#8c564b")
 
 
@@ -122,7 +123,7 @@ class Curve:
         for scale, _ in axes:
             scales[scale] = {"auto": True}
         self._scales = scales
-        self._axes = ax  # (the stations' numbers are added above them: station_axis)
+        self._axes = ax  # (the stations' numbers are added above them: station_axes)
         self._scale_of = [s["scale"] for s in series]  # per data series: its axis
         self._aligned = len(axes) > 1  # two or three y axes: one level for their zeros
         self.nser = len(ser)
@@ -167,7 +168,7 @@ class Curve:
         if same:
             return
         if not np.array_equal(stations, self.stations):  # (numbers gone with the lines)
-            numbers = (station_axis(stations),) if stations.size else ()
+            numbers = station_axes(stations) if stations.size else ()
             self.handle.axes = (*self._axes, *numbers)
         self.x, self.ys, self.shade, self.stations = x, list(ys), shade, stations
         if self._aligned:
@@ -214,30 +215,45 @@ class Curve:
         self.handle.data = wire(out, flags=len(out) - 1 - len(self.ys))
 
 
-def station_axis(stations_deg: np.ndarray) -> dict:
-    """An axis above the plot that numbers the dashed station lines (a teacher's
-    review: the lines carried no numbers): uPlot's static ticks at the stations'
-    angles [deg], labelled with their indices. Stations less than STATION_LABEL_DEG
-    apart share one label at their mean angle ("1,2": the paper's stations 1 and 2,
-    7.4 deg apart, had read "12" on a narrow plot; a single follower's coincide)."""
+def station_axes(stations_deg: np.ndarray) -> tuple[dict, ...]:
+    """Axes above the plot that number the dashed station lines (a teacher's review:
+    the lines carried no numbers): uPlot's static ticks at the stations' angles [deg],
+    labelled with their indices. Stations that coincide (within STATION_SAME_DEG: a
+    single follower's) share one label ("1,2"); stations less than STATION_LABEL_DEG
+    apart go on a second row above the first, each number over its own line (the
+    paper's stations 1 and 2, 7.4 deg apart: a shared "1,2" between the lines could
+    not tell the class which window is which, a later review)."""
     groups: list[list[tuple[int, float]]] = []
     for i, at in sorted(enumerate(map(float, stations_deg)), key=lambda p: p[1]):
-        if groups and at - groups[-1][-1][1] < STATION_LABEL_DEG:
+        if groups and at - groups[-1][-1][1] < STATION_SAME_DEG:
             groups[-1].append((i, at))
         else:
             groups.append([(i, at)])
-    return {
-        "scale": "x",
-        "side": 0,  # top
-        "size": 16,
-        "gap": 2,
-        "splits": [sum(at for _, at in g) / len(g) for g in groups],
-        "values": [",".join(str(i) for i, _ in sorted(g)) for g in groups],
-        "font": "10px sans-serif",
-        "stroke": "#555555",
-        "grid": {"show": False},
-        "ticks": {"show": False},
-    }
+    rows: list[list[tuple[float, str]]] = [[], []]
+    for g in groups:
+        label = (sum(at for _, at in g) / len(g), ",".join(str(i) for i, _ in sorted(g)))
+        free = [r for r in rows if not r or label[0] - r[-1][0] >= STATION_LABEL_DEG]
+        if free:
+            free[0].append(label)
+        else:  # a third station within the distance: it joins the upper row's last
+            at, text = rows[1][-1]
+            rows[1][-1] = ((at + label[0]) / 2, f"{text},{label[1]}")
+    return tuple(
+        {
+            "scale": "x",
+            "side": 0,  # top (a second one stacks above the first)
+            "size": 14,
+            "gap": 1,
+            "splits": [at for at, _ in row],
+            "values": [text for _, text in row],
+            "font": "11px sans-serif",
+            "stroke": "#333333",
+            "grid": {"show": False},
+            "ticks": {"show": False},
+        }
+        for row in rows
+        if row
+    )
 
 
 def zero_aligned(spans: dict[str, tuple[float, float]], pad: float = 0.05) -> dict:

@@ -1725,7 +1725,7 @@ def test_the_curves_mark_the_stations_and_the_angle_now(tab):
     """A teacher's review: the curves had only the 'θ now' line, so a class could not
     find station 2 or 3 on the F_N or stress curves. Each plot has a dashed line at each
     station and the 'θ now' line, as vertical spikes on their own scale."""
-    from app.plots import station_axis
+    from app.plots import station_axes
 
     s = tab
     s.goto_station(3)
@@ -1737,9 +1737,10 @@ def test_the_curves_mark_the_stations_and_the_angle_now(tab):
         np.testing.assert_allclose(np.sort(x[st == 2.0]), np.sort(stations), atol=1e-4)
         np.testing.assert_allclose(x[now == 2.0], [stations[3]], atol=1e-4)
         assert c.handle.series[-2]["label"] == "stations"
-        top = c.handle.axes[-1]  # numbered above the plot (a later review)
-        assert top["side"] == 0 and top == station_axis(stations)
-        assert top["values"] == ["0", "1,2", "3,4", "5"]  # (1, 2 and 3, 4 7.4 deg apart)
+        low, high = c.handle.axes[-2:]  # numbered above the plot (a later review)
+        assert (low, high) == station_axes(stations) and low["side"] == high["side"] == 0
+        # (1, 2 and 3, 4 are 7.4 deg apart: two rows, each number over its line)
+        assert low["values"] == ["0", "1", "3", "5"] and high["values"] == ["2", "4"]
     S = np.asarray(s.ui.curves[0].handle.data[1], float)  # S stays a curve through them
     x = np.asarray(s.ui.curves[0].handle.data[0], float)
     k = int(np.argmin(np.abs(x - stations[2])))

@@ -793,17 +793,26 @@ def test_history_keeps_one_step_per_burst_and_empties_redo_on_a_change():
 
 def test_station_lines_are_numbered_above_the_plots():
     """A teacher's review: the dashed station lines carried no numbers. An axis above
-    each plot labels them at their angles; coinciding stations share one label."""
-    from app.plots import station_axis
+    each plot labels them at their angles; coinciding stations share one label, and
+    stations too close for two labels side by side get a second row, each number over
+    its own line (a later review: "1,2" between the paper's stations 1 and 2 could not
+    say which window was which)."""
+    from app.plots import STATION_LABEL_DEG, station_axes
 
-    ax = station_axis(np.array([0.0, 100.0, 100.0, 170.0, 170.0, 300.0]))
+    (ax,) = station_axes(np.array([0.0, 100.0, 100.0, 170.0, 170.0, 300.0]))
     assert ax["side"] == 0 and ax["scale"] == "x"
     assert ax["splits"] == [0.0, 100.0, 170.0, 300.0]
     assert ax["values"] == ["0", "1,2", "3,4", "5"]
     # the paper's double faces: 1 and 2 are 7.4 deg apart, 3 and 4 7.4 too
-    ax = station_axis(np.array([0.0, 100.0, 107.4, 162.6, 170.0, 300.0]))
-    assert ax["values"] == ["0", "1,2", "3,4", "5"]
-    assert ax["splits"] == pytest.approx([0.0, 103.7, 166.3, 300.0])
+    low, high = station_axes(np.array([0.0, 100.0, 107.4, 162.6, 170.0, 300.0]))
+    assert low["values"] == ["0", "1", "3", "5"] and high["values"] == ["2", "4"]
+    assert low["splits"] == [0.0, 100.0, 162.6, 300.0] and high["splits"] == [107.4, 170.0]
+    assert low["side"] == high["side"] == 0
+    for row in (low, high):  # each row's numbers stand apart
+        assert np.all(np.diff(row["splits"]) >= STATION_LABEL_DEG)
+    # three within the distance: the third joins the upper row's number
+    low, high = station_axes(np.array([10.0, 14.0, 18.0]))
+    assert low["values"] == ["0"] and high["values"] == ["1,2"]
 
 
 def test_the_status_says_where_its_violations_are_marked():

@@ -184,6 +184,15 @@ def test_app_in_headless_chromium(tmp_path):
             page.get_by_role("button", name="5", exact=True).click()
             page.get_by_text("at station 5").first.wait_for()
 
+            # the controls' labels read on a projector: dark grey, not Mantine's dimmed
+            # #868e96 (3.3:1 on white, a teacher's review)
+            colour = page.evaluate(
+                """() => { const l = [...document.querySelectorAll('label')]
+                    .find(e => e.textContent.startsWith('Play speed'));
+                    return getComputedStyle(l).color }"""
+            )
+            assert colour == "rgb(73, 80, 87)", colour
+
             # the wide panel gives the curves room, and gives it back
             panel = page.locator("[data-testid=floating-panel]")
             narrow = panel.bounding_box()["width"]
