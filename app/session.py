@@ -489,9 +489,15 @@ class Session:
         self.error = err
         self._show_status()
 
-    def _show_file_error(self, err: str) -> None:
+    def _show_file_error(self, err: str | None) -> None:
         self.file_error = err
         self._show_status()
+
+    def _file_error_seen(self) -> None:
+        """The user went on to another file action: a refused file's box goes (a
+        review: it stayed through downloads, their answer under it). Lock held."""
+        if self.file_error is not None:
+            self._show_file_error(None)
 
     def _show_status(self) -> None:
         a = self.analysis
@@ -610,6 +616,7 @@ class Session:
             return say("… Still making the previous file: one at a time, please.")
         try:
             with self.lock:
+                self._file_error_seen()
                 a, d = self.analysis, self.design
                 if self.error is not None:  # the controls no longer describe d: say so
                     return say(
@@ -875,6 +882,7 @@ class Session:
                     "✖ Not saved: this browser's storage did not answer when the tab "
                     "opened. Reload the page, or download the design."
                 )
+            self._file_error_seen()
             name = str(name).strip()
             kept = storage.parse_working(self.saved.get(name))
             if kept is not None and kept != self.design and self._replace_armed != name:

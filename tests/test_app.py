@@ -309,6 +309,20 @@ def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content,
     assert s.design.motion.lift_mm == 12.0 and s.error is None
 
 
+def test_a_refused_file_s_box_goes_at_the_next_file_action(tab, downloads):
+    """A maker's review: the red "Could not open the file" box stayed through station
+    clicks and a download, the download's answer under it. A download (or a save)
+    is the user going on: the box goes; a station click leaves it."""
+    s = tab
+    fire_upload(s.ui.upload_btn, "bad.json", b'{"cam": {"base_radius_mm": -40}}')
+    assert "Could not open the file" in s.ui.status.content
+    s.goto_station(2)
+    assert "Could not open the file" in s.ui.status.content
+    s.ui.download_btns["stl"].value = True
+    assert wait_for(lambda: "Sent" in s.ui.files_md.content, 30.0), s.ui.files_md.content
+    assert "Could not open the file" not in s.ui.status.content
+
+
 def test_preset_and_downloads(tab, downloads):
     s = tab
     s.ui.preset_dd.value = "Classroom: simple harmonic rise/fall, single concave face"
