@@ -524,6 +524,13 @@ class Session:
         names = tuple(str(i) for i in range(len(a.stations)))
         if tuple(self.ui.stations_btn.options) != names:
             self.ui.stations_btn.options = names
+        # each station's angle in the label's hint (a teacher's review: the buttons
+        # said nothing of where they go)
+        hint = "the cam angle of each station: " + ", ".join(
+            f"{i}: {math.degrees(t):.1f}°" for i, t in enumerate(a.stations)
+        )
+        if self.ui.stations_btn.hint != hint:
+            self.ui.stations_btn.hint = hint
 
     # --- background: the verified analysis and the comparison ------------------------
     def refine(self) -> None:
