@@ -317,7 +317,6 @@ def curve_specs(a) -> list[dict]:
     """Each plot: title, axes [(scale, label)], series [{label, scale, stroke, fn(a) ->
     values on the analysis grid, ...}] and the violation codes it shades."""
     lim = a.design.limits.max_pressure_angle_deg
-    ref_label, ref = rho_reference_mm(a.design)
 
     def rho_mm(a):
         r = to_mm(a.primary(a.rho))
@@ -423,7 +422,7 @@ def curve_specs(a) -> list[dict]:
             [
                 {"label": "ρ [mm]", "scale": "mm", "stroke": COLORS[3], "fn": rho_mm},
                 {
-                    "label": f"{ref_label} = {ref:g} mm (limit)",
+                    "label": rho_limit_label(a.design),
                     "scale": "mm",
                     "stroke": "#d62728",
                     "dash": [6, 4],
@@ -564,6 +563,17 @@ def _stress_limit_label(a) -> str:
     return f"limit {contact_stress_limit_MPa(a.design):.4g} MPa{far}"
 
 
+def rho_limit_label(design) -> str:
+    """The legend of the ρ plot's limit line (checks.rho_reference_mm): a roller's
+    says which side of it is wrong (undercut between -r_c and 0; a concave flank lies
+    below -r_c)."""
+    label, ref = rho_reference_mm(design)
+    if design.follower.kind.is_roller:
+        r_c = design.follower.roller_radius_mm
+        return f"0 (limit: undercut for −{r_c:g} < ρ ≤ 0 mm)"
+    return f"{label} = {ref:g} mm (limit)"
+
+
 def _stress_limit_line(a) -> np.ndarray:
     # (hidden by the series' show flag, not by NaN: uPlot cannot range a scale with a
     # NaN series, and the whole plot went blank)
@@ -572,11 +582,10 @@ def _stress_limit_line(a) -> np.ndarray:
 
 def relabel_limits(curves: list[Curve], a) -> None:
     """Legend labels that carry the current limit values."""
-    ref_label, ref = rho_reference_mm(a.design)
     lim = a.design.limits.max_pressure_angle_deg
     labels = {
         "Pressure angle": (2, f"+limit {lim:g}°"),
-        "Radius of curvature": (2, f"{ref_label} = {ref:g} mm (limit)"),
+        "Radius of curvature": (2, rho_limit_label(a.design)),
         "Contact (Hertz) stress": (2, _stress_limit_label(a)),
     }
     shown = {"Contact (Hertz) stress": _stress_limit_shown(a)}  # (a far limit: hidden)

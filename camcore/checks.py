@@ -183,15 +183,18 @@ def where_text(ranges: tuple[tuple[float, float], ...]) -> str:
 
 
 def rho_reference_mm(design) -> tuple[str, float]:
-    """(label, value [mm]) of the radius that bounds the cam's radius of curvature for
-    the design's follower, as the curvature rules below use it: |r_f| for a concave
-    face (0 < rho < |r_f|, Eq. 22), r_c for a roller (the undercut rule on the pitch
-    radius), 0 for a flat face (rho > 0) and a knife edge (no rule: drawn at 0)."""
+    """(label, value [mm]) of the radius that bounds the cam's radius of curvature rho
+    for the design's follower, as the curvature rules below use it: |r_f| for a
+    concave face (0 < rho < |r_f|, Eq. 22), 0 for a flat face (rho > 0), a roller and a
+    knife edge (no rule: drawn at 0).
+
+    A roller's rule is on the pitch radius rho_p = rho + r_c: undercut where it lies in
+    (0, r_c], that is -r_c < rho <= 0 on the cam; a concave flank has rho < -r_c, which
+    is sound. So the cam's rho meets its limit at 0, not at r_c (a designer's review:
+    the curve's line at r_c had said a sound 1.9 mm against a 55 mm roller broke it)."""
     f = design.follower
     if f.kind.is_concave:
         return "|r_f|", -f.face_radius_mm
-    if f.kind.is_roller:
-        return "r_c", f.roller_radius_mm
     return "0", 0.0
 
 

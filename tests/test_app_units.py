@@ -860,3 +860,26 @@ def test_the_compare_table_says_unbounded_maxima_not_their_samples():
     assert f"- ² *{roller.label}*: the velocity jumps" in md
     plain = {k: {"summary": summary(analyze(d.with_kind(k), verify=False))} for k in results}
     assert "unbounded" not in table_markdown(plain, d)
+
+
+def test_the_rho_plot_draws_a_roller_s_limit_at_zero_not_at_r_c():
+    """A designer's review: the ρ plot drew a roller's limit at r_c, so a sound cam
+    whose ρ is 17 mm under a 30 mm roller looked broken. A roller's rule is on the
+    pitch radius ρ + r_c (undercut in (0, r_c]): on the cam's ρ the limit is 0, with
+    the undercut band -r_c < ρ <= 0 said in the legend; a concave face keeps |r_f|."""
+    from app.plots import curve_specs, rho_limit_label
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+
+    data = load_preset("paper_example").with_kind("single_roller").model_dump()
+    data["follower"]["roller_radius_mm"], data["cam"]["base_radius_mm"] = 30.0, 25.0
+    a = analyze(Design.model_validate(data), verify=False)
+    assert a.valid  # (no undercut: the pitch radius stays above r_c everywhere)
+    (spec,) = [c for c in curve_specs(a) if c["title"].startswith("Radius of curvature")]
+    rho, line = (s["fn"](a) for s in spec["series"][:2])
+    touching = a.in_contact.any(axis=0)
+    assert 0.0 < rho[touching].min() < 30.0 and np.all(line == 0.0)
+    assert spec["series"][1]["label"] == rho_limit_label(a.design)
+    assert "undercut for −30 < ρ ≤ 0 mm" in rho_limit_label(a.design)
+    paper = load_preset("paper_example")
+    assert rho_limit_label(paper) == "|r_f| = 250 mm (limit)"
