@@ -19,7 +19,7 @@ import numpy as np
 
 from camcore.model import Design, FollowerKind, design_to_json
 from camcore.motion import segment_word
-from camcore.report import machine_rows, rho_range_text, unbounded_notes
+from camcore.report import machine_rows, rho_range_text, unbounded_figures, unbounded_notes
 from camcore.units import to_mm
 
 from .controls import LABEL_OF_LAW
@@ -399,6 +399,7 @@ def summary_markdown(s: dict) -> str:
 
     pa, rho = s["pressure_angle_max_deg"], s["curvature_radius_mm"]
     fn, st = s["contact_force_max_N"], s["contact_stress_max_MPa"]
+    free = unbounded_figures(s)  # (a review: "101036570.5 MPa" beside "unbounded")
     rows = [
         ("High-dwell radius R", f"{f(s['dwell_radius_mm'], 3)} mm"),
         (
@@ -417,7 +418,7 @@ def summary_markdown(s: dict) -> str:
         ),
         (
             "Max F_N per contact: whole cycle / high dwell (one-face windows included)",
-            f"{f(fn['cycle'])} / {f(fn['high_dwell'])} N",
+            f"{'unbounded' if 'force' in free else f(fn['cycle'])} / {f(fn['high_dwell'])} N",
         ),
         (
             "Max F_N per face while both faces touch the high dwell (Table 1's figure)",
@@ -425,8 +426,17 @@ def summary_markdown(s: dict) -> str:
             if fn["high_dwell_two_contact"] is not None
             else "– (one face only)",
         ),
-        ("Max F1 / F2", f"{f(s['guide_force_max_N']['F1'])} / {f(s['guide_force_max_N']['F2'])} N"),
-        ("Max stress cycle / dwell", f"{f(st['cycle'], 1)} / {f(st['high_dwell'], 1)} MPa"),
+        (
+            "Max F1 / F2",
+            "unbounded"
+            if "guide" in free
+            else f"{f(s['guide_force_max_N']['F1'])} / {f(s['guide_force_max_N']['F2'])} N",
+        ),
+        (
+            "Max stress cycle / high dwell",
+            f"{'unbounded' if 'stress' in free else f(st['cycle'], 1)} / "
+            f"{f(st['high_dwell'], 1)} MPa",
+        ),
         (
             "Stress limit: allowable / safety factor",
             # (significant figures: an allowable of 1e-300 MPa had read "0 MPa")

@@ -354,11 +354,16 @@ def summary(a: Analysis) -> dict:
 _NO_VALUE = re.compile(r"^-( / -)* [^\d]*$")
 
 
+BIG = 1e7  # beyond it a figure prints in significant figures, not fixed decimals
+
+
 def _fmt(x, nd=3) -> str:
     if x is None:
         return "-"
     if isinstance(x, list):
         return " .. ".join(_fmt(v, nd) for v in x)
+    if abs(x) >= BIG:  # (a review: "9802731368133097947136.000000 kg m2" at 1e-9 rpm)
+        return f"{x:.4g}"
     return f"{x:.{nd}f}".replace(f"-{0:.{nd}f}", f"{0:.{nd}f}")  # no "-0.00 W"
 
 
@@ -391,6 +396,8 @@ def _train_text(t: dict | None) -> str:
 def _down(x: float) -> str:
     """A margin to 2 decimals, rounded down: 1.4996 is '1.49', not '1.5' beside a
     warning that it is below 1.5 (round-off aside: 0.3 / 0.1 is 2.9999999999999996)."""
+    if x >= BIG:  # (a review: "jumps at 1009989342029.04 x this speed")
+        return f"{x:.3g}"
     return f"{math.floor(x * (1 + machine.ROUND_OFF) * 100) / 100:.2f}"
 
 
@@ -430,6 +437,7 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
             if s["jump_speed_rpm"] is None
             else "none needed at this speed: the follower's weight keeps it on the cam"
         )
+    free = unbounded_figures(s)
     return [
         ("spring rate min / proposed", spring),
         ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
@@ -445,13 +453,23 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         ("margin to jump", _margin_text(s)),
         (
             "shaft torque drive / brake",
-            f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
+            "unbounded"
+            if "torque" in free
+            else f"{_fmt(s['cam_torque_max_Nm']['drive'])} / "
             f"{_fmt(s['cam_torque_max_Nm']['brake'])} N m",
         ),
-        ("power max / mean", f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W"),
+        (
+            "power max / mean",
+            "unbounded"
+            if "power" in free
+            else f"{_fmt(s['power_max_W'], 1)} / {_fmt(s['power_mean_W'], 2)} W",
+        ),
         (
             "flywheel energy / inertia",
-            f"{_fmt(s['flywheel_energy_J'], 4)} J / {_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2",
+            "unbounded"
+            if "flywheel" in free
+            else f"{_fmt(s['flywheel_energy_J'], 4)} J / "
+            f"{_fmt(s['flywheel_inertia_kg_m2'], 6)} kg m2",
         ),
         (
             "wear depth max (Archard)",
@@ -460,7 +478,9 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         ),
         (
             "pitting life",
-            _life_text(s["follower"], long=True)
+            "none to estimate: the contact stress has no bound"
+            if "life" in free
+            else _life_text(s["follower"], long=True, allowable=s["contact_stress_allowable_MPa"])
             if s["pitting_life_cycles"] is None
             else f"{s['pitting_life_cycles']:.3g} cycles ({s['pitting_life_hours']:.3g} h)",
         ),
@@ -614,6 +634,27 @@ def impulse_note(s: dict) -> str | None:
     )
 
 
+# what has no bound for each reason of unbounded_notes (the figures its note names)
+UNBOUNDED = {
+    "the velocity jumps": {"force", "stress", "life"},
+    "the cam has a cusp": {"stress", "life"},
+    "the guide jams": {"force", "guide", "stress", "torque", "power", "flywheel", "life"},
+}
+
+
+def unbounded_figures(s: dict) -> set[str]:
+    """Which cycle figures of summary ``s`` have no bound (UNBOUNDED's names: force,
+    guide, stress, torque, power, flywheel, life): the text shows "unbounded" there, not
+    the samples' largest (a designer's review read "101036570.5 MPa" in the key numbers
+    beside a headline of "unbounded"). The JSON keeps the numbers and the notes."""
+    return {f for why, _ in unbounded_notes(s) for f in UNBOUNDED[why]}
+
+
+def bounded(x, nd: int, figure: str, unbounded: set[str]) -> str:
+    """_fmt, or "unbounded" if ``figure`` is among ``unbounded`` (unbounded_figures)."""
+    return "unbounded" if figure in unbounded else _fmt(x, nd)
+
+
 def unbounded_notes(s: dict) -> list[tuple[str, str]]:
     """(why, note) for each reason the cycle's force or stress maxima have no bound:
     an impulse (impulse_note), a cusp (cusp_note), a jammed guide (jam_note)."""
@@ -668,6 +709,7 @@ def _stations_text(stations_deg: list[float]) -> str:
 def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
     limit = None if design is None else design.limits.max_pressure_angle_deg
+    free = unbounded_figures(s)
     rows = [
         ("follower", s["follower"]),
         ("valid", "yes" if s["valid"] else "NO"),
@@ -700,7 +742,7 @@ def report_text(s: dict, design: Design | None = None) -> str:
         ),
         (
             "max F_N cycle / high dwell",
-            f"{_fmt(s['contact_force_max_N']['cycle'])} / "
+            f"{bounded(s['contact_force_max_N']['cycle'], 3, 'force', free)} / "
             f"{_fmt(s['contact_force_max_N']['high_dwell'])} N",
         ),
         (
@@ -709,11 +751,13 @@ def report_text(s: dict, design: Design | None = None) -> str:
         ),
         (
             "max F1 / F2",
-            f"{_fmt(s['guide_force_max_N']['F1'])} / {_fmt(s['guide_force_max_N']['F2'])} N",
+            "unbounded"
+            if "guide" in free
+            else f"{_fmt(s['guide_force_max_N']['F1'])} / {_fmt(s['guide_force_max_N']['F2'])} N",
         ),
         (
             "max stress cycle / high dwell",
-            f"{_fmt(s['contact_stress_max_MPa']['cycle'], 2)} / "
+            f"{bounded(s['contact_stress_max_MPa']['cycle'], 2, 'stress', free)} / "
             f"{_fmt(s['contact_stress_max_MPa']['high_dwell'], 2)} MPa",
         ),
         (
@@ -905,14 +949,22 @@ def _verdict_lines(rows: list[dict]) -> list[str]:
     return lines
 
 
-def _life_text(follower: str, long: bool = False) -> str:
+def _life_text(follower: str, long: bool = False, allowable: float | None = None) -> str:
     """A pitting life of None (no finite estimate) in words: a knife edge has no Hertz
     stress to estimate it from (a line of zero radius: the stress is unbounded,
-    contact.contact_stress), any other follower is in the endurance region (stress
-    within the allowable)."""
+    contact.contact_stress), any other follower is in the endurance region: its stress
+    is below the ``allowable`` [MPa], the endurance stress, itself (the limit check
+    multiplies the stress by the safety factor first: a designer's review read
+    "within the allowable" beside a broken stress limit)."""
     if follower == FollowerKind.knife_edge:
         return "not estimated (knife edge: no Hertz stress)" if long else "n/a"
-    return "endurance (stress within the allowable)" if long else "endurance"
+    if not long:
+        return "endurance"
+    at = f" {allowable:g} MPa" if allowable is not None else ""
+    return (
+        f"endurance (the stress itself is below the allowable{at}; the limit adds the "
+        "safety factor)"
+    )
 
 
 def analyze_summary(design: Design) -> dict:

@@ -628,8 +628,26 @@ def test_a_jammed_guide_says_its_force_figures_are_unbounded():
     assert "σ<sub>H</sub> unbounded: the guide jams" in panels.headline_html(s).replace(
         "\u00a0", " "
     )
+    # the figures themselves say it (a designer's review read "1540056.45 N" and
+    # "18329206986.279 N·m" in the key numbers beside the note)
+    text, keys = report_text(s), panels.summary_markdown(s)
+    for label in ("max F1 / F2", "shaft torque drive / brake", "power max / mean"):
+        assert f"{label}" in text and _row(text, label).endswith("unbounded"), label
+    assert "  unbounded / " in _row(text, "max F_N cycle / high dwell")
+    assert _row(text, "pitting life").endswith("none to estimate: the contact stress has no bound")
+    assert (
+        "| Max F1 / F2 | unbounded |" in keys
+        and "| Max stress cycle / high dwell | unbounded" in keys
+    )
+    assert "whole cycle / high dwell (one-face windows included) | unbounded / " in keys
     ok = summary(analyze(load_preset("paper_example"), verify=False))
     assert jam_note(ok) is None and "jams" not in panels.summary_markdown(ok)
+    assert "unbounded" not in report_text(ok) + panels.summary_markdown(ok)
+
+
+def _row(text: str, label: str) -> str:
+    """The value of the text report's row ``label``."""
+    return next(ln for ln in text.splitlines() if ln.strip().startswith(label)).strip()
 
 
 def test_a_cusped_cam_says_its_stress_has_no_bound():
@@ -656,6 +674,11 @@ def test_a_cusped_cam_says_its_stress_has_no_bound():
     line = panels.headline_html(s).replace("\u00a0", " ")
     assert "σ<sub>H</sub> unbounded: the cam has a cusp" in line and "MPa" not in line
     assert cusp_note(summary(analyze(load_preset("paper_example"), verify=False))) is None
+    # the stress itself says it; the force has a bound (a cusp is no jam)
+    text = report_text(s)
+    assert "  unbounded / " in _row(text, "max stress cycle / high dwell")
+    assert "unbounded" not in _row(text, "max F_N cycle / high dwell")
+    assert "| Max stress cycle / high dwell | unbounded / " in panels.summary_markdown(s)
 
 
 def test_a_velocity_jump_says_its_force_figures_are_unbounded():
