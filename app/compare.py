@@ -85,6 +85,7 @@ def table_markdown(results: dict, design: Design) -> str:
         for _, note in unbounded_notes(a["summary"])
     ]
     text = "\n".join(lines)
+    text += "\n\n" + _fields_used(design)
     text += (
         "\n\n¹ The largest contact force and stress per face in the high dwell; for double "
         "followers while both faces touch (the load is shared; in the first and last 2ψ_h "
@@ -106,6 +107,22 @@ def table_markdown(results: dict, design: Design) -> str:
     if notes:
         text += "\n\n" + "\n".join(notes)
     return text
+
+
+def _fields_used(design: Design) -> str:
+    """Which of the design's follower fields each compared follower takes (a
+    designer's review: the rollers ran with a roller radius greyed out on the Design
+    tab, and nothing said which); and that the limits counted are the paper's and the
+    profile's, without the geometric check (it runs for the design on screen)."""
+    f = design.follower
+    return (
+        f"Each follower takes this design's own values: rollers r_c = {f.roller_radius_mm:g} "
+        f"mm, concave faces r_f = {f.face_radius_mm:g} mm, double followers' offset e = "
+        f"{f.offset_mm:g} mm, single followers' axis offset e_s = {f.single_offset_mm:g} mm "
+        "(set on the Design tab: a field the follower on screen does not use is greyed "
+        "there, and still used here). *Limits* counts the broken limits without the "
+        "geometric check, which runs for the design on screen."
+    )
 
 
 class CompareView:

@@ -468,6 +468,11 @@ def test_compare_tab(tab):
     for label in ("single roller", "double roller", "single concave", "double concave"):
         assert label in md
     assert "67.297" in md  # Table 1 reference column
+    # which follower fields each follower takes (a designer's review: the rollers ran
+    # with the greyed roller radius, unsaid), and what the limits column counts
+    f = s.design.follower
+    assert f"rollers r_c = {f.roller_radius_mm:g} mm, concave faces r_f = -250 mm" in md
+    assert "without the geometric check" in md
     # the paper's point in a row: the stress while both faces share the load, beside a
     # single follower's in its dwell (a teacher's review: the cycle's peaks, in the
     # one-face windows, had double concave no better than single concave)
