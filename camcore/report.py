@@ -703,7 +703,12 @@ def _stations_text(stations_deg: list[float]) -> str:
         word = f"{v:.3f}"
         if not shown or shown[-1] != word:
             shown.append(word)
-    return " ".join(shown) + " deg"
+    swapped = [i for i in range(1, len(stations_deg)) if stations_deg[i] < stations_deg[i - 1]]
+    note = "".join(  # (a designer's review: "158.064 141.936" said nothing of why)
+        f" (station {i} before {i - 1}: the dwell between them is shorter than 4 psi, Eq. 28)"
+        for i in swapped
+    )
+    return " ".join(shown) + " deg" + note
 
 
 def report_text(s: dict, design: Design | None = None) -> str:

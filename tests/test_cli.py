@@ -486,3 +486,18 @@ def test_extreme_figures_print_in_significant_figures(capsys):
     assert "e+21 kg m2" in out and "jumps at 1.85e+12 x this speed" in out
     assert main(["report", "--preset", "paper_example"]) == 0
     assert "jump speed                           1855.0 rpm" in capsys.readouterr().out
+
+
+def test_stations_out_of_order_say_why(capsys):
+    """A designer's review: with a high dwell shorter than 4 psi the stations printed
+    "0 100 253.871 16.129 170 300" and said nothing; now the line says which station
+    comes first and why (Eq. 28, which the violations list too)."""
+    args = ["report", "--preset", "paper_example", "--set", "follower.face_radius_mm=-100"]
+    main(args)
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "stations  " in ln)
+    assert line.endswith(
+        "(station 3 before 2: the dwell between them is shorter than 4 psi, Eq. 28)"
+    )
+    assert main(["report", "--preset", "paper_example"]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "stations  " in ln)
+    assert line.endswith(" deg")
