@@ -248,6 +248,15 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
                 "point) at the lowest position: longer tilts the stem more (Fig. 5; 30 mm)",
             ),
             Spec("dynamics.gravity_m_s2", "Gravity g [m/s²]", "number", step=0.01),
+            Spec(
+                "dynamics.external_load_N",
+                "External load F_e [N]",
+                "number",
+                step=1.0,
+                hint="a constant load on the follower toward the cam (a process force, a "
+                "cylinder), added to F_t of Eq. 29 as the weight is; negative pulls it off "
+                "the cam (0 in the paper)",
+            ),
             Spec("dynamics.overhang_shrinks", "Overhang shrinks with lift", "checkbox"),
             Spec(
                 "dynamics.train_stiffness_N_per_m",

@@ -52,6 +52,7 @@ PARAMETERS = {
     # width against the stress): not batched fields, each value its own batch
     "Cam width w [mm]": "cam.width_mm",
     "Spring rate k [N/m]": "dynamics.spring_rate_N_per_m",
+    "External load F_e [N]": "dynamics.external_load_N",
 }
 # labels of earlier versions, as a kept setup may hold them
 OLD_LABELS = {"Speed [rpm]": "Cam speed [rpm]"}

@@ -64,9 +64,17 @@ def spring_load(design: Design, S: np.ndarray) -> np.ndarray:
     return d.spring_rate_N_per_m * (S + d.preload_mm * MM)
 
 
+def external_load(design: Design) -> float:
+    """F_e [N]: dynamics.external_load_N, a constant load along the follower's axis
+    toward the cam (beyond the paper, whose F_t has only weight, inertia and spring:
+    F_e adds to it as M g does, so every formula that holds for the weight holds)."""
+    return design.dynamics.external_load_N
+
+
 def total_load(design: Design, S: np.ndarray, A: np.ndarray) -> np.ndarray:
-    """F_t = M (g + a) + k s with a = A omega^2 and s = S + s_p  [N] (Eqs. 29-30)."""
-    return inertia_load(design, A) + spring_load(design, S)
+    """F_t = M (g + a) + k s + F_e with a = A omega^2 and s = S + s_p  [N] (Eqs. 29-30;
+    F_e = external_load, 0 in the paper)."""
+    return inertia_load(design, A) + spring_load(design, S) + external_load(design)
 
 
 @dataclass(frozen=True)

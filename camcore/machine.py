@@ -37,8 +37,8 @@ from .units import MM, RPM
 
 
 def spring_free_load(design: Design, prog: motion.Program) -> np.ndarray:
-    """D = M (g + A w^2) [N]: the load F_t of Eq. 29 without the spring."""
-    return forces.inertia_load(design, prog.A)
+    """D = M (g + A w^2) + F_e [N]: the load F_t of Eq. 29 without the spring."""
+    return forces.inertia_load(design, prog.A) + forces.external_load(design)
 
 
 def spring_force(design: Design, prog: motion.Program) -> np.ndarray:
@@ -114,7 +114,8 @@ def _jump_need(design: Design):
     """1 / w^2 at which F_N reaches zero at each angle (jump_speed_rpm)."""
     d = design.dynamics
     M, k, s_p = forces.moving_mass(design), d.spring_rate_N_per_m, d.preload_mm * MM
-    return lambda p: _over(-M * p.A, M * d.gravity_m_s2 + k * (p.S + s_p))
+    hold = M * d.gravity_m_s2 + forces.external_load(design)  # (weight and F_e alike)
+    return lambda p: _over(-M * p.A, hold + k * (p.S + s_p))
 
 
 def _rpm(inv_w2: float) -> float:

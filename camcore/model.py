@@ -614,6 +614,14 @@ class Dynamics(_Part):
     gravity_m_s2: float = Field(
         9.81, ge=0, le=1000, description="g along the follower axis; 0 drops weight from Eq. 29"
     )
+    external_load_N: float = Field(
+        0.0,
+        ge=-1e6,
+        le=1e6,
+        description="a constant load on the follower along its axis, toward the cam [N] "
+        "(a process force, a cylinder; negative: pulling it off the cam); it adds to F_t "
+        "of Eq. 29 as the weight does (0 as in the paper)",
+    )
     overhang_shrinks: bool = Field(
         True, description="l1 = l1_0 - S (the stem slides further into the guide as it rises)"
     )

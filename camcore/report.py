@@ -525,7 +525,8 @@ def inputs_text(design) -> str:
             f"M {dyn.mass_g:g} g, k {dyn.spring_rate_N_per_m:g} N/m, s_p {dyn.preload_mm:g} "
             f"mm, guide mu {dyn.guide_friction:g}, d {dyn.guide_width_mm:g} mm, "
             f"l1 {dyn.overhang_mm:g} mm, l2 {dyn.guide_length_mm:g} mm"
-            + (f", contact mu {dyn.contact_friction:g}" if dyn.contact_friction else ""),
+            + (f", contact mu {dyn.contact_friction:g}" if dyn.contact_friction else "")
+            + (f", external load {dyn.external_load_N:g} N" if dyn.external_load_N else ""),
         ),
         (
             "material",

@@ -91,7 +91,7 @@ def respond(design: Design) -> Response | None:
     S = np.fft.rfft(s)
     h = np.arange(S.size) * w  # harmonic frequencies [rad/s]
     denom = K - m * h**2 + 1j * h * c
-    F0 = k2 * d.preload_mm * MM + m * d.gravity_m_s2
+    F0 = k2 * d.preload_mm * MM + m * d.gravity_m_s2 + d.external_load_N  # (F_e: as g)
     X = (k1 + 1j * h * c) * S / denom
     X[0] -= F0 * n / denom[0]  # rfft scaling: the mean is S_0 / n
     x = np.fft.irfft(X, n)

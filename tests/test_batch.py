@@ -63,6 +63,9 @@ VARIANTS = {
     "sticky": {"dynamics.guide_friction": 0.9, "dynamics.overhang_mm": 80.0},
     "big_radii": {"follower.roller_radius_mm": 80.0, "follower.face_radius_mm": -110.0},
     "elastic": {"dynamics.train_stiffness_N_per_m": 5e4, "cam.speed_rpm": 3000.0},
+    # a process load toward the cam (beyond the paper), and one pulling it off
+    "pushed": {"dynamics.external_load_N": 120.0, "dynamics.train_stiffness_N_per_m": 5e4},
+    "pulled": {"dynamics.external_load_N": -60.0, "cam.speed_rpm": 1200.0},
     # the velocity drops instantly at the rise's end: no spring holds the follower
     "velocity_drop": {"motion.segments.0.law": "constant_velocity"},
     # a jump-speed margin the paper's example misses (1.55 x), alone and after the

@@ -519,3 +519,47 @@ def test_the_jump_speed_check_and_the_summary_share_one_spring_search(monkeypatc
     assert len(calls) == 1 and "jump_speed" in [v.code for v in a.violations]
     assert s["jump_speed_rpm"] == direct.jump_speed_rpm
     assert s["spring_rate_min_N_per_m"] == direct.rate_min
+
+
+def test_an_external_load_acts_as_weight_does():
+    """dynamics.external_load_N (beyond the paper: a process force toward the cam) adds
+    to F_t of Eq. 29 as M g does. Independently: the paper's dwell force by hand,
+    F_N = M g + F_e + k (h + s_p) for a single follower; and a design with F_e equals
+    one whose gravity carries it (g' = g + F_e / M) in every figure: the forces, the
+    stress, the spring, the jump speed, the torque and the elastic train."""
+    from camcore.forces import moving_mass
+    from camcore.report import summary
+
+    base = load_preset("paper_example").with_kind("single_concave")
+    data = base.model_dump()
+    data["dynamics"]["external_load_N"] = 50.0
+    loaded = Design.model_validate(data)
+    s0, s1 = summary(analyze(base, verify=False)), summary(analyze(loaded, verify=False))
+    d = base.dynamics
+    by_hand = d.mass_g * 1e-3 * d.gravity_m_s2 + d.spring_rate_N_per_m * (15 + 5) * 1e-3
+    assert s0["contact_force_max_N"]["high_dwell"] == pytest.approx(by_hand, rel=1e-9)
+    assert s1["contact_force_max_N"]["high_dwell"] == pytest.approx(by_hand + 50.0, rel=1e-9)
+    assert s1["jump_speed_rpm"] > s0["jump_speed_rpm"]  # it holds the follower on
+    # the same load as weight: g' = g + F_e / M, F_e = 0
+    data["dynamics"]["external_load_N"] = 0.0
+    data["dynamics"]["gravity_m_s2"] = d.gravity_m_s2 + 50.0 / moving_mass(base)
+    data["dynamics"]["train_stiffness_N_per_m"] = 2e6  # the elastic train too
+    as_weight = summary(analyze(Design.model_validate(data), verify=False))
+    data["dynamics"].update(gravity_m_s2=d.gravity_m_s2, external_load_N=50.0)
+    with_load = summary(analyze(Design.model_validate(data), verify=False))
+    for key in (
+        "contact_force_max_N",
+        "guide_force_max_N",
+        "contact_stress_max_MPa",
+        "spring_rate_min_N_per_m",
+        "preload_min_mm",
+        "jump_speed_rpm",
+        "cam_torque_max_Nm",
+        "flywheel_energy_J",
+        "train",
+    ):
+        assert with_load[key] == pytest.approx(as_weight[key], rel=1e-9), key
+    # pulling it off: a negative load the spring cannot beat at the dwell jumps
+    data["dynamics"].update(external_load_N=-1000.0, train_stiffness_N_per_m=None)
+    pulled = analyze(Design.model_validate(data), verify=False)
+    assert "jump" in {v.code for v in pulled.violations}
