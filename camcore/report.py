@@ -473,7 +473,10 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         ),
         (
             "wear depth max (Archard)",
-            f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
+            # (a designer's review read "0.0000 um ... sliding up to 0.00 m/s" of rollers)
+            "none: a roller rolls (no sliding wear to model)"
+            if FollowerKind(s["follower"]).is_roller
+            else f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
             f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)",
         ),
         (

@@ -501,3 +501,19 @@ def test_stations_out_of_order_say_why(capsys):
     assert main(["report", "--preset", "paper_example"]) == 0
     line = next(ln for ln in capsys.readouterr().out.splitlines() if "stations  " in ln)
     assert line.endswith(" deg")
+
+
+def test_a_roller_s_wear_and_the_report_s_follower_read_in_words(capsys):
+    """A designer's review: a roller's wear row read "0.0000 um ... (sliding up to 0.00
+    m/s)", and the HTML report's header "Follower: double_concave"."""
+    from camcore.analysis import analyze
+    from camcore.document import html_report
+
+    assert main(["report", "--preset", "paper_example", "--follower", "double_roller"]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "wear depth max" in ln)
+    assert line.endswith("none: a roller rolls (no sliding wear to model)")
+    assert main(["report", "--preset", "paper_example"]) == 0
+    line = next(ln for ln in capsys.readouterr().out.splitlines() if "wear depth max" in ln)
+    assert "um per million cycles (sliding up to" in line
+    page = html_report(analyze(load_preset("paper_example"), verify=False))
+    assert "<b>Follower:</b> double concave" in page and "double_concave</p>" not in page
