@@ -32,6 +32,7 @@ def studio() -> None:
             page.get_by_text("All design limits met").first.wait_for()
             page.get_by_role("button", name="2", exact=True).click()
             page.get_by_text("at station 2").first.wait_for()
+            page.mouse.move(960, 1000)  # (off the buttons: their hint would cover the panel)
             page.wait_for_timeout(4000)  # software WebGL: a few frames per second
             page.screenshot(path=str(HERE / "studio_station2.png"))
             page.get_by_role("tab", name="View").click()
