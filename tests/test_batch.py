@@ -291,3 +291,16 @@ def test_fast_rows_hold_plain_python_values():
             k: type(v) for k, v in r.items() if type(v) not in (float, int, str, bool, type(None))
         }
         assert not bad, bad
+
+
+def test_the_batched_core_asks_glibc_to_keep_its_freed_memory():
+    """batch.keep_freed_memory (mallopt: blocks up to KEEP_MB from the heap, as much
+    freed memory kept) runs once per process, with the batched core, and holds on
+    glibc; elsewhere it says False and changes nothing."""
+    import platform
+
+    from camcore import batch
+
+    batch.summaries([load_preset("paper_example")])
+    assert batch._kept == [platform.libc_ver()[0] == "glibc"]
+    assert batch.keep_freed_memory() is batch._kept[0] and len(batch._kept) == 1
