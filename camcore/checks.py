@@ -330,12 +330,12 @@ def _contact_stress(a) -> list[Violation]:
         return []
     top = max(float(stress.max()), worst.value if worst else 0.0)
     ranges = runs_deg(a.theta, np.asarray(bad.any(0)), extra)
-    rho = _near_cusp(a, stress, top, allow)
+    rho = _near_cusp(a, bad, worst, top, allow)
     if rho is not None:  # (a review: "8335972.2 MPa" beside a headline of "unbounded")
         message = (
             f"Hertz stress without bound at {where_text(ranges)}: the cam's radius of "
             f"curvature falls to {rho * 1e3:.3g} mm there (Eq. 21: a near cusp), where "
-            f"Eq. 42 grows without bound (on the grid, with the safety factor {sf:g}: "
+            f"Eq. 42 grows without bound (at its largest found, with the safety factor {sf:g}: "
             f"more than {_times(top * sf / allow)} the allowable {allow / 1e6:g} MPa); "
             "fix the curvature first"
         )
@@ -355,16 +355,22 @@ def _times(ratio: float) -> str:
     return f"{words[p - 1] if p <= len(words) else 'a million'} times"
 
 
-def _near_cusp(a, stress: np.ndarray, top: float, allow: float) -> float | None:
-    """The cam's radius of curvature [m] where the stress peaks, if the stress is many
-    times the allowable because that radius nears zero (a cusp: Eq. 42 grows without
-    bound as rho -> 0): the number is then the formula's, not a stress the part could
-    carry, and the curvature limit (Eqs. 21-22) is what to fix. None otherwise."""
+def _near_cusp(a, bad: np.ndarray, worst, top: float, allow: float) -> float | None:
+    """The cam's smallest radius of curvature [m] where the stress is over its limit
+    (``bad``: per face and sample; ``worst``: the refined stress_max, between the
+    samples), if the stress is many times the allowable because that radius nears
+    zero (a cusp: Eq. 42 grows without bound as rho -> 0): the number is then the
+    formula's, not a stress the part could carry, and the curvature limit (Eqs. 21-22)
+    is what to fix. None otherwise. (A review saw "890265.2 MPa", a peak between the
+    samples where rho nears 0, beside a cusp the headline called unbounded: the
+    samples' own rho there was 0.61 mm.)"""
     if top < 10 * allow:
         return None
-    f, k = np.unravel_index(int(np.argmax(stress)), stress.shape)
-    rho = abs(float(a.rho[f, k]))
-    return rho if rho < 0.01 * a.design.cam.base_radius_mm * 1e-3 else None
+    rho = [float(np.min(np.abs(a.rho[bad])))] if bad.any() else []
+    if worst is not None and np.isfinite(worst.value):  # rho at the refined peak
+        rho.append(abs(float(a.local(np.array([worst.theta])).rho[worst.face, 0])))
+    least = min(rho, default=np.inf)
+    return least if least < 0.01 * a.design.cam.base_radius_mm * 1e-3 else None
 
 
 def _dwell_arcs(a) -> list[Violation]:

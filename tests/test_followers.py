@@ -302,6 +302,13 @@ def test_a_stress_from_a_near_cusp_says_so():
     assert "more than a thousand times the allowable 1000 MPa" in v.message, v.message
     assert checks._times(10.0) == "ten times" and checks._times(9.9e9) == "a million times"
     assert checks._times(99_999.0) == "ten thousand times"
+    # a peak between the samples, where rho nears 0 though the samples' is 0.61 mm
+    data = PAPER.model_dump()
+    data["cam"].update(base_radius_mm=50.0, speed_rpm=300.0)
+    data["follower"].update(face_radius_mm=-75.0, offset_mm=5.0)
+    a = analyze(Design.model_validate(data), verify=False)
+    (v,) = [v for v in a.violations if v.code == "contact_stress"]
+    assert v.message.startswith("Hertz stress without bound") and "near cusp" in v.message
     data = PAPER.with_kind("double_roller").model_dump()
     data["limits"]["allowable_contact_stress_MPa"] = 10.0
     a = analyze(Design.model_validate(data), verify=False)
