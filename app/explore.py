@@ -123,6 +123,7 @@ class ExplorePanel:
         self.shown_px = PANEL_PX  # the panel's width: the map is drawn for it
         self._drawn: tuple | None = None  # (rows, x, y, names, front, limits, px) on show
         self._map_busy = False  # a thread draws the map (a sweep's end or a new width)
+        self._map_lock = threading.Lock()  # held while one draws: never two at once
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
 
     def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
@@ -328,7 +329,8 @@ class ExplorePanel:
             px = self.shown_px
         try:
             front = pareto(rows, names)
-            png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
+            with self._map_lock:  # (a redraw for a new width may be drawing the last map)
+                png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
             values = figure_values(rows, names)
             offers = {}
             for n, i in enumerate(offered(front, values, MAX_FRONT), start=1):
@@ -379,7 +381,8 @@ class ExplorePanel:
                         self._map_busy = False
                         return
                 rows, x, y, names, front, limits, _ = drawn
-                png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
+                with self._map_lock:
+                    png = self._analyst.explore_png(rows, x, y, names, front, limits, px)
                 with self._lock:
                     if self._drawn is drawn:  # (not cleared or replaced meanwhile)
                         self._drawn = (*drawn[:-1], px)

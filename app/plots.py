@@ -320,7 +320,9 @@ def curve_specs(a) -> list[dict]:
 
     def rho_mm(a):
         r = to_mm(a.primary(a.rho))
-        cap = max(3 * rho_reference_mm(a.design)[1], 2 * a.design.cam.base_radius_mm)
+        f = a.design.follower  # (a roller's concave flanks lie below -r_c: kept there,
+        r_c = f.roller_radius_mm if f.kind.is_roller else 0.0  # not cut into its band)
+        cap = max(3 * rho_reference_mm(a.design)[1], 2 * a.design.cam.base_radius_mm, 2 * r_c)
         return np.clip(np.nan_to_num(r, nan=cap, posinf=cap, neginf=-cap), -cap, cap)
 
     worn: list = [None, None]  # (analysis, wear of both faces): computed once per analysis
@@ -475,7 +477,7 @@ def curve_specs(a) -> list[dict]:
                     "fn": lambda a: machine.spring_force(a.design, a.prog),
                 },
                 {
-                    "label": "needed −M(g+Aω²) [N]",
+                    "label": "needed −(M(g+Aω²)+F_e) [N]",
                     "scale": "N",
                     "stroke": "#d62728",
                     "dash": [6, 4],

@@ -151,7 +151,8 @@ class Session:
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
-        self._replace_armed: str | None = None  # a kept name the next Save replaces
+        # (name, design): a Save of that design under that kept name replaces it
+        self._replace_armed: tuple[str, Design] | None = None
         self._persist = False  # on once the browser's stored design has been read
         self._view_edits = 0  # the user's view changes (a kept view never overrides one)
         self.history = History()  # the designs before and after the one on screen
@@ -891,10 +892,14 @@ class Session:
                 )
             self._file_error_seen()
             name = str(name).strip()
-            kept = storage.parse_working(self.saved.get(name))
-            if kept is not None and kept != self.design and self._replace_armed != name:
-                self._replace_armed = name  # (a review: a variant went without a word)
-                return self._say(
+            # another design under that name (one this version cannot open counts too):
+            # the first click says so, a second one on the same design replaces it
+            replaced = name in self.saved and (
+                storage.parse_working(self.saved[name]) != self.design
+            )
+            if replaced and self._replace_armed != (name, self.design):
+                self._replace_armed = (name, self.design)  # (a review: a variant went
+                return self._say(  # without a word)
                     f"⚠ This browser already keeps another design as **{esc(name)}**: "
                     "click *Save in this browser* again to replace it, or change the name."
                 )
@@ -903,7 +908,6 @@ class Session:
                 saved = storage.with_saved(self.saved, name, self.design)
             except ValueError as exc:
                 return self._say(f"✖ Not saved: {esc(exc)}.")
-            replaced = kept is not None and kept != self.design
             replaced_note = " (it replaces the one kept before)" if replaced else ""
             self._show_saved(saved, write=True)
             self.ui.saved_dd.value = name

@@ -215,7 +215,10 @@ def proposed_name(name: str) -> str:
     name = " ".join(str(name).split())
     if len(name) > MAX_NAME and " (" in name:
         name = name.split(" (")[0]
-    return textwrap.shorten(name, MAX_NAME, placeholder=" …") or "my cam"
+    short = textwrap.shorten(name, MAX_NAME, placeholder=" …")
+    if name and short == "…":  # (one word longer than a name: cut inside it, a review)
+        short = name[: MAX_NAME - 2] + " …"
+    return short or "my cam"
 
 
 def _refuse(name: str):

@@ -674,7 +674,7 @@ def keep_freed_memory() -> bool:
     and to keep up to KEEP_MB of freed memory for the next (mallopt); False where the C
     library is not glibc. The price: a process that ran a batch holds up to KEEP_MB it
     no longer uses (the batched core runs in the sweep's process or workers, and in the
-    app's background worker, not in its server)."""
+    app's background worker, not in its server unless that worker cannot start)."""
     if not _kept:
         ok = False
         try:
@@ -683,9 +683,8 @@ def keep_freed_memory() -> bool:
 
             libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
             size = KEEP_MB << 20
-            ok = bool(libc.mallopt(_M_MMAP_THRESHOLD, size)) and bool(
-                libc.mallopt(_M_TRIM_THRESHOLD, size)
-            )
+            ok = bool(libc.mallopt(_M_MMAP_THRESHOLD, size))  # (each asked, whatever the
+            ok = bool(libc.mallopt(_M_TRIM_THRESHOLD, size)) and ok  # other answers)
         except (OSError, AttributeError):  # not glibc (no mallopt): nothing to tune
             ok = False
         _kept.append(ok)

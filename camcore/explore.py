@@ -302,7 +302,8 @@ def explore_png(
     shown_px: int = PANEL_PX,
     limits: tuple[tuple[float, float], tuple[float, float]] | None = None,
 ) -> bytes:
-    """The exploration as one PNG (explore_figure), 2 x ``shown_px`` pixels wide."""
+    """The exploration as one PNG (explore_figure), 2 x ``shown_px`` pixels wide (drawn
+    for 240 px at least)."""
     fig = explore_figure(rows, x, y, names, front, shown_px, limits)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=DPI)

@@ -1,18 +1,20 @@
 """The running machine (rigid follower): which spring, how fast, what the shaft delivers.
 
-All of it follows from the load of Eq. 29, F_t = M (g + A w^2) + k (S + s_p), and the
-guide solve of Eqs. 33-41. That solve is linear and homogeneous in F_t (forces.py), and
-in every guide mode that does not self-lock F_N has the sign of F_t. So the follower
-keeps contact (F_N >= 0) exactly where
+All of it follows from the load of Eq. 29, F_t = M (g + A w^2) + k (S + s_p) + F_e (F_e:
+dynamics.external_load_N, beyond the paper, 0 in it), and the guide solve of Eqs.
+33-41. That solve is linear and homogeneous in F_t (forces.py), and in every guide mode
+that does not self-lock F_N has the sign of F_t. So the follower keeps contact (F_N >=
+0) exactly where
 
-    k (S + s_p) >= -D,   D = M (g + A w^2)   (the load without the spring)
+    k (S + s_p) >= -D,   D = M (g + A w^2) + F_e   (the load without the spring)
 
 whatever the guide friction. This gives, as closed forms over the cam angle (their
 extremes found between the grid samples, camcore.extremes.refine_maxes):
 
 * the smallest spring rate for the design's preload, and the smallest preload for its
   rate;
-* the jump speed: w^2 <= (M g + k (S + s_p)) / (-M A) wherever A < 0;
+* the jump speed: w^2 <= (M g + F_e + k (S + s_p)) / (-M A) wherever A < 0 (none at
+  all where M g + F_e + k (S + s_p) < 0: a load pulling the follower off);
 * a proposed spring (rule below), which meets limits.min_jump_speed_ratio too when set.
 
 The shaft torque comes from the contact forces (forces.cam_torque); its peaks, the
@@ -115,7 +117,14 @@ def _jump_need(design: Design):
     d = design.dynamics
     M, k, s_p = forces.moving_mass(design), d.spring_rate_N_per_m, d.preload_mm * MM
     hold = M * d.gravity_m_s2 + forces.external_load(design)  # (weight and F_e alike)
-    return lambda p: _over(-M * p.A, hold + k * (p.S + s_p))
+
+    def need(p):
+        den = hold + k * (p.S + s_p)
+        # where the static load pulls the follower off (F_e < 0 can), it leaves at any
+        # speed: inf (a review: _over gave 0 there wherever A >= 0, a finite jump speed)
+        return np.where(den < 0, np.inf, _over(-M * p.A, den))
+
+    return need
 
 
 def _rpm(inv_w2: float) -> float:
@@ -146,8 +155,9 @@ def jump_speed_rpm(
     the angle [rad] where it does; inf if the follower never leaves the cam (no
     deceleration anywhere).
 
-    F_t = M g + k (S + s_p) + M A w^2 >= 0 fails first where (-M A) / (M g + k (S + s_p))
-    is largest (only A < 0 can pull the follower off)."""
+    F_t = M g + F_e + k (S + s_p) + M A w^2 >= 0 fails first where (-M A) / (M g + F_e +
+    k (S + s_p)) is largest (A < 0 pulls the follower off; so does a negative F_e larger
+    than the weight and spring hold: then at any speed, 0 rpm)."""
     inv_w2, at = _sups(design, theta, [_jump_need(design)], prog)[0]
     return _rpm(inv_w2), at
 

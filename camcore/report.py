@@ -435,7 +435,9 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         spring = (
             "none needed: nothing pulls the follower off the cam"
             if s["jump_speed_rpm"] is None
-            else "none needed at this speed: the follower's weight keeps it on the cam"
+            # (its weight, or an external load F_e toward the cam: a review's g = 0)
+            else "none needed at this speed: the follower's weight and any external load "
+            "keep it on the cam"
         )
     free = unbounded_figures(s)
     return [
@@ -634,13 +636,15 @@ def impulse_note(s: dict) -> str | None:
         s,
         {"velocity_jump"},
         "the velocity jumps (an infinite acceleration)",
-        "the contact force and stress grow",
+        "the forces, stress, torque and power grow",
     )
 
 
 # what has no bound for each reason of unbounded_notes (the figures its note names)
 UNBOUNDED = {
-    "the velocity jumps": {"force", "stress", "life"},
+    # (F1, F2 are linear in F_t, the torque is F_N times its lever; an impulse's energy,
+    # the flywheel's, is finite)
+    "the velocity jumps": {"force", "guide", "stress", "torque", "power", "life"},
     "the cam has a cusp": {"stress", "life"},
     "the guide jams": {"force", "guide", "stress", "torque", "power", "flywheel", "life"},
 }

@@ -17,7 +17,7 @@ comes back (tested).
 
 At constant cam speed the steady state is periodic with the cam's period, so it is
 solved exactly per harmonic: on a uniform grid of the cycle, X_n = [(k_1 + i n w c)
-S_n - F_0 delta_n0] / (K - m (n w)^2 + i n w c), K = k_1 + k_2, F_0 = k_2 s_p + m g
+S_n - F_0 delta_n0] / (K - m (n w)^2 + i n w c), K = k_1 + k_2, F_0 = k_2 s_p + m g + F_e
 (numpy FFT, vectorized; no time stepping, no start-up transient). The grid resolves
 the natural frequency with margin (at least 16 samples per natural period) up to
 MAX_SAMPLES: a train with omega_n above 4096 omega is effectively rigid at this speed,

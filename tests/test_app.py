@@ -2416,6 +2416,8 @@ def test_the_name_to_keep_a_design_under_is_the_designs(tab):
     assert s.ui.save_name.value == "Chuang, Hsu & Chang, Section 6 example"
     cut = proposed_name("word " * 20)
     assert len(cut) <= 60 and cut.endswith("word …") and proposed_name(" ") == "my cam"
+    long_word = "packaging_line_station_3_cam_revision_B_final_for_customer_XYZ"
+    assert proposed_name(long_word) == long_word[:58] + " …"  # (it had proposed "…")
     assert proposed_name("short (with a note)") == "short (with a note)"
     s.load_preset("valve_lift_roller")
     assert s.ui.save_name.value == proposed_name(load_preset("valve_lift_roller").name)
@@ -2445,7 +2447,11 @@ def test_saving_over_another_kept_design_asks_first(app, monkeypatch):
         s.save_named("mine")
         assert "already keeps another design as **mine**" in s.ui.files_md.content
         assert json.loads(writes[storage.SAVED_KEY])["mine"] == first  # not replaced
-        s.save_named("mine")  # the second click replaces it, and says so
+        s.ui.controls["cam.base_radius_mm"].value = 96.0  # an edit between: asks again
+        s.save_named("mine")
+        assert "already keeps another design" in s.ui.files_md.content
+        assert json.loads(writes[storage.SAVED_KEY])["mine"] == first
+        s.save_named("mine")  # the second click on the same design replaces it
         assert "replaces the one kept before" in s.ui.files_md.content
         assert json.loads(writes[storage.SAVED_KEY])["mine"] != first
         s.ui.controls["cam.base_radius_mm"].value = 90.0

@@ -698,6 +698,12 @@ def test_a_velocity_jump_says_its_force_figures_are_unbounded():
         f"  !! {note}" in report_text(s)
         and "velocity jumps (an infinite acceleration) at theta = 0, 100 deg" in md
     )
+    # every figure linear in the force says so too (a review read "13.914 / 2.391 N"
+    # and "1.185 / 1.112 N m" beside F_N's "unbounded"); the flywheel's energy is finite
+    text = report_text(s)
+    for label in ("max F1 / F2", "shaft torque drive / brake", "power max / mean"):
+        assert _row(text, label).endswith("unbounded"), label
+    assert "unbounded" not in _row(text, "flywheel energy / inertia")
     assert "unbounded: the velocity jumps" in panels.headline_html(s).replace("\u00a0", " ")
 
 

@@ -374,7 +374,7 @@ def test_a_cam_that_needs_no_spring_says_so(capsys):
     assert s["spring_rate_min_N_per_m"] == 0.0 and s["jump_speed_rpm"] > 0
     assert main(["report", "--preset", "classroom_harmonic"]) == 0
     out = capsys.readouterr().out
-    assert "none needed at this speed: the follower's weight keeps it on the cam" in out
+    assert "none needed at this speed: the follower's weight and any external load keep it" in out
     # its acceleration jumps, accepted by its limits, are said, not passed over
     assert "  ~ acceleration jumps accepted at theta = 0.000, 150.000, 180.000, 330.000" in out
 

@@ -563,3 +563,11 @@ def test_an_external_load_acts_as_weight_does():
     data["dynamics"].update(external_load_N=-1000.0, train_stiffness_N_per_m=None)
     pulled = analyze(Design.model_validate(data), verify=False)
     assert "jump" in {v.code for v in pulled.violations}
+    # ... and one just past the weight and the preload's force, where S = 0: off the
+    # cam at any speed, not a finite jump speed from the deceleration alone (a review)
+    M, k = moving_mass(base), d.spring_rate_N_per_m
+    data["dynamics"]["external_load_N"] = -(M * d.gravity_m_s2 + k * d.preload_mm * 1e-3) - 1.0
+    s = summary(analyze(Design.model_validate(data), verify=False))
+    assert s["jump_speed_rpm"] == 0.0
+    assert s["jump_margin"]["jump_speed"] == 0.0
+    assert "none: the follower leaves the cam at any speed" in report.report_text(s)
