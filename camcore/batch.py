@@ -663,7 +663,8 @@ LEFT_OUT = (
 # free of a larger mmapped one) fresh pages from the kernel, and returns them at free:
 # a batch's temporaries, a few MB each, then fault in every page anew, each time.
 # Heap blocks up to KEEP_MB, and up to that much freed memory kept for the next, made
-# a --fast design ~10 % cheaper (A/B, 64-design chunks: 3.25-3.32 against 3.54-3.64 ms).
+# a --fast design ~7 % cheaper (64-design chunks, medians of five interleaved A/B runs:
+# 3.29 against 3.53 ms).
 KEEP_MB = 128
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # (glibc's malloc.h)
 _kept: list[bool] = []  # (whether keep_freed_memory ran in this process, and its answer)
