@@ -18,6 +18,8 @@ import warnings
 
 import viser
 
+from camcore import batch
+
 from . import uploads, viser_speedups
 from .analyst import Analyst
 from .session import Session
@@ -79,6 +81,7 @@ class App:
         processes: bool = True,
     ):
         _tune_malloc()  # before the server's threads create their arenas
+        batch.KEEP_FREED = False  # (a sweep run here, without a worker, must not undo it)
         viser_speedups.install()
         uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
         self.server = viser.ViserServer(

@@ -668,6 +668,7 @@ LEFT_OUT = (
 KEEP_MB = 128
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3  # (glibc's malloc.h)
 _kept: list[bool] = []  # (whether keep_freed_memory ran in this process, and its answer)
+KEEP_FREED = True  # False: leave malloc as it is (the app's server tunes it its own way)
 
 
 def keep_freed_memory() -> bool:
@@ -675,7 +676,10 @@ def keep_freed_memory() -> bool:
     and to keep up to KEEP_MB of freed memory for the next (mallopt); False where the C
     library is not glibc. The price: a process that ran a batch holds up to KEEP_MB it
     no longer uses (the batched core runs in the sweep's process or workers, and in the
-    app's background worker, not in its server unless that worker cannot start)."""
+    app's background worker; the app's server, which may run it when no worker starts,
+    sets KEEP_FREED = False: it keeps its own small threshold, app.main._tune_malloc)."""
+    if not KEEP_FREED:
+        return False
     if not _kept:
         ok = False
         try:

@@ -293,14 +293,26 @@ def test_fast_rows_hold_plain_python_values():
         assert not bad, bad
 
 
-def test_the_batched_core_asks_glibc_to_keep_its_freed_memory():
+def test_the_batched_core_asks_glibc_to_keep_its_freed_memory(monkeypatch):
     """batch.keep_freed_memory (mallopt: blocks up to KEEP_MB from the heap, as much
     freed memory kept) runs once per process, with the batched core, and holds on
-    glibc; elsewhere it says False and changes nothing."""
+    glibc; elsewhere it says False and changes nothing. The app's server turns it off
+    (KEEP_FREED: it keeps its own small threshold, app.main._tune_malloc)."""
     import platform
 
+    from app.main import App
     from camcore import batch
 
+    monkeypatch.setattr(batch, "KEEP_FREED", True)
+    monkeypatch.setattr(batch, "_kept", [])
     batch.summaries([load_preset("paper_example")])
     assert batch._kept == [platform.libc_ver()[0] == "glibc"]
     assert batch.keep_freed_memory() is batch._kept[0] and len(batch._kept) == 1
+    monkeypatch.setattr(batch, "_kept", [])
+    app = App(host="127.0.0.1", port=0, processes=0)
+    try:
+        assert batch.KEEP_FREED is False
+        batch.summaries([load_preset("paper_example")])  # (as a sweep without a worker)
+        assert batch._kept == []
+    finally:
+        app.stop()
