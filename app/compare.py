@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from camcore.model import PAPER_FOLLOWERS, Design
-from camcore.report import paper_table1_N, unbounded_notes
+from camcore.report import paper_table1_N, unbounded_figures, unbounded_notes
 
 from .panels import esc, largest_pressure_angle
 from .plots import COLORS, Curve
@@ -34,13 +34,10 @@ def table_markdown(results: dict, design: Design) -> str:
         return st["high_dwell_two_contact"] if k.is_double else st["high_dwell"]
 
     def bounded(s: dict, what: str, x: float | None, nd: int = 2) -> str:
-        """A cycle maximum, or "unbounded²" where it has no bound (report's notes: an
-        impulse or a jam for both, a cusp for the stress; a review read 2,004,164 MPa
-        in the table unflagged)."""
-        whys = {why for why, _ in unbounded_notes(s)}
-        if whys - ({"the cam has a cusp"} if what == "force" else set()):
-            return "unbounded²"
-        return f(x, nd)
+        """A cycle maximum, or "unbounded²" where it has no bound (report's
+        unbounded_figures, the key numbers' and the reports' rule; a review read
+        2,004,164 MPa in the table unflagged)."""
+        return "unbounded²" if what in unbounded_figures(s) else f(x, nd)
 
     table1 = {k: paper_table1_N(design, k) for k in results}
     rows = [  # (label, figure of a follower's summary)
