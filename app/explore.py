@@ -27,15 +27,18 @@ from camcore.explore import (
     PROFILE_FIGURES,
     distinct,
     figure_values,
+    grid_points,
     ignored_fields,
     offered,
     pareto,
+    spec_document,
+    sweep_grid,
 )
 from camcore.model import PAPER_FOLLOWERS, Design, DesignError, FollowerKind
-from camcore.sweep import design_at, with_point
+from camcore.sweep import csv_text, design_at, with_point
 
 from .controls import SPECS, control_value, get_path
-from .panels import esc
+from .panels import esc, file_stem
 
 # label -> design path of the fields a sweep may vary (numbers only)
 PARAMETERS = {
@@ -61,21 +64,10 @@ MAX_STEPS = 15  # per axis
 MAX_RANGE_ABS = 1e9  # of a range's ends: far beyond every field's own limits
 MAX_DESIGNS = MAX_STEPS * MAX_STEPS * len(PAPER_FOLLOWERS)
 CHUNK = 12  # designs per background job: ~0.1 s, the cancel latency
+_PLAIN_NAME = re.compile(r"[A-Za-z0-9_.-]{1,120}")  # a file name shown as code as is
+MAX_FILE_BYTES = 16 << 20  # a sweep's CSV or SPEC sent to the browser
 MAX_FRONT = OFFERED  # designs of the front offered for loading (spread along it)
 NO_FIGURE = "none"  # the third figure is optional
-
-
-def grid_points(
-    x: tuple[str, float, float], y: tuple[str, float, float], steps: int, kinds: list[str]
-) -> list[dict]:
-    """The sweep's points: kinds x (x values) x (y values), ``steps`` values per axis
-    (2..MAX_STEPS: ValueError otherwise), each a {path: value} dict."""
-    if steps not in range(2, MAX_STEPS + 1):
-        raise ValueError(f"steps: 2 to {MAX_STEPS}")
-    xv, yv = np.linspace(x[1], x[2], steps), np.linspace(y[1], y[2], steps)
-    return [
-        {"follower.kind": k, x[0]: float(a), y[0]: float(b)} for k in kinds for a in xv for b in yv
-    ]
 
 
 class ExplorePanel:
@@ -108,6 +100,9 @@ class ExplorePanel:
         self.progress = gui.add_markdown("")
         self.front_dd = gui.add_dropdown("Pareto designs", ("–",), initial_value="–")
         self.load_btn = gui.add_button("Load this design", disabled=True)
+        self.csv_btn = gui.add_button("Download the results (CSV)", disabled=True)
+        self.spec_btn = gui.add_button("Download the sweep (SPEC for camcore)", disabled=True)
+        self.files_md = gui.add_markdown("")
         self.image: Any = None
         self._folder = gui.add_folder("Map", expand_by_default=True)
         self._analyst: Any = None
@@ -125,14 +120,24 @@ class ExplorePanel:
         self._map_busy = False  # a thread draws the map (a sweep's end or a new width)
         self._map_lock = threading.Lock()  # held while one draws: never two at once
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
+        self._ran: tuple[dict, dict, list[dict]] | None = None  # (base, grid, rows) on show
+        self._send: Callable[[str, bytes], None] | None = None  # a file to the browser
 
-    def bind(self, analyst, design: Callable[[], Design], load: Callable[[Design], None]):
-        self._analyst, self._design, self._load = analyst, design, load
+    def bind(
+        self,
+        analyst,
+        design: Callable[[], Design],
+        load: Callable[[Design], None],
+        send: Callable[[str, bytes], None],
+    ):
+        self._analyst, self._design, self._load, self._send = analyst, design, load, send
         for widget in self._setup_widgets():
             widget.on_update(lambda _: self._keep_setup())
         self.run_btn.on_click(lambda _: self.start())
         self.cancel_btn.on_click(lambda _: self.cancel())
         self.load_btn.on_click(lambda _: self.load(self.front_dd.value))
+        self.csv_btn.on_click(lambda _: self.download("csv"))
+        self.spec_btn.on_click(lambda _: self.download("spec"))
         self.x.on_update(lambda _: self._suggest(self.x, self.x_range, "x"))
         self.y.on_update(lambda _: self._suggest(self.y, self.y_range, "y"))
 
@@ -234,7 +239,7 @@ class ExplorePanel:
             self._thread.start()
 
     def _job(self):
-        """(base, points, x, y, figures) from the widgets, or None (said why)."""
+        """(base, points, grid, x, y, figures) from the widgets, or None (said why)."""
         px, py = PARAMETERS.get(self.x.value), PARAMETERS.get(self.y.value)
         names = [FIGURE_LABELS.get(f.value) for f in (self.fig_a, self.fig_b)]
         if self.fig_c.value != NO_FIGURE:
@@ -277,11 +282,11 @@ class ExplorePanel:
         # the boxes show what runs (a box left empty sends nothing: a review ran the
         # last range while the box stood blank)
         self.x_range.value, self.y_range.value = (x0, x1), (y0, y1)
-        points = grid_points((px, x0, x1), (py, y0, y1), int(steps), kinds)
+        grid = sweep_grid((px, x0, x1), (py, y0, y1), int(steps), kinds)
         base = design.model_dump(mode="json")
-        return base, points, (px, self.x.value), (py, self.y.value), names
+        return base, grid_points(grid), grid, (px, self.x.value), (py, self.y.value), names
 
-    def _sweep(self, base, points, x, y, names) -> None:
+    def _sweep(self, base, points, grid, x, y, names) -> None:
         """Analyse each distinct design once (points that differ only in a field their
         follower ignores make one design: camcore.sweep.same_designs), in chunks."""
         done: dict[int, dict] = {}  # point index -> its row, for the points analysed
@@ -311,13 +316,14 @@ class ExplorePanel:
             ]
             span = [[p[path] for p in points] for path in (x[0], y[0])]  # the asked ranges
             limits = ((min(span[0]), max(span[0])), (min(span[1]), max(span[1])))
-            self._show(base, rows, len(points), x, y, names, limits)
+            self._show((base, grid, rows), len(points), x, y, names, limits)
         except Exception as exc:  # a worker lost: say so, keep the tab
             self.progress.content = f"✖ The sweep stopped: {esc(exc)}"
         finally:
             self.run_btn.disabled, self.cancel_btn.disabled = False, True
 
-    def _show(self, base, rows, total, x, y, names, limits) -> None:
+    def _show(self, ran, total, x, y, names, limits) -> None:
+        base, _, rows = ran
         if not rows:
             self._clear()  # (a review: the last sweep's map stayed, loadable, unmarked)
             self.progress.content = "Cancelled before the first designs."
@@ -341,6 +347,8 @@ class ExplorePanel:
                 offers[f"{n}. {shown} → {figs}"] = point
             with self._lock:
                 self._base, self._offers, self._armed = base, offers, None
+                self._ran, self.files_md.content = ran, ""
+                self.csv_btn.disabled = self.spec_btn.disabled = False
                 self._drawn = (rows, x, y, names, front, limits, px)
                 self.front_dd.options = tuple(offers) or ("–",)
                 self.front_dd.value = self.front_dd.options[0]
@@ -394,7 +402,9 @@ class ExplorePanel:
     def _clear(self) -> None:
         """No results on show: no offers, no map."""
         with self._lock:
-            self._offers, self._armed, self._drawn = {}, None, None
+            self._offers, self._armed, self._drawn, self._ran = {}, None, None, None
+            self.csv_btn.disabled = self.spec_btn.disabled = True
+            self.files_md.content = ""
             self.front_dd.options = ("–",)
             self.front_dd.value = "–"
             self.load_btn.disabled = True
@@ -433,6 +443,35 @@ class ExplorePanel:
         self._load(design)
         number = label.split(" ", 1)[0].rstrip(".")
         self.progress.content = f"Loaded design {esc(number)} of the Pareto front."
+
+    def download(self, what: str) -> None:
+        """Send the sweep on show: its rows as CSV (``what`` = "csv", the columns of
+        ``camcore sweep``'s Parquet table) or as a SPEC ("spec") that ``camcore sweep``
+        runs again, on this machine or a Dask cluster (issue 12: one who outgrows the
+        app changes a flag, not the study)."""
+        with self._lock:
+            ran = self._ran
+        if ran is None or self._send is None:
+            self.files_md.content = "✖ Run a sweep first: the files hold its results."
+            return
+        base, grid, rows = ran
+        stem = file_stem(Design.model_validate(base))
+        if what == "csv":
+            name, data = f"{stem}-sweep.csv", csv_text(rows).encode()
+            said = f"{len(rows)} rows, one per point, the columns of `camcore sweep`'s table"
+        else:
+            name, data = f"{stem}-sweep.json", spec_document(base, grid).encode()
+            shown = name if _PLAIN_NAME.fullmatch(name) else "SPEC.json"  # (file_stem's
+            said = (  # slug is plain: inside a code span esc's backslashes would show)
+                f"run it with `camcore sweep {shown} --out results.parquet --fast` "
+                "for these rows, without `--fast` for the profile's checks too; "
+                "`--workers N` or `--scheduler ADDRESS` runs it on Dask"
+            )
+        if len(data) > MAX_FILE_BYTES:  # (MAX_DESIGNS rows are ~2 MB: never, by design)
+            self.files_md.content = f"✖ {esc(name)} would be {len(data):,} bytes: too large."
+            return
+        self._send(name, data)
+        self.files_md.content = f"Sent **{esc(name)}** ({len(data):,} bytes): {said}."
 
     def cancel(self) -> None:
         """Stop the sweep after the chunk it is on (said at once: a chunk can take

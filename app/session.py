@@ -216,7 +216,12 @@ class Session:
         ui.aside_btn.on_click(lambda _: self.download_set_aside())
         for kind, b in ui.download_btns.items():
             b.on_click(lambda _, k=kind: self.download(k))
-        ui.explore.bind(self.analyst, lambda: self.design, self.set_design)
+        ui.explore.bind(
+            self.analyst,
+            lambda: self.design,
+            self.set_design,
+            lambda name, data: self.client.send_file_download(name, data, save_immediately=True),
+        )
 
     # --- design changes -------------------------------------------------------------
     def on_control(self) -> None:

@@ -10,6 +10,8 @@ the app's background worker) the exploration reads the same table.
 from __future__ import annotations
 
 import io
+import itertools
+import json
 import math
 from dataclasses import dataclass
 
@@ -17,7 +19,7 @@ import numpy as np
 
 from .checks import CODES
 from .model import PAPER_FOLLOWERS, FollowerKind
-from .sweep import first_violation, pareto_mask
+from .sweep import _axis, first_violation, pareto_mask
 
 
 @dataclass(frozen=True)
@@ -55,6 +57,34 @@ FIGURES: dict[str, Figure] = {
 
 # figures the batched core (sweep --fast) does not compute
 PROFILE_FIGURES = {"wear", "outer_diameter"}
+
+
+def sweep_grid(
+    x: tuple[str, float, float], y: tuple[str, float, float], steps: int, kinds: list[str]
+) -> dict:
+    """The grid of a SPEC (camcore.sweep.parse_spec) for the follower ``kinds`` times
+    ``steps`` values of each field, (path, from, to) from ``x`` and ``y``: the kinds
+    vary slowest, y fastest."""
+    return {
+        "follower.kind": list(kinds),
+        x[0]: {"from": x[1], "to": x[2], "num": steps},
+        y[0]: {"from": y[1], "to": y[2], "num": steps},
+    }
+
+
+def grid_points(grid: dict) -> list[dict]:
+    """The points of a SPEC's ``grid``, {path: value} each, in the order and with the
+    very values ``camcore sweep`` gives them (the same axes, the last fastest)."""
+    axes = [(path, _axis(path, raw)) for path, raw in grid.items()]
+    names = [path for path, _ in axes]
+    return [dict(zip(names, c, strict=True)) for c in itertools.product(*(v for _, v in axes))]
+
+
+def spec_document(base: dict, grid: dict) -> str:
+    """A SPEC document of the sweep of ``grid`` around the design ``base`` (a Design's
+    JSON data): ``camcore sweep SPEC --out T.parquet --fast`` runs the same designs,
+    and without ``--fast`` adds the profile's figures and checks."""
+    return json.dumps({"base": base, "grid": grid}, indent=1) + "\n"
 
 
 def figure_values(rows: list[dict], names: list[str]) -> np.ndarray:

@@ -520,6 +520,37 @@ def _table(rows: list[dict]):
     return pa.table(cols)
 
 
+FORMULA_START = ("=", "+", "-", "@", "\t", "\r")  # a spreadsheet runs such a text cell
+
+
+def csv_text(rows: list[dict]) -> str:
+    """The rows as CSV: the columns of the Parquet table (``_table``: each key where it
+    first appears), a float at full precision (repr), None as an empty cell. A text
+    cell that a spreadsheet would run as a formula (a design's name "=HYPERLINK(...)")
+    starts with an apostrophe, as OWASP advises against CSV injection."""
+    import csv
+    import io
+
+    names: dict[str, None] = {}
+    for r in rows:
+        names.update(dict.fromkeys(r))
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(names)
+    for r in rows:
+        writer.writerow(_cell(r.get(k)) for k in names)
+    return out.getvalue()
+
+
+def _cell(v) -> str:
+    if v is None:
+        return ""
+    if isinstance(v, float):
+        return repr(v)
+    text = str(v)
+    return "'" + text if isinstance(v, str) and text.startswith(FORMULA_START) else text
+
+
 def _progress(done: int, total: int, rate: float, stream=sys.stderr) -> None:
     width = 30
     fill = int(width * done / max(total, 1))

@@ -1260,6 +1260,49 @@ def test_explore_says_what_it_runs_and_why_points_are_no_designs(tab, monkeypatc
     assert "made of segments" in e.progress.content
 
 
+def test_explore_hands_its_sweep_over_as_csv_and_as_a_spec(tab, downloads, monkeypatch):
+    """After a sweep the tab sends its rows as CSV (the columns of camcore sweep's table)
+    and as a SPEC that camcore sweep runs to the very same rows (--fast: the batched
+    core, as the tab ran); before one, and after a cancelled one, it sends nothing."""
+    import csv
+
+    from camcore import sweep
+
+    e = tab.ui.explore
+    assert e.csv_btn.disabled and e.spec_btn.disabled
+    e.download("csv")  # (a forged click: nothing on show)
+    assert not downloads and "Run a sweep first" in e.files_md.content
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Roller radius r_c [mm]"
+    e.x_range.value, e.y_range.value = (70.0, 85.0), (-5.0, 12.0)  # r_c < 0: no design
+    e.steps.value, e.all_kinds.value = 3, True
+    e.run_btn.value = True
+    assert wait_for(lambda: not e.csv_btn.disabled, 120.0), e.progress.content
+    rows = e._ran[2]
+    assert len(rows) == 36 and any(r.get("error") for r in rows)
+    e.csv_btn.value = True
+    name, data = downloads[-1]
+    assert name.startswith(panels.file_stem(tab.design)) and name.endswith("-sweep.csv")
+    assert f"Sent **{panels.esc(name)}**" in e.files_md.content
+    table = list(csv.DictReader(io.StringIO(data.decode())))
+    assert len(table) == 36
+    for got, want in zip(table, rows, strict=True):
+        assert set(got) >= set(want)
+        for k, v in want.items():  # floats exactly (repr), the rest as text
+            assert got[k] == ("" if v is None else repr(v) if isinstance(v, float) else str(v))
+    e.spec_btn.value = True
+    name, data = downloads[-1]
+    assert name.endswith("-sweep.json") and f"camcore sweep {name} --out" in e.files_md.content
+    spec = sweep.parse_spec(data)
+    again = sweep.run_chunk(spec.base, list(spec.points()), fast=True)
+    assert again == rows  # the same designs, figures and verdicts, in the same order
+    # a sweep cancelled before its first designs has nothing to send
+    cancel_first = lambda base, points: e._cancel.set() or list(range(len(points)))  # noqa: E731
+    monkeypatch.setattr(e._analyst, "same_designs", cancel_first)  # (the app's analyst)
+    e.run_btn.value = True
+    assert wait_for(lambda: "Cancelled before" in e.progress.content, 10.0)
+    assert e.csv_btn.disabled and e.spec_btn.disabled and e._ran is None
+
+
 def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):
     """The spring rate and the cam width are Explore fields too: the paper example's
     spring (k_min 2800 N/m at 1200 rpm, jump speed 1855 rpm) over speed x rate shows

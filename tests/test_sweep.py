@@ -1191,3 +1191,48 @@ def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
             sweep.load_spec(tmp_path / "sub" / "spec.json")
     with pytest.raises(DesignError, match=re.escape("grid.cam.\\u001b[2Kx: no such field")):
         sweep.parse_spec(json.dumps({"grid": {"cam.\x1b[2Kx": [10]}}))
+
+
+def test_csv_holds_the_table_s_columns_and_defuses_formulas():
+    """csv_text: the columns of the Parquet table in first-seen order, floats that read
+    back exactly, None as empty, and a text a spreadsheet would run as a formula
+    (OWASP's CSV injection: "=", "+", "-", "@" first) made plain text by an apostrophe."""
+    import csv
+    import io
+
+    rows = [
+        {"grid.x": 0.1 + 0.2, "design": '=HYPERLINK("http://x")', "valid": True},
+        {"grid.x": -1e-300, "design": "@SUM(A1)", "valid": False, "error": "no, -3 mm"},
+        {"grid.x": float("inf"), "design": "plain", "valid": None},
+    ]
+    table = list(csv.reader(io.StringIO(sweep.csv_text(rows))))
+    assert table[0] == ["grid.x", "design", "valid", "error"]
+    assert [float(r[0]) for r in table[1:]] == [0.1 + 0.2, -1e-300, float("inf")]
+    assert [r[1] for r in table[1:]] == ['\'=HYPERLINK("http://x")', "'@SUM(A1)", "plain"]
+    assert [r[2] for r in table[1:]] == ["True", "False", ""]
+    assert [r[3] for r in table[1:]] == ["", "no, -3 mm", ""]  # (not first: left alone)
+    assert sweep.csv_text([{"a": "-1"}, {"a": "+1"}, {"a": "\tx"}]).splitlines()[1:] == [
+        "'-1",
+        "'+1",
+        "'\tx",
+    ]
+
+
+def test_explore_s_spec_is_what_camcore_sweep_runs():
+    """The SPEC the Explore tab hands over: camcore sweep parses it to the very points
+    (values and order) the tab ran, around the same base design."""
+    from camcore.explore import grid_points, spec_document, sweep_grid
+    from camcore.model import load_preset
+
+    base = load_preset("paper_example").model_dump(mode="json")
+    grid = sweep_grid(
+        ("cam.base_radius_mm", 70.0, 90.3), ("follower.offset_mm", 35.0, 25.0), 7, ["a", "b"]
+    )
+    points = grid_points(grid)
+    assert len(points) == 2 * 7 * 7 and points[0]["follower.offset_mm"] == 35.0
+    assert [p["follower.kind"] for p in points[:49]] == ["a"] * 49  # kinds slowest
+    assert points[1]["cam.base_radius_mm"] == 70.0 and points[7]["cam.base_radius_mm"] > 70
+    grid["follower.kind"] = ["single_roller", "double_concave"]
+    spec = sweep.parse_spec(spec_document(base, grid))
+    assert list(spec.points()) == grid_points(grid)
+    assert spec.base == json.loads(load_preset("paper_example").model_dump_json())
