@@ -58,13 +58,12 @@ def stations() -> None:
 
 
 def explore_map() -> None:
-    from app.explore import grid_points
     from camcore import explore, sweep
     from camcore.model import PAPER_FOLLOWERS, load_preset
 
     base = load_preset("paper_example").model_dump(mode="json")
     x, y = ("cam.base_radius_mm", 50.0, 110.0), ("follower.offset_mm", 10.0, 45.0)
-    points = grid_points(x, y, 8, [k.value for k in PAPER_FOLLOWERS])
+    points = explore.grid_points(explore.sweep_grid(x, y, 8, [k.value for k in PAPER_FOLLOWERS]))
     rows = sweep.run_chunk(base, points, verify=False)
     names = ["cam_size", "stress", "pressure_angle"]  # the third colours the designs
     png = explore.explore_png(
