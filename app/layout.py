@@ -98,6 +98,8 @@ class Layout:
     history_md: Any  # how many steps each way
     controls: dict[str, Any]  # by design path, see app.controls.SPECS
     low_dwell_md: Any
+    spring_btn: Any  # puts the proposed spring rate in (Dynamics)
+    spring_md: Any  # what it did
     segments: SegmentTable
     summary_md: Any
     # Curves, Compare
@@ -176,6 +178,13 @@ def _design_tab(gui, base: Design, h: dict) -> None:
         with gui.add_folder(title, expand_by_default=expand):
             for spec in specs:
                 h["controls"][spec.path] = _control(gui, spec, base)
+            if title == "Dynamics":  # (after the spring's own controls)
+                h["spring_btn"] = gui.add_button(
+                    "Use the proposed spring rate",
+                    hint="k = the proposal of the key numbers: n k_min at this preload "
+                    "(and the jump-speed margin, if set), rounded up; Undo takes it back",
+                )
+                h["spring_md"] = gui.add_markdown("")
             if title == "Motion program":
                 h["low_dwell_md"] = gui.add_markdown("")
                 folder = gui.add_folder("Program segments (any program)", expand_by_default=False)

@@ -135,6 +135,7 @@ class Session:
         self.verified = False  # self.analysis is the geometrically checked one
         self.cutter_note: str | None = None  # the cutter gouges (found with the check)
         self.headline = ""  # the design's headline figures (panels.headline_html)
+        self.proposed_rate: float | None = None  # [N/m] the key numbers' spring proposal
         self.gen = 0  # bumped by every new design: background results of older ones drop
         self.theta_deg = 0.0
         self.speed = 45.0  # animation, cam degrees per second
@@ -214,6 +215,7 @@ class Session:
         ui.open_saved_btn.on_click(lambda _: self.open_saved(ui.saved_dd.value))
         ui.delete_saved_btn.on_click(lambda _: self.delete_saved(ui.saved_dd.value))
         ui.aside_btn.on_click(lambda _: self.download_set_aside())
+        ui.spring_btn.on_click(lambda _: self.use_proposed_spring())
         for kind, b in ui.download_btns.items():
             b.on_click(lambda _, k=kind: self.download(k))
         ui.explore.bind(
@@ -255,6 +257,32 @@ class Session:
                 # may already sit in one
                 self._sync_controls(design, prefix="motion.")
             self._apply(self._renamed_for_kind(design))
+
+    def use_proposed_spring(self) -> None:
+        """Put the spring rate the key numbers propose (machine.spring's proposal, at
+        the design's preload) into the design, as an edit Undo takes back; or say why
+        there is none to put."""
+        with self.lock:
+            say, rate, d = self.ui.spring_md, self.proposed_rate, self.design
+            if self.error is not None:
+                say.content = "✖ The input is invalid (see the red panel): fix it first."
+                return
+            if rate is None:
+                say.content = (
+                    "✖ No spring rate keeps contact at this preload: raise the preload "
+                    "s_p, or lower the speed or the mass."
+                )
+                return
+            if rate == d.dynamics.spring_rate_N_per_m:
+                say.content = f"The spring rate is the proposal already: {rate:g} N/m."
+                return
+            none = " (no spring is needed: nothing pulls the follower off)" if rate == 0 else ""
+            dyn = d.dynamics.model_copy(update={"spring_rate_N_per_m": rate})
+            self.set_design(d.model_copy(update={"dynamics": dyn}), reset_camera=False)
+            say.content = (
+                f"Spring rate k: {d.dynamics.spring_rate_N_per_m:g} → {rate:g} N/m{none} "
+                "(the key numbers give its jump speed; Undo takes it back)."
+            )
 
     def travel(self, label: str) -> None:
         """Undo or redo (layout.HISTORY_BUTTONS) a change of the design: the whole
@@ -471,6 +499,8 @@ class Session:
                 ui.stations_img = None
                 ui.stations_fig_md.content = ""
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
+            if ui.spring_md.content:  # (said of an earlier design; use_proposed_spring
+                ui.spring_md.content = ""  # writes its line after this redraw)
             if ui.quick_md.content and ui.quick_md.content != SILENT_NOTE:
                 ui.quick_md.content = ""  # it spoke of the design before this one
             self._show_summary(s)
@@ -523,6 +553,7 @@ class Session:
         """Key numbers, and what happens at each station in words (for where_md)."""
         self.ui.summary_md.content = summary_markdown(s)
         self.headline = headline_html(s)  # shown with the status (_show_status)
+        self.proposed_rate = s["spring_proposal"]["spring_rate_N_per_m"]  # (None: inf)
         self.station_events = [st["event"] for st in s["stations"]]
         self.station_faces = [st["contacts"] for st in s["stations"]]
 

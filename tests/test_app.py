@@ -2582,6 +2582,41 @@ def test_the_users_own_view_change_wins_over_the_kept_one(app, monkeypatch):
         assert json.loads(writes[storage.VIEW_KEY])["theta_deg"] == pytest.approx(5.0)
 
 
+def test_the_proposed_spring_goes_in_with_one_click(tab, monkeypatch):
+    """Dynamics' *Use the proposed spring rate*: k becomes the key numbers' proposal
+    (n k_min rounded up: its margin k / k_min is then n at least), the control shows it,
+    Undo takes it back; a design no spring holds, and invalid input, say why instead."""
+    from app import history
+    from camcore.report import summary as report_summary
+
+    monkeypatch.setattr(history, "SETTLE_S", 0.0)  # each change a step
+    s = tab
+    first = s.design
+    proposal = report_summary(s.analysis)["spring_proposal"]["spring_rate_N_per_m"]
+    assert proposal != first.dynamics.spring_rate_N_per_m  # (paper: 4201 against 6772.5)
+    s.ui.spring_btn.value = True  # click
+    assert s.design.dynamics.spring_rate_N_per_m == proposal
+    assert s.ui.controls["dynamics.spring_rate_N_per_m"].value == proposal
+    assert f"6772.5 → {proposal:g} N/m" in s.ui.spring_md.content
+    after = report_summary(s.analysis)
+    n = first.dynamics.spring_safety_factor
+    assert n <= after["jump_margin"]["spring_rate"] < n * 1.001  # the rule, just met
+    assert after["spring_proposal"]["spring_rate_N_per_m"] == proposal  # (a fixed point)
+    s.use_proposed_spring()  # again: nothing to change, and it says so
+    assert "the proposal already" in s.ui.spring_md.content
+    s.travel("↶ Undo")
+    assert s.design == first and s.ui.spring_md.content == ""  # (said of the other)
+    s.ui.controls["dynamics.preload_mm"].value = 0.0
+    s.ui.controls["dynamics.external_load_N"].value = -50.0  # pulls it off in the dwell
+    assert s.proposed_rate is None
+    s.use_proposed_spring()
+    assert "No spring rate keeps contact" in s.ui.spring_md.content
+    assert s.design.dynamics.spring_rate_N_per_m == first.dynamics.spring_rate_N_per_m
+    s.ui.controls["cam.base_radius_mm"].value = -5.0  # invalid input
+    s.use_proposed_spring()
+    assert "input is invalid" in s.ui.spring_md.content
+
+
 def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     """A designer tries a change and steps back: Undo gives the design before it,
     controls and program table with it; Redo gives it again; a slider dragged through

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from camcore.analysis import compare
+from camcore.analysis import analyze, compare
 from camcore.model import Design, FollowerKind, load_preset
 from camcore.report import summary
 
@@ -115,3 +115,16 @@ def test_the_download_name_shown_is_the_papers_example_s():
 
     (printed,) = _printed(r"design \(`([a-z0-9_-]+)\.stl` for the")
     assert printed == file_stem(load_preset("paper_example"))
+
+
+def test_the_proposed_spring_s_jump_speed():
+    """The README's example of *Use the proposed spring rate*: the paper example's k
+    and jump speed before and after (the proposal at the design's preload)."""
+    k0, k1, n0, n1 = _printed(r"k ([\d.]+) → ([\d.]+) N/m, jump speed (\d+) → (\d+) rpm")
+    d = load_preset("paper_example")
+    before = summary(analyze(d, verify=False))
+    k = before["spring_proposal"]["spring_rate_N_per_m"]
+    dyn = d.dynamics.model_copy(update={"spring_rate_N_per_m": k})
+    after = summary(analyze(d.model_copy(update={"dynamics": dyn}), verify=False))
+    assert (float(k0), float(k1)) == (d.dynamics.spring_rate_N_per_m, k)
+    assert (int(n0), int(n1)) == (round(before["jump_speed_rpm"]), round(after["jump_speed_rpm"]))
