@@ -57,6 +57,23 @@ PARAMETERS = {
     "Spring rate k [N/m]": "dynamics.spring_rate_N_per_m",
     "External load F_e [N]": "dynamics.external_load_N",
 }
+# how the list of front designs names each field ("r_b 12")
+SYMBOLS = {
+    "follower.kind": "",
+    "cam.base_radius_mm": "r_b",
+    "follower.offset_mm": "e",
+    "follower.single_offset_mm": "e_s",
+    "follower.face_radius_mm": "r_f",
+    "follower.roller_radius_mm": "r_c",
+    "motion.lift_mm": "h",
+    "motion.rise_deg": "β_r",
+    "motion.fall_deg": "β_f",
+    "cam.speed_rpm": "speed",
+    "cam.width_mm": "w",
+    "dynamics.spring_rate_N_per_m": "k",
+    "dynamics.external_load_N": "F_e",
+}
+SIGNED = {"follower.single_offset_mm", "dynamics.external_load_N"}  # either side of 0
 # labels of earlier versions, as a kept setup may hold them
 OLD_LABELS = {"Speed [rpm]": "Cam speed [rpm]"}
 FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
@@ -122,6 +139,7 @@ class ExplorePanel:
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
         self._ran: tuple[dict, dict, list[dict]] | None = None  # (base, grid, rows) on show
         self._send: Callable[[str, bytes], None] | None = None  # a file to the browser
+        self._invalid: Callable[[], bool] | None = None  # the tab's input is invalid
 
     def bind(
         self,
@@ -129,8 +147,12 @@ class ExplorePanel:
         design: Callable[[], Design],
         load: Callable[[Design], None],
         send: Callable[[str, bytes], None],
+        invalid: Callable[[], bool],
     ):
+        """``invalid``: whether the tab's input is invalid now (the design on screen is
+        then the last valid one, not what the controls say)."""
         self._analyst, self._design, self._load, self._send = analyst, design, load, send
+        self._invalid = invalid
         for widget in self._setup_widgets():
             widget.on_update(lambda _: self._keep_setup())
         self.run_btn.on_click(lambda _: self.start())
@@ -210,9 +232,15 @@ class ExplorePanel:
         if path is None or self._design is None:
             return
         rng.label = _range_label(axis, dd.value)
-        v = get_path(self._design(), path)
+        design = self._design()
+        refused = _refused_field(design, dd.value, path)
+        if refused is not None:  # (a review: the last field's range stood, relabelled)
+            self.progress.content = refused
+            return
+        v = get_path(design, path)
         if isinstance(v, int | float):
-            lo, hi = sorted((0.7 * v, 1.3 * v)) if v else (0.0, 10.0)
+            zero = (-10.0, 10.0) if path in SIGNED else (0.0, 10.0)
+            lo, hi = sorted((0.7 * v, 1.3 * v)) if v else zero
             rng.value = (round(lo, 1), round(hi, 1))
 
     def suggest_ranges(self) -> None:
@@ -252,13 +280,16 @@ class ExplorePanel:
             return None
         assert self._design is not None  # bound before any click
         design = self._design()
+        if self._invalid is not None and self._invalid():
+            self.progress.content = (  # (a review: it ran around the last valid design)
+                "✖ The input is invalid (see the red panel): fix it, and the sweep runs "
+                "around the design you see."
+            )
+            return None
         for label, path in ((self.x.value, px), (self.y.value, py)):
-            if path.startswith("motion.") and design.motion.classic is None:
-                self.progress.content = (  # (a review: every point was "not a design")
-                    f"✖ {esc(label)}: this design's motion program is made of segments "
-                    "(the Motion table), which that field does not describe: sweep a cam "
-                    "or follower field, or load a rise-dwell-fall design."
-                )
+            refused = _refused_field(design, label, path)
+            if refused is not None:
+                self.progress.content = refused
                 return None
         kinds = (
             [k.value for k in PAPER_FOLLOWERS]
@@ -342,7 +373,8 @@ class ExplorePanel:
             for n, i in enumerate(offered(front, values, MAX_FRONT), start=1):
                 point, shown = _offer(rows[i])
                 figs = ", ".join(
-                    f"{v:.4g} {FIGURES[m].unit}" for m, v in zip(names, values[i], strict=True)
+                    f"{FIGURES[m].symbol} {v:.4g} {FIGURES[m].unit}"
+                    for m, v in zip(names, values[i], strict=True)
                 )
                 offers[f"{n}. {shown} → {figs}"] = point
             with self._lock:
@@ -520,8 +552,21 @@ def _offer(row: dict) -> tuple[dict, str]:
         if path == "follower.kind" and isinstance(v, str) and v in FollowerKind.__members__:
             shown.append(FollowerKind(v).label)
         else:
-            shown.append(f"{v:.4g}" if isinstance(v, float) else str(v))
+            value = f"{v:.4g}" if isinstance(v, float) else str(v)
+            shown.append(f"{SYMBOLS.get(path, path)} {value}")
     return point, ", ".join(shown)
+
+
+def _refused_field(design: Design, label: str, path: str) -> str | None:
+    """Why ``design`` cannot be swept over the field ``path`` (``label`` as chosen), or
+    None: a motion field of a program made of segments is no field of it."""
+    if path.startswith("motion.") and design.motion.classic is None:
+        return (  # (a review: every point was "not a design")
+            f"✖ {esc(label)}: this design's motion program is made of segments "
+            "(the Motion table), which that field does not describe: sweep a cam "
+            "or follower field, or load a rise-dwell-fall design."
+        )
+    return None
 
 
 def _summary(rows: list[dict], total: int, front, names: list[str], limits, listed: int) -> str:

@@ -223,6 +223,7 @@ class Session:
             lambda: self.design,
             self.set_design,
             lambda name, data: self.client.send_file_download(name, data, save_immediately=True),
+            lambda: self.error is not None,
         )
 
     # --- design changes -------------------------------------------------------------

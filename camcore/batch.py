@@ -481,12 +481,12 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
         )
     limit = d0.limits.max_pressure_angle_deg  # Eqs. 5, 13
     phi = to_deg(np.abs(loc.pressure_angle))  # as checks._pressure_angle
-    bad = grid_any(on & (phi > limit)) | cand_any(
-        "pressure_angle_max", lambda v: v > math.radians(limit)
+    bad = grid_any(on & (phi > checks.most(limit))) | cand_any(
+        "pressure_angle_max", lambda v: v > checks.most(math.radians(limit))
     )
     add(bad, "pressure_angle")
     if bt.r[0] != 0.0:  # Eq. 42
-        lim_pa = contact_stress_limit_MPa(d0) * 1e6
+        lim_pa = checks.most(contact_stress_limit_MPa(d0) * 1e6)
         stress = np.where(loc.in_contact, loc.stress, 0.0)
         add(
             grid_any(stress > lim_pa) | cand_any("stress_max", lambda v: v > lim_pa),
@@ -714,7 +714,7 @@ def summaries(designs: list[Design]) -> list[dict]:
     lim = bt.designs[0].limits.min_jump_speed_ratio  # checks._jump_speed, run_all's last
     for row, spring in zip(verdicts, springs, strict=True):
         ratio = spring["jump_margin"]["jump_speed"]  # (None: it never jumps)
-        if lim is not None and ratio is not None and ratio < lim:
+        if lim is not None and ratio is not None and ratio < checks.least(lim):
             row.append("jump_speed")
     parts = zip(
         bt.designs,

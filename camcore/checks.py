@@ -84,6 +84,26 @@ CODES = (
 
 LIFT_TOLERANCE_M = 1e-8  # 1e-5 mm: far above round-off, far below any real defect
 ROUND_OFF_MM = 1e-9  # a size this far past its limit meets it (190.00000000000003 mm)
+ROUND_OFF = 1e-9  # relative: a figure this close past its limit meets it (a review: the
+# double rollers' sin phi = e / (r_b + r_c) = 1/2 gave phi = 30.000000000000004 deg, and
+# "exceeds the limit 30 deg by 0.00 deg" refused a design exactly at it)
+
+
+def most(limit: float) -> float:
+    """The largest figure that meets "at most ``limit``": the limit, with the closed
+    forms' round-off (ROUND_OFF)."""
+    return limit + ROUND_OFF * abs(limit)
+
+
+def least(limit: float) -> float:
+    """The smallest figure that meets "at least ``limit``" (as ``most``)."""
+    return limit - ROUND_OFF * abs(limit)
+
+
+def _by(excess: float) -> str:
+    """How far past a limit, in two decimals or, below them, two significant figures
+    (never "by 0.00")."""
+    return f"{excess:.2f}" if excess >= 0.005 else f"{excess:.2g}"
 
 
 def lift_tolerance(a) -> float:
@@ -295,9 +315,9 @@ def _curvature_rules(a) -> list[Violation]:
 def _pressure_angle(a) -> list[Violation]:
     limit = a.design.limits.max_pressure_angle_deg
     phi = to_deg(np.abs(a.pressure_angle))
-    bad = a.on_curve & (phi > limit)
+    bad = a.on_curve & (phi > most(limit))
     worst = a.worst.get("pressure_angle_max")
-    extra = worst.beyond(math.radians(limit), 1.0) if worst else ()
+    extra = worst.beyond(most(math.radians(limit)), 1.0) if worst else ()
     if not (bad.any() or extra):
         return []
     top = max(float(phi[bad].max()) if bad.any() else 0.0, to_deg(worst.value) if worst else 0)
@@ -307,7 +327,7 @@ def _pressure_angle(a) -> list[Violation]:
             "pressure_angle",
             "Eqs. 5, 13",
             f"pressure angle {top:.2f} deg exceeds the limit {limit:g} deg "
-            f"by {top - limit:.2f} deg at {where_text(ranges)}",
+            f"by {_by(top - limit)} deg at {where_text(ranges)}",
             ranges,
             top - limit,
         )
@@ -323,9 +343,9 @@ def _contact_stress(a) -> list[Violation]:
     sf = a.design.limits.contact_stress_safety_factor
     limit = contact_stress_limit_MPa(a.design) * 1e6  # the largest stress allowed [Pa]
     stress = np.where(a.in_contact, a.stress, 0.0)
-    bad = stress > limit
+    bad = stress > most(limit)
     worst = a.worst.get("stress_max")
-    extra = worst.beyond(limit, 1.0) if worst else ()
+    extra = worst.beyond(most(limit), 1.0) if worst else ()
     if not (bad.any() or extra):
         return []
     top = max(float(stress.max()), worst.value if worst else 0.0)
@@ -343,7 +363,7 @@ def _contact_stress(a) -> list[Violation]:
         message = (
             f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = "
             f"{top * sf / 1e6:.1f} MPa exceeds the allowable {allow / 1e6:g} MPa by "
-            f"{(top * sf - allow) / 1e6:.1f} MPa at {where_text(ranges)}"
+            f"{_by((top * sf - allow) / 1e6)} MPa at {where_text(ranges)}"
         )
     return [Violation("contact_stress", "Eq. 42", message, ranges, (top * sf - allow) / 1e6)]
 
@@ -606,7 +626,7 @@ def _jump_speed(a) -> list[Violation]:
         return []
     sp, speed = a.spring, a.design.cam.speed_rpm
     ratio = sp.jump_speed_rpm / speed
-    if ratio >= lim:  # (never jumps: inf)
+    if ratio >= least(lim):  # (never jumps: inf)
         return []
     drop = velocity_drop(segments(a.design))
     at = to_deg(sp.jump_at if drop is None else drop) % 360.0
@@ -749,7 +769,7 @@ def _hub_wall(a) -> list[Violation]:
     """The hub's thinnest wall against limits.min_hub_wall_mm (not in the paper: a
     maker's limit; a wall of hundredths of a millimetre passed every other check)."""
     wall, lim = hub_wall_mm(a), a.design.limits.min_hub_wall_mm
-    if wall is None or wall >= lim:
+    if wall is None or wall >= lim - ROUND_OFF_MM:
         return []
     key = " and keyway" if a.design.cam.keyway_width_mm > 0 else ""
     return [

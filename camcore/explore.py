@@ -30,6 +30,7 @@ class Figure:
     label: str
     unit: str
     columns: tuple[str, ...]
+    symbol: str = ""  # how a list of designs names it ("R 70.75 mm")
 
     def get(self, row: dict) -> float | None:
         vals = [row.get(c) for c in self.columns]
@@ -41,17 +42,18 @@ class Figure:
 
 
 FIGURES: dict[str, Figure] = {
-    "cam_size": Figure("cam size R (high-dwell radius)", "mm", ("dwell_radius_mm",)),
-    "stress": Figure("max contact stress σ_H", "MPa", ("contact_stress_max_MPa.cycle",)),
+    "cam_size": Figure("cam size R (high-dwell radius)", "mm", ("dwell_radius_mm",), "R"),
+    "stress": Figure("max contact stress σ_H", "MPa", ("contact_stress_max_MPa.cycle",), "σ_H"),
     "pressure_angle": Figure(
         "max pressure angle",
         "°",
         ("pressure_angle_max_deg.rise", "pressure_angle_max_deg.fall"),
+        "φ",
     ),
-    "force": Figure("max contact force F_N", "N", ("contact_force_max_N.cycle",)),
-    "torque": Figure("peak driving torque", "N m", ("cam_torque_max_Nm.drive",)),
-    "wear": Figure("max wear depth", "µm/10⁶ cycles", ("wear_depth_max_um_per_Mcycle",)),
-    "outer_diameter": Figure("cam outer diameter", "mm", ("profile.outer_diameter_mm",)),
+    "force": Figure("max contact force F_N", "N", ("contact_force_max_N.cycle",), "F_N"),
+    "torque": Figure("peak driving torque", "N m", ("cam_torque_max_Nm.drive",), "T"),
+    "wear": Figure("max wear depth", "µm/10⁶ cycles", ("wear_depth_max_um_per_Mcycle",), "wear"),
+    "outer_diameter": Figure("cam outer diameter", "mm", ("profile.outer_diameter_mm",), "Ø"),
 }
 
 

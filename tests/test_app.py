@@ -9,6 +9,7 @@ import io
 import itertools
 import json
 import math
+import re
 import threading
 import time
 
@@ -1301,6 +1302,31 @@ def test_explore_hands_its_sweep_over_as_csv_and_as_a_spec(tab, downloads, monke
     e.run_btn.value = True
     assert wait_for(lambda: "Cancelled before" in e.progress.content, 10.0)
     assert e.csv_btn.disabled and e.spec_btn.disabled and e._ran is None
+
+
+def test_explore_review_names_fields_and_refuses_early(tab):
+    """A designer's review of Explore: the front's list names each field and figure
+    ("r_b 70", "σ_H 52.4 MPa"); a signed field at 0 gets a range either side of it; a
+    motion field of a segment program is refused when chosen (its box had kept the
+    last field's range); and with the input invalid nothing runs (it had swept around
+    the last valid design without a word)."""
+    s, e = tab, tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (70.0, 90.0), (25.0, 35.0)
+    e.steps.value, e.all_kinds.value = 2, False
+    e.run_btn.value = True
+    assert wait_for(lambda: not e.load_btn.disabled, 60.0), e.progress.content
+    first = e.front_dd.options[0]
+    assert re.match(r"1\. double concave, r_b \d+, e \d+ → R [\d.]+ mm, σ_H ", first), first
+    e.y.value = "Axis offset e_s (single) [mm]"  # 0 in the paper example
+    assert tuple(e.y_range.value) == (-10.0, 10.0)
+    assert wait_for(lambda: not e._thread.is_alive(), 30.0)  # (its map drawn)
+    s.ui.controls["cam.base_radius_mm"].value = -5.0  # invalid input
+    e.run_btn.value = True
+    assert "input is invalid" in e.progress.content and not e._thread.is_alive()
+    s.load_preset("double_index")  # a program of segments
+    e.y.value = "Rise β_r [°]"
+    assert "made of segments" in e.progress.content
 
 
 def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):

@@ -316,3 +316,28 @@ def test_the_batched_core_asks_glibc_to_keep_its_freed_memory(monkeypatch):
         assert batch._kept == []
     finally:
         app.stop()
+
+
+def test_a_design_exactly_at_a_limit_meets_it():
+    """A designer's review: the double rollers' pressure angle at the dwell is
+    asin(e / (r_b + r_c)), 30 deg exactly for e = 10, r_b + r_c = 20 mm; round-off made
+    it 30.000000000000004 and refused the design ("exceeds ... by 0.00 deg"), so a
+    sweep's smallest r_b came out 13 mm, not 12. Both paths now let a figure within
+    checks.ROUND_OFF of its limit meet it; a hundredth of a millimetre smaller fails,
+    and its message says by how much in figures that are not zero."""
+    from camcore import checks
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(lift_mm=20, rise_deg=120, high_dwell_deg=60, fall_deg=120)
+    data["cam"].update(speed_rpm=300, base_radius_mm=12)
+    data["follower"].update(kind="double_roller", roller_radius_mm=8, offset_mm=10)
+    at, below = sweep.run_chunk(data, [{}, {"cam.base_radius_mm": 11.99}], fast=True)
+    assert at["pressure_angle_max_deg.rise"] > 30.0  # (the round-off is there)
+    assert at["pressure_angle_max_deg.rise"] <= checks.most(30.0)
+    assert at["valid"] and not below["valid"]
+    a = analyze(sweep.design_at(data, {}), verify=False)
+    assert not checks.run_all(a, None)
+    b = analyze(sweep.design_at(data, {"cam.base_radius_mm": 11.9999}), verify=False)
+    (v,) = [v for v in checks.run_all(b, None) if v.code == "pressure_angle"]
+    excess = math.degrees(math.asin(10 / 19.9999)) - 30  # (at the dwell: sin phi = e / R)
+    assert f"by {excess:.2g} deg" in v.message and excess < 0.005, v.message

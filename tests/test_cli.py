@@ -518,3 +518,14 @@ def test_a_roller_s_wear_and_the_report_s_follower_read_in_words(capsys):
     assert "um per million cycles (sliding up to" in line
     page = html_report(analyze(load_preset("paper_example"), verify=False))
     assert "<b>Follower:</b> double concave" in page and "double_concave</p>" not in page
+
+
+def test_python_m_camcore_is_the_camcore_command():
+    """``python3 -m camcore`` runs the command line (a review ran it so and got "No
+    module named camcore.__main__")."""
+    from camcore import package_version
+
+    out = subprocess.run(
+        [sys.executable, "-m", "camcore", "--version"], capture_output=True, text=True
+    )
+    assert out.returncode == 0 and out.stdout.strip() == f"camcore {package_version()}"
