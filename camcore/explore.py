@@ -417,7 +417,8 @@ def explore_figure(
         ax.set_ylim(*ylim)
         ax.set_title(title, fontsize=FONT)
         bottom, left = i + cols >= n, i % cols == 0  # (no map below it; the first column)
-        ax.set_xlabel(x[1] if bottom else "", fontsize=FONT)
+        room = (72 * width - 45) / cols - 8  # [pt] a map's width (less the y label, ticks)
+        ax.set_xlabel(_wrapped(x[1], room) if bottom else "", fontsize=FONT)
         ax.set_ylabel(y[1] if left else "", fontsize=FONT)
         ax.tick_params(labelsize=SMALL, labelbottom=bottom, labelleft=left)
     handles = [_patch(cmap[c], c.replace("_", " ")) for c in legend]  # (words, not codes)
@@ -431,6 +432,15 @@ def explore_figure(
     )
     _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front, width)
     return fig
+
+
+def _wrapped(label: str, room_pt: float) -> str:
+    """``label`` on as many lines as it needs to fit ``room_pt`` wide (a review: two
+    maps' "Base radius r_b [mm]" ran into one another in the narrow panel)."""
+    import textwrap
+
+    chars = max(8, int((room_pt - 12) / (0.6 * FONT)))  # (a character ~0.6 em wide)
+    return "\n".join(textwrap.wrap(label, chars, break_long_words=False)) or label
 
 
 def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, width: float) -> None:
@@ -492,24 +502,55 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
             )
             for k in kinds
         ]
-        ax.legend(handles=handles if third else None, fontsize=SMALL)
+        ax.legend(  # below the axes, never over the designs (a review)
+            handles=handles if third else None,
+            fontsize=SMALL,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.16 if width < 6 else -0.12),
+            ncols=2 if width < 6 else 4,
+            frameon=False,
+        )
 
 
 def _number_front(ax, v: np.ndarray, front: np.ndarray, gap: float) -> None:
-    """The front's numbers (the app's list), leaving out those closer than ``gap`` (a
-    fraction of the front's extent: about two lines of text) to one already printed
-    (they would print over each other)."""
+    """The front's numbers (the app's list): a number closer than ``gap`` (a fraction
+    of the front's extent: about two lines of text) to one already placed joins its
+    label ("3,4", "16-18") instead of printing over it (a review could not find 17)."""
     span = np.nanmax(v[front, :2], axis=0) - np.nanmin(v[front, :2], axis=0)
     span = np.where(span > 0, span, 1.0)
-    shown: list[np.ndarray] = []
+    char = 0.24 * gap  # a character's width (gap: two and a half lines' height)
+    groups: list[tuple[np.ndarray, int, list[int]]] = []  # (where, design, its numbers)
     for n, i in enumerate(offered(front, v), start=1):
         at = v[i, :2] / span
-        if any(np.hypot(*(at - p)) < gap for p in shown):
-            continue
-        shown.append(at)
+        near = [  # within two lines above or below, and left of the label's end
+            g
+            for g in groups
+            if abs(at[1] - g[0][1]) < gap
+            and -gap < at[0] - g[0][0] < gap + char * len(numbers_text(g[2]))
+        ]
+        if near:
+            near[0][2].append(n)
+        else:
+            groups.append((at, i, [n]))
+    for _, i, numbers in groups:
         ax.annotate(
-            str(n), (v[i, 0], v[i, 1]), fontsize=SMALL, xytext=(3, 3), textcoords="offset points"
+            numbers_text(numbers),
+            (v[i, 0], v[i, 1]),
+            fontsize=SMALL,
+            xytext=(3, 3),
+            textcoords="offset points",
         )
+
+
+def numbers_text(numbers: list[int]) -> str:
+    """Increasing numbers as runs: [3, 4, 5, 9] -> "3-5,9", [3, 4] -> "3,4"."""
+    runs: list[list[int]] = []
+    for n in numbers:
+        if runs and n == runs[-1][-1] + 1:
+            runs[-1].append(n)
+        else:
+            runs.append([n])
+    return ",".join(f"{r[0]}-{r[-1]}" if len(r) > 2 else ",".join(map(str, r)) for r in runs)
 
 
 def _span(values: np.ndarray) -> tuple[float, float]:

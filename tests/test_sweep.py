@@ -1236,3 +1236,52 @@ def test_explore_s_spec_is_what_camcore_sweep_runs():
     spec = sweep.parse_spec(spec_document(base, grid))
     assert list(spec.points()) == grid_points(grid)
     assert spec.base == json.loads(load_preset("paper_example").model_dump_json())
+
+
+def test_the_map_finds_every_front_number_and_keeps_its_labels_apart():
+    """A designer's review of the narrow panel: numbers of the front printed over one
+    another were left out (list entry 17 was nowhere on the map), the two maps' x
+    labels ran into one ("...[mm]Base radius..."), and the legend covered designs.
+    Now close numbers share a label ("16,17", "3-5"), each offered number is on the
+    map once, the labels stand apart and the legend is below the axes."""
+    from camcore.explore import (
+        PANEL_PX,
+        explore_figure,
+        grid_points,
+        numbers_text,
+        offered,
+        pareto,
+        sweep_grid,
+    )
+    from camcore.explore import figure_values as values_of
+    from camcore.model import load_preset
+
+    assert numbers_text([3, 4, 5, 9]) == "3-5,9" and numbers_text([16, 17]) == "16,17"
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(lift_mm=20, rise_deg=120, high_dwell_deg=60, fall_deg=120)
+    data["cam"].update(speed_rpm=300)
+    kinds = ["single_roller", "double_roller", "single_concave", "double_concave"]
+    x, y = ("cam.base_radius_mm", 10.0, 38.0), ("follower.roller_radius_mm", 4.0, 12.0)
+    rows = sweep.fast_rows(data, grid_points(sweep_grid(x, y, 8, kinds)))
+    names = ["cam_size", "stress", "pressure_angle"]  # (its colour bar narrows the maps)
+    front = pareto(rows, names)
+    listed = len(offered(front, values_of(rows, names)))
+    axes = ((x[0], "Base radius r_b [mm]"), (y[0], "Roller radius r_c [mm]"))
+    fig = explore_figure(rows, *axes, names, front, PANEL_PX)
+    pareto_ax = fig.axes[len(kinds)]
+    labels = [t.get_text() for t in pareto_ax.texts]
+    numbers = []
+    for label in labels:
+        for part in label.split(","):
+            lo, _, hi = part.partition("-")
+            numbers += range(int(lo), int(hi or lo) + 1)
+    assert sorted(numbers) == list(range(1, listed + 1)) and len(labels) < listed
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    r = canvas.get_renderer()
+    left, right = (fig.axes[i].xaxis.label.get_window_extent(r) for i in (2, 3))
+    assert left.x1 < right.x0  # (the bottom maps' x labels)
+    legend = pareto_ax.get_legend().get_window_extent(r)
+    assert legend.y1 < pareto_ax.get_window_extent(r).y0  # below the designs
