@@ -44,7 +44,7 @@ from .analysis import stations
 from .contact import compliance, conservative_stress, half_width, hertz_line_stress
 from .model import Design, allowable_contact_stress_MPa, contact_stress_limit_MPa, omega_rad_s
 from .motion import FALL, HIGH, RISE
-from .report import _finite, _train
+from .report import _finite, _train, unbounded_of
 from .units import MM, to_deg
 
 R2D = 180.0 / math.pi
@@ -732,6 +732,7 @@ def summaries(designs: list[Design]) -> list[dict]:
             "valid": not codes,
             "profile_checked": False,
             "violations": [{"code": c} for c in codes],
+            "unbounded": unbounded_of(codes),
             **geometry,
             **grid,
             **spring,

@@ -293,6 +293,7 @@ def summary(a: Analysis) -> dict:
         "follower": a.design.follower.kind.value,
         "valid": a.valid,
         "violations": [v.as_dict() for v in a.violations],
+        "unbounded": unbounded_of([v.code for v in a.violations]),
         "dwell_radius_mm": a.geo.dwell_radius * 1e3,
         "psi_h_deg": a.geo.psi_h * R2D,
         "psi_l_deg": a.geo.psi_l * R2D,
@@ -612,7 +613,7 @@ def jam_note(s: dict) -> str | None:
     figure)."""
     return _unbounded(
         s,
-        {"guide_jam"},
+        UNBOUNDED_BY["the guide jams"],
         "the guide jams (self-locking)",
         "the force, stress, torque and power grow",
     )
@@ -623,7 +624,10 @@ def cusp_note(s: dict) -> str | None:
     the Hertz stress (Eq. 42) grows without bound toward rho = 0 (a teacher's review
     read 'sigma_H <= 1957662.6 / 800 MPa')."""
     return _unbounded(
-        s, checks.CUSPED, "the profile has a cusp or folds back", "the contact stress grows"
+        s,
+        UNBOUNDED_BY["the cam has a cusp"],
+        "the profile has a cusp or folds back",
+        "the contact stress grows",
     )
 
 
@@ -634,7 +638,7 @@ def impulse_note(s: dict) -> str | None:
     bounds)."""
     return _unbounded(
         s,
-        {"velocity_jump"},
+        UNBOUNDED_BY["the velocity jumps"],
         "the velocity jumps (an infinite acceleration)",
         "the forces, stress, torque and power grow",
     )
@@ -654,8 +658,26 @@ def unbounded_figures(s: dict) -> set[str]:
     """Which cycle figures of summary ``s`` have no bound (UNBOUNDED's names: force,
     guide, stress, torque, power, flywheel, life): the text shows "unbounded" there, not
     the samples' largest (a designer's review read "101036570.5 MPa" in the key numbers
-    beside a headline of "unbounded"). The JSON keeps the numbers and the notes."""
-    return {f for why, _ in unbounded_notes(s) for f in UNBOUNDED[why]}
+    beside a headline of "unbounded"). The JSON keeps the numbers, the notes, and
+    these names as ``unbounded``."""
+    return set(unbounded_of([v["code"] for v in s["violations"]]))
+
+
+# the violation codes behind each reason of unbounded_notes
+UNBOUNDED_BY = {
+    "the velocity jumps": {"velocity_jump"},
+    "the cam has a cusp": checks.CUSPED,
+    "the guide jams": {"guide_jam"},
+}
+
+
+def unbounded_of(codes: list[str]) -> list[str]:
+    """The figures (UNBOUNDED's names, sorted) that the violations ``codes`` leave
+    without bound: a post-processor of a sweep's table reads them beside the numbers
+    (a review: a cusp's 28,672,817 MPa read as a stress)."""
+    return sorted(
+        {f for why, by in UNBOUNDED_BY.items() if by & set(codes) for f in UNBOUNDED[why]}
+    )
 
 
 def bounded(x, nd: int, figure: str, unbounded: set[str]) -> str:

@@ -341,3 +341,27 @@ def test_a_design_exactly_at_a_limit_meets_it():
     (v,) = [v for v in checks.run_all(b, None) if v.code == "pressure_angle"]
     excess = math.degrees(math.asin(10 / 19.9999)) - 30  # (at the dwell: sin phi = e / R)
     assert f"by {excess:.2g} deg" in v.message and excess < 0.005, v.message
+
+
+def test_rows_say_which_figures_have_no_bound():
+    """A review read a cusp's 28,672,817 MPa in a sweep's table as a stress: the rows
+    (batched and single) name the figures the violations leave without bound, as the
+    text reports print "unbounded" for them; a sound design has none."""
+    from camcore.report import unbounded_figures
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(lift_mm=20, rise_deg=120, high_dwell_deg=60, fall_deg=120)
+    data["cam"].update(speed_rpm=300)
+    points = [
+        {"follower.kind": "single_concave", "cam.base_radius_mm": 10.0},  # a cusp
+        {"follower.kind": "single_concave", "cam.base_radius_mm": 40.0},
+    ]
+    cusp, sound = sweep.run_chunk(data, points, fast=True)
+    assert json.loads(cusp["unbounded"]) == ["life", "stress"]
+    assert json.loads(sound["unbounded"]) == []
+    full = sweep.run_chunk(data, points, verify=False)
+    assert [r["unbounded"] for r in full] == [cusp["unbounded"], sound["unbounded"]]
+    s = summary(analyze(sweep.design_at(data, points[0]), verify=False))
+    assert (
+        unbounded_figures(s) == set(s["unbounded"]) and s["contact_stress_max_MPa"]["cycle"] > 1e6
+    )
