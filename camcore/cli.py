@@ -258,7 +258,9 @@ def _sweep(args) -> int:
     spec = sweep.load_spec(args.spec)
     if spec.defaulted:  # a base design file leaving inputs out: said, as report does
         left_out = list(spec.defaulted)
-        print(f"note: {args.spec}: base {defaults_note(left_out, len(left_out))}", file=sys.stderr)
+        base = spec.base_file.name if spec.base_file is not None else "base"
+        note = defaults_note(left_out, len(left_out), f"its base design file {base}")
+        print(f"note: {args.spec}: {note}", file=sys.stderr)
     if args.workers is not None and args.workers < 1:
         raise DesignError("--workers: at least 1")
     if not 1 <= args.chunk <= sweep.MAX_CHUNK:  # (memory: ~2 MB a design at 0.1 deg)
@@ -356,9 +358,10 @@ def _pareto(args) -> int:
         reasons = [f"rows of the batched core have no {n}" for n in names if n in PROFILE_FIGURES]
         reasons += ["a knife edge has no contact stress"] if "stress" in names else []
         why = f" ({'; '.join(reasons)})" if reasons else ""
-        print(
-            f"{_count(f.lacking, 'valid row')} without a value for {', '.join(names)} left out{why}"
-        )
+        # each figure a row lacks, with how many lack it (a review had read "without a
+        # value for cam_size, stress" as both missing where only the stress was)
+        which = ", ".join(f"{n} missing in {k}" for n, k in f.lacking_by.items())
+        print(f"{_count(f.lacking, 'valid row')} left out: {which}{why}")
     if not f.front:
         print("no valid design with these figures: no Pareto front")
         return EXIT_BREAKS_LIMITS

@@ -13,7 +13,7 @@ import io
 import itertools
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -184,6 +184,7 @@ class TableFront:
     front: list[dict]  # per distinct front design: {"row", "grid": {...}, "figures": {...}}
     repeats: int  # front rows that repeat a listed design (a field its follower ignores)
     lacking: int  # valid rows without a value for a figure (not compared)
+    lacking_by: dict[str, int] = field(default_factory=dict)  # figure -> rows without it
 
 
 def table_front(path, names: list[str]) -> TableFront:
@@ -273,6 +274,11 @@ def _table_front(path, names: list[str], have: set[str]) -> TableFront:
         front=front,
         repeats=len(rows) - len(front),
         lacking=int((valid & ~np.isfinite(values).all(axis=1)).sum()),
+        lacking_by={
+            n: int((valid & ~np.isfinite(values[:, j])).sum())
+            for j, n in enumerate(names)
+            if (valid & ~np.isfinite(values[:, j])).any()
+        },
     )
 
 

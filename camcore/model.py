@@ -1205,12 +1205,13 @@ def load_design(path: str | Path) -> Design:
     return read_design(path)[0]
 
 
-def defaults_note(left_out: list[str], shown: int = 8) -> str:
-    """One line saying which inputs took their defaults (defaulted_fields), or ""."""
+def defaults_note(left_out: list[str], shown: int = 8, where: str = "the file") -> str:
+    """One line saying which inputs took their defaults (defaulted_fields), or ""
+    (``where``: the file that left them out)."""
     if not left_out:
         return ""
     more = f" (+{len(left_out) - shown} more)" if len(left_out) > shown else ""
-    return f"not in the file, so their defaults: {'; '.join(left_out[:shown])}{more}"
+    return f"not in {where}, so at their defaults: {'; '.join(left_out[:shown])}{more}"
 
 
 def design_to_json(design: Design) -> str:

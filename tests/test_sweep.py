@@ -964,12 +964,12 @@ def test_pareto_of_odd_tables(pareto_table, tmp_path):
     holes = tmp_path / "holes.parquet"
     pq.write_table(t.set_column(t.schema.get_field_index(col), col, pa.array(stress)), holes)
     f = table_front(holes, ["cam_size", "stress"])
-    assert f.lacking == 3 and f.valid == int(valid.sum())
+    assert f.lacking == 3 and f.lacking_by == {"stress": 3} and f.valid == int(valid.sum())
     assert all(d["row"] not in lacking for d in f.front)
     run = cli(holes, "--figures", "cam_size,stress")
     assert (
-        "3 valid rows without a value for cam_size, stress left out (a knife edge has no "
-        "contact stress)" in run.stdout
+        "3 valid rows left out: stress missing in 3 (a knife edge has no contact stress)"
+        in run.stdout
     )
 
     def swapped(name, values):
@@ -1143,8 +1143,9 @@ def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
     from camcore.cli import main
 
     assert main(["sweep", str(spec_path), "--out", str(tmp_path / "r.parquet"), "--fast"]) == 0
-    assert "base not in the file, so their defaults: cam.base_radius_mm = 80.0" in (
-        capsys.readouterr().err
+    assert (
+        "spec.json: not in its base design file mine.json, so at their defaults: "
+        "cam.base_radius_mm = 80.0" in (capsys.readouterr().err)
     )
     # the table is never written over the base design (a review: it was, exit 0)
     kept = (tmp_path / "mine.json").read_bytes()
