@@ -25,6 +25,7 @@ from camcore.explore import (
     OFFERED,
     PANEL_PX,
     PROFILE_FIGURES,
+    best_per_kind,
     distinct,
     figure_values,
     grid_points,
@@ -591,6 +592,7 @@ def _summary(rows: list[dict], total: int, front, names: list[str], limits, list
         )
     if not ok:
         out += " No valid design: widen or move the ranges."
+    out += _least_text(rows, names[0])
     flat = [axis for axis, (lo, hi) in zip("xy", limits, strict=True) if lo == hi]
     if flat:
         out += f" The {' and '.join(flat)} range{'s are' if len(flat) > 1 else ' is'} one value."
@@ -599,6 +601,23 @@ def _summary(rows: list[dict], total: int, front, names: list[str], limits, list
     if "wear" in names and rollers:
         out += " Rollers roll: their sliding wear is 0, so they lead on wear."
     return out
+
+
+def _least_text(rows: list[dict], name: str) -> str:
+    """The valid design least in the figure ``name`` for each follower the sweep ran
+    (camcore.explore.best_per_kind): "the smallest cam each follower allows", read
+    without narrowing the ranges (a designer's review); "" if none is valid."""
+    best = best_per_kind(rows, name)
+    if not best:
+        return ""
+    fig = FIGURES[name]
+    value = figure_values([rows[i] for i in best.values()], [name])[:, 0]
+    each = "; ".join(
+        f"{_offer(rows[i])[1]} → {fig.symbol} {v:.4g} {fig.unit}"
+        for i, v in zip(best.values(), value, strict=True)
+    )
+    several = len({r.get("grid.follower.kind") for r in rows}) > 1
+    return f"<br>Least {fig.label}{' per follower' if several else ''}: {esc(each)}."
 
 
 def _valid_designs(rows: list[dict]) -> int:

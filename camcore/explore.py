@@ -136,6 +136,23 @@ def distinct(rows: list[dict]) -> np.ndarray:
     return out
 
 
+def best_per_kind(rows: list[dict], name: str) -> dict[str, int]:
+    """Per follower kind of the rows (in their order), the valid row least in the
+    figure FIGURES[name] (the first of equal ones): "the smallest cam each follower
+    allows", "the least stress each reaches" (a designer's review had narrowed the
+    ranges again and again to read it off the map). Kinds with no valid row with a
+    value are left out."""
+    v = figure_values(rows, [name])[:, 0]
+    out: dict[str, int] = {}
+    for i, r in enumerate(rows):
+        if not r.get("valid") or not np.isfinite(v[i]):
+            continue
+        k = _kind(r)
+        if k not in out or v[i] < v[out[k]]:
+            out[k] = i
+    return out
+
+
 OFFERED = 30  # designs of a front numbered on the map and listed for loading
 
 

@@ -1318,9 +1318,12 @@ def test_explore_review_names_fields_and_refuses_early(tab):
     assert wait_for(lambda: not e.load_btn.disabled, 60.0), e.progress.content
     first = e.front_dd.options[0]
     assert re.match(r"1\. double concave, r_b \d+, e \d+ → R [\d.]+ mm, σ_H ", first), first
+    assert wait_for(lambda: not e._thread.is_alive(), 30.0)  # (its map drawn)
+    # the least cam size of the (one) follower swept: the front's first design
+    least = first.split(" → ")[0][3:] + " → " + first.split(" → ")[1].split(",")[0]
+    assert f"Least cam size R (high-dwell radius): {panels.esc(least)}" in e.progress.content
     e.y.value = "Axis offset e_s (single) [mm]"  # 0 in the paper example
     assert tuple(e.y_range.value) == (-10.0, 10.0)
-    assert wait_for(lambda: not e._thread.is_alive(), 30.0)  # (its map drawn)
     s.ui.controls["cam.base_radius_mm"].value = -5.0  # invalid input
     e.run_btn.value = True
     assert "input is invalid" in e.progress.content and not e._thread.is_alive()

@@ -5,6 +5,7 @@ work runs on a Dask LocalCluster."""
 from __future__ import annotations
 
 import json
+import math
 import re
 import subprocess
 import sys
@@ -1286,3 +1287,40 @@ def test_the_map_finds_every_front_number_and_keeps_its_labels_apart():
     assert left.x1 < right.x0  # (the bottom maps' x labels)
     legend = pareto_ax.get_legend().get_window_extent(r)
     assert legend.y1 < pareto_ax.get_window_extent(r).y0  # below the designs
+
+
+def test_the_smallest_cam_each_follower_allows():
+    """A designer's review sized a 20 mm / 120 deg packaging cam at 300 rpm on a 1 mm
+    grid of r_b: the smallest valid base radius is 17 mm for the single roller (tan phi
+    = S'/(r_b + r_c + S): 29.46 deg there, over 30 at 16 mm, by hand), 12 mm for the
+    double rollers (phi = asin(e / (r_b + r_c)) = 30 deg exactly), 16 and 15 mm for the
+    concave faces. best_per_kind reads them off the rows, one per follower."""
+    from camcore.explore import best_per_kind
+    from camcore.model import load_preset
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(lift_mm=20, rise_deg=120, high_dwell_deg=60, fall_deg=120)
+    data["cam"].update(speed_rpm=300)
+    kinds = ["single_roller", "double_roller", "single_concave", "double_concave"]
+    points = [
+        {"follower.kind": k, "cam.base_radius_mm": float(r)} for k in kinds for r in range(10, 21)
+    ]
+    rows = sweep.fast_rows(data, points)
+    best = best_per_kind(rows, "cam_size")
+    assert list(best) == kinds
+    smallest = {k: rows[i]["grid.cam.base_radius_mm"] for k, i in best.items()}
+    assert smallest == {
+        "single_roller": 17.0,
+        "double_roller": 12.0,
+        "single_concave": 16.0,
+        "double_concave": 15.0,
+    }
+    assert best_per_kind([{**r, "valid": False} for r in rows], "cam_size") == {}
+    # the single roller's by hand: the cycloidal rise's largest tan phi = S' / (R0 + S)
+    x = np.linspace(0.0, 1.0, 200001)
+    h, beta = 20.0, math.radians(120.0)
+    S = h * (x - np.sin(2 * np.pi * x) / (2 * np.pi))
+    dS = h / beta * (1 - np.cos(2 * np.pi * x))
+    r_c = data["follower"]["roller_radius_mm"]
+    phi = {r: np.degrees(np.arctan(dS / (r + r_c + S))).max() for r in (16.0, 17.0)}
+    assert phi[16.0] > 30.0 > phi[17.0]
