@@ -128,3 +128,27 @@ def test_the_proposed_spring_s_jump_speed():
     after = summary(analyze(d.model_copy(update={"dynamics": dyn}), verify=False))
     assert (float(k0), float(k1)) == (d.dynamics.spring_rate_N_per_m, k)
     assert (int(n0), int(n1)) == (round(before["jump_speed_rpm"]), round(after["jump_speed_rpm"]))
+
+
+def test_the_explore_list_example():
+    """The README's example of Explore's list of front designs: the review's smallest
+    double-roller cam (20 mm / 120 deg at 300 rpm, r_b 12, r_c 8)."""
+    from camcore import sweep
+
+    r_b, r_c, big_r, stress = _printed(
+        r'"double roller, r_b (\d+), r_c (\d+) → R ([\d.]+) mm, σ_H ([\d.]+) MPa"'
+    )
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(lift_mm=20, rise_deg=120, high_dwell_deg=60, fall_deg=120)
+    data["cam"].update(speed_rpm=300)
+    point = {
+        "follower.kind": "double_roller",
+        "cam.base_radius_mm": float(r_b),
+        "follower.roller_radius_mm": float(r_c),
+    }
+    (row,) = sweep.fast_rows(data, [point])
+    assert row["valid"]
+    assert (big_r, stress) == (
+        f"{row['dwell_radius_mm']:.4g}",
+        f"{row['contact_stress_max_MPa.cycle']:.4g}",
+    )
