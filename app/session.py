@@ -270,8 +270,9 @@ class Session:
                 return
             if rate is None:
                 say.content = (
-                    "✖ No spring rate keeps contact at this preload: raise the preload "
-                    "s_p, or lower the speed or the mass."
+                    "✖ No spring rate keeps contact at this preload: where the follower "
+                    "is pulled off, the spring has no force to hold it. Raise the preload "
+                    "s_p (or lessen what pulls it off)."
                 )
                 return
             if rate == d.dynamics.spring_rate_N_per_m:

@@ -19,7 +19,7 @@ import numpy as np
 
 from .checks import CODES
 from .model import PAPER_FOLLOWERS, FollowerKind
-from .sweep import _axis, first_violation, pareto_mask
+from .sweep import axis_values, first_violation, pareto_mask
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ def sweep_grid(
 def grid_points(grid: dict) -> list[dict]:
     """The points of a SPEC's ``grid``, {path: value} each, in the order and with the
     very values ``camcore sweep`` gives them (the same axes, the last fastest)."""
-    axes = [(path, _axis(path, raw)) for path, raw in grid.items()]
+    axes = [(path, axis_values(path, raw)) for path, raw in grid.items()]
     names = [path for path, _ in axes]
     return [dict(zip(names, c, strict=True)) for c in itertools.product(*(v for _, v in axes))]
 

@@ -111,7 +111,7 @@ class Spec:
         return [self.point(k) for k in range(i * size, min((i + 1) * size, self.size))]
 
 
-def _axis(path: str, raw) -> tuple:
+def axis_values(path: str, raw) -> tuple:
     """A grid axis from a list of values or {"from", "to", "num"} (inclusive, linear)."""
     if isinstance(raw, dict):
         if set(raw) != {"from", "to", "num"}:
@@ -143,7 +143,7 @@ def _defaulted(text, design: Design, axes) -> tuple[str, ...]:
 
 
 def _axis_size(raw) -> int:
-    """How many values an axis as written would give (1 where it is malformed: _axis
+    """How many values an axis as written would give (1 where it is malformed: axis_values
     then says what is wrong with it)."""
     if isinstance(raw, list):
         return max(len(raw), 1)
@@ -228,7 +228,7 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     if size > MAX_DESIGNS:
         many = f"{size}" if size < 10**15 else "over 10^15"
         raise DesignError(f"grid: {many} designs; at most {MAX_DESIGNS} per sweep")
-    axes = tuple((str(path), _axis(path, raw)) for path, raw in grid.items())
+    axes = tuple((str(path), axis_values(path, raw)) for path, raw in grid.items())
     _one_field_each([p for p, _ in axes])
     base_dict = json.loads(design.model_dump_json())
     for path, values in axes:

@@ -1085,7 +1085,7 @@ def test_a_grid_too_large_is_refused_before_its_values_are_made(monkeypatch):
     import tracemalloc
 
     built = []
-    monkeypatch.setattr(sweep, "_axis", lambda *a: built.append(a) or ())
+    monkeypatch.setattr(sweep, "axis_values", lambda *a: built.append(a) or ())
     fields = [f"motion.segments.{i}.angle_deg" for i in range(4)]
     fields += [f"motion.segments.{i}.lift_mm" for i in range(4)]
     grid = {f: {"from": 1, "to": 2, "num": 100_000} for f in fields}
