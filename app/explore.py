@@ -16,6 +16,7 @@ from __future__ import annotations
 import re
 import threading
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -88,6 +89,17 @@ MAX_FRONT = OFFERED  # designs of the front offered for loading (spread along it
 NO_FIGURE = "none"  # the third figure is optional
 
 
+@dataclass(frozen=True)
+class Ran:
+    """A sweep on show: what the downloads send."""
+
+    base: dict  # the design it ran around (Design JSON data)
+    grid: dict  # its SPEC grid (camcore.explore.sweep_grid)
+    rows: list[dict]  # the rows of the points analysed (all, unless cancelled)
+    batched: bool  # the batched core (else the full analysis, no geometric check)
+    total: int  # the grid's points
+
+
 class ExplorePanel:
     """The tab's widgets and its one background sweep. ``bind`` connects it to the
     session: the analyst, the design on screen, and how to load a design."""
@@ -138,7 +150,7 @@ class ExplorePanel:
         self._map_busy = False  # a thread draws the map (a sweep's end or a new width)
         self._map_lock = threading.Lock()  # held while one draws: never two at once
         self._write: Callable[[dict], None] | None = None  # keeps the setup (storage)
-        self._ran: tuple[dict, dict, list[dict]] | None = None  # (base, grid, rows) on show
+        self._ran: Ran | None = None  # the sweep on show
         self._send: Callable[[str, bytes], None] | None = None  # a file to the browser
         self._invalid: Callable[[], bool] | None = None  # the tab's input is invalid
 
@@ -232,12 +244,12 @@ class ExplorePanel:
         path = PARAMETERS.get(dd.value)
         if path is None or self._design is None:
             return
-        rng.label = _range_label(axis, dd.value)
         design = self._design()
         refused = _refused_field(design, dd.value, path)
         if refused is not None:  # (a review: the last field's range stood, relabelled)
             self.progress.content = refused
             return
+        rng.label = _range_label(axis, dd.value)
         v = get_path(design, path)
         if isinstance(v, int | float):
             zero = (-10.0, 10.0) if path in SIGNED else (0.0, 10.0)
@@ -348,14 +360,14 @@ class ExplorePanel:
             ]
             span = [[p[path] for p in points] for path in (x[0], y[0])]  # the asked ranges
             limits = ((min(span[0]), max(span[0])), (min(span[1]), max(span[1])))
-            self._show((base, grid, rows), len(points), x, y, names, limits)
+            self._show(Ran(base, grid, rows, batched, len(points)), x, y, names, limits)
         except Exception as exc:  # a worker lost: say so, keep the tab
             self.progress.content = f"✖ The sweep stopped: {esc(exc)}"
         finally:
             self.run_btn.disabled, self.cancel_btn.disabled = False, True
 
-    def _show(self, ran, total, x, y, names, limits) -> None:
-        base, _, rows = ran
+    def _show(self, ran: Ran, x, y, names, limits) -> None:
+        base, rows, total = ran.base, ran.rows, ran.total
         if not rows:
             self._clear()  # (a review: the last sweep's map stayed, loadable, unmarked)
             self.progress.content = "Cancelled before the first designs."
@@ -487,18 +499,24 @@ class ExplorePanel:
         if ran is None or self._send is None:
             self.files_md.content = "✖ Run a sweep first: the files hold its results."
             return
-        base, grid, rows = ran
-        stem = file_stem(Design.model_validate(base))
+        stem = file_stem(Design.model_validate(ran.base))
+        n, total = len(ran.rows), ran.total
+        cut = f" (the sweep was cancelled after {n} of its {total} points)" if n < total else ""
         if what == "csv":
-            name, data = f"{stem}-sweep.csv", csv_text(rows).encode()
-            said = f"{len(rows)} rows, one per point, the columns of `camcore sweep`'s table"
+            name, data = f"{stem}-sweep.csv", csv_text(ran.rows).encode()
+            said = f"{n} rows, one per point, the columns of `camcore sweep`'s table{cut}"
         else:
-            name, data = f"{stem}-sweep.json", spec_document(base, grid).encode()
+            name, data = f"{stem}-sweep.json", spec_document(ran.base, ran.grid).encode()
             shown = name if _PLAIN_NAME.fullmatch(name) else "SPEC.json"  # (file_stem's
-            said = (  # slug is plain: inside a code span esc's backslashes would show)
-                f"run it with `camcore sweep {shown} --out results.parquet --fast` "
-                "for these rows, without `--fast` for the profile's checks too; "
-                "`--workers N` or `--scheduler ADDRESS` runs it on Dask"
+            # slug is plain: inside a code span esc's backslashes would show). The tab
+            # ran the batched core, or the full analysis less the geometric check where
+            # a figure needs the profile (a review: --fast had no wear column)
+            flag, more = ("--fast", "the profile's") if ran.batched else ("--no-verify", "the")
+            rows = f"all {total} points{cut}" if cut else "these rows"
+            said = (
+                f"run it with `camcore sweep {shown} --out results.parquet {flag}` for "
+                f"{rows}, without `{flag}` for {more} checks too; `--workers N` or "
+                "`--scheduler ADDRESS` runs it on Dask"
             )
         if len(data) > MAX_FILE_BYTES:  # (MAX_DESIGNS rows are ~2 MB: never, by design)
             self.files_md.content = f"✖ {esc(name)} would be {len(data):,} bytes: too large."
@@ -547,7 +565,7 @@ def _offer(row: dict) -> tuple[dict, str]:
             continue
         path = key[5:]
         if path in ignored:
-            shown.append("–")
+            shown.append(f"{SYMBOLS.get(path, path)} –")
             continue
         point[path] = v
         if path == "follower.kind" and isinstance(v, str) and v in FollowerKind.__members__:

@@ -20,6 +20,8 @@ import math
 import threading
 import time
 
+from pydantic import ValidationError
+
 from camcore import checks, export
 from camcore.analysis import Analysis
 from camcore.model import (
@@ -30,6 +32,7 @@ from camcore.model import (
     defaults_note,
     design_from_json,
     design_to_json,
+    format_validation_error,
     name_follows_kind,
     preset_names,
 )
@@ -279,8 +282,18 @@ class Session:
                 say.content = f"The spring rate is the proposal already: {rate:g} N/m."
                 return
             none = " (no spring is needed: nothing pulls the follower off)" if rate == 0 else ""
-            dyn = d.dynamics.model_copy(update={"spring_rate_N_per_m": rate})
-            self.set_design(d.model_copy(update={"dynamics": dyn}), reset_camera=False)
+            data = d.model_dump()
+            data["dynamics"]["spring_rate_N_per_m"] = rate
+            try:  # (validated: a review's proposal of 7.3e10 N/m passed the field's 1e9)
+                design = Design.model_validate(data)
+            except ValidationError as exc:
+                why = esc(format_validation_error(exc))
+                say.content = (
+                    f"✖ The proposal, {rate:g} N/m, is no spring rate here: {why}. A "
+                    "larger preload s_p needs a smaller rate."
+                )
+                return
+            self.set_design(design, reset_camera=False)
             say.content = (
                 f"Spring rate k: {d.dynamics.spring_rate_N_per_m:g} → {rate:g} N/m{none} "
                 "(the key numbers give its jump speed; Undo takes it back)."

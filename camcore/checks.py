@@ -422,7 +422,7 @@ def _dwell_arcs(a) -> list[Violation]:
             g, length = replace(g, start=start, end=start + run.t1 - run.t0), run.t1 - run.t0
         need = to_deg(4 * dwell_psi(a.geo, g.S0))
         have = to_deg(length)
-        if have < need - 1e-9:
+        if have < least(need):
             name = (
                 "high dwell beta_h"
                 if a.design.motion.classic
@@ -433,7 +433,7 @@ def _dwell_arcs(a) -> list[Violation]:
                     "high_dwell_arc",
                     "Eq. 28",
                     f"{name} = {have:g} deg is below 4 psi = {need:.3f} deg "
-                    f"(short by {need - have:.3f} deg): both faces cannot rest on the dwell arc",
+                    f"(short by {_by(need - have)} deg): both faces cannot rest on the dwell arc",
                     _on_circle_deg(to_deg(g.start), to_deg(g.end)),
                     need - have,
                 )

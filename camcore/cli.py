@@ -96,7 +96,10 @@ def _design(args, unused_note: bool = True, kinds: tuple[FollowerKind, ...] = ()
         given += ["follower.kind"] if getattr(args, "follower", None) else []
         left_out = defaulted_fields(with_given(text, given), design, kinds)
         if left_out:
-            print(f"note: {args.design}: {defaults_note(left_out, len(left_out))}", file=sys.stderr)
+            from .files import printable
+
+            note = defaults_note(left_out, len(left_out))
+            print(f"note: {printable(args.design, 200)}: {note}", file=sys.stderr)
     return design
 
 
@@ -258,9 +261,11 @@ def _sweep(args) -> int:
     spec = sweep.load_spec(args.spec)
     if spec.defaulted:  # a base design file leaving inputs out: said, as report does
         left_out = list(spec.defaulted)
-        base = spec.base_file.name if spec.base_file is not None else "base"
+        from .files import printable
+
+        base = printable(spec.base_file.name, 80) if spec.base_file is not None else "base"
         note = defaults_note(left_out, len(left_out), f"its base design file {base}")
-        print(f"note: {args.spec}: {note}", file=sys.stderr)
+        print(f"note: {printable(args.spec, 200)}: {note}", file=sys.stderr)
     if args.workers is not None and args.workers < 1:
         raise DesignError("--workers: at least 1")
     if not 1 <= args.chunk <= sweep.MAX_CHUNK:  # (memory: ~2 MB a design at 0.1 deg)

@@ -373,8 +373,8 @@ def _fmt_against(x, limit: float | None, nd: int) -> str:
     that is not it (a designer's review read a valid 29.999 deg as "30.00" beside the
     30 deg limit)."""
     text = _fmt(x, nd)
-    if x is None or limit is None or x == limit:
-        return text
+    if x is None or limit is None or abs(x - limit) <= checks.ROUND_OFF * abs(limit):
+        return text  # (the limit itself, to round-off: it meets it, checks.most)
     for places in range(nd, nd + 7):  # (at most 6 places more)
         text = _fmt(x, places)
         if text != _fmt(limit, places):

@@ -1243,7 +1243,7 @@ def test_explore_says_what_it_runs_and_why_points_are_no_designs(tab, monkeypatc
     e.x_range.value = (70.0, 90.0)
     e.run_btn.value = True
     assert wait_for(lambda: not e.load_btn.disabled, 60.0), e.progress.content
-    assert all(", –" in o for o in e.front_dd.options), e.front_dd.options
+    assert all(", r_c –" in o for o in e.front_dd.options), e.front_dd.options
     roller = s.design.follower.roller_radius_mm
     e.load_btn.value = True
     assert wait_for(lambda: "Loaded design" in e.progress.content, 10.0)
@@ -1278,7 +1278,7 @@ def test_explore_hands_its_sweep_over_as_csv_and_as_a_spec(tab, downloads, monke
     e.steps.value, e.all_kinds.value = 3, True
     e.run_btn.value = True
     assert wait_for(lambda: not e.csv_btn.disabled, 120.0), e.progress.content
-    rows = e._ran[2]
+    rows = e._ran.rows
     assert len(rows) == 36 and any(r.get("error") for r in rows)
     e.csv_btn.value = True
     name, data = downloads[-1]
@@ -1292,10 +1292,35 @@ def test_explore_hands_its_sweep_over_as_csv_and_as_a_spec(tab, downloads, monke
             assert got[k] == ("" if v is None else repr(v) if isinstance(v, float) else str(v))
     e.spec_btn.value = True
     name, data = downloads[-1]
-    assert name.endswith("-sweep.json") and f"camcore sweep {name} --out" in e.files_md.content
+    said = e.files_md.content
+    assert name.endswith("-sweep.json") and f"camcore sweep {name} --out" in said
+    assert "--fast` for these rows" in said
     spec = sweep.parse_spec(data)
     again = sweep.run_chunk(spec.base, list(spec.points()), fast=True)
     assert again == rows  # the same designs, figures and verdicts, in the same order
+    # a figure that needs the profile: the tab ran the full analysis (no geometric
+    # check), and the SPEC says the flag that gives those rows (--fast has no wear)
+    e.steps.value, e.all_kinds.value = 2, False
+    e.fig_c.value = "max wear depth"
+    e.run_btn.value = True
+    assert wait_for(lambda: not e._thread.is_alive() and len(e._ran.rows) == 4, 120.0)
+    e.spec_btn.value = True
+    assert "--no-verify` for these rows" in e.files_md.content, e.files_md.content
+    spec = sweep.parse_spec(downloads[-1][1])
+    assert sweep.run_chunk(spec.base, list(spec.points()), verify=False) == e._ran.rows
+    # cancelled after its first chunk: the files say so
+    e.fig_c.value, e.steps.value, e.all_kinds.value = "none", 5, True
+    real = e._analyst.sweep_chunk
+    first_only = lambda *a: e._cancel.set() or real(*a)  # noqa: E731
+    monkeypatch.setattr(e._analyst, "sweep_chunk", first_only)
+    e.run_btn.value = True
+    assert wait_for(lambda: not e._thread.is_alive() and "cancelled" in e.progress.content, 60.0)
+    n = len(e._ran.rows)
+    assert 0 < n < 100 and e._ran.total == 100
+    e.csv_btn.value = True
+    assert f"cancelled after {n} of its 100 points" in e.files_md.content
+    e.spec_btn.value = True
+    assert "for all 100 points (the sweep was cancelled" in e.files_md.content
     # a sweep cancelled before its first designs has nothing to send
     cancel_first = lambda base, points: e._cancel.set() or list(range(len(points)))  # noqa: E731
     monkeypatch.setattr(e._analyst, "same_designs", cancel_first)  # (the app's analyst)
@@ -1328,8 +1353,10 @@ def test_explore_review_names_fields_and_refuses_early(tab):
     e.run_btn.value = True
     assert "input is invalid" in e.progress.content and not e._thread.is_alive()
     s.load_preset("double_index")  # a program of segments
+    before = (e.y_range.label, tuple(e.y_range.value))
     e.y.value = "Rise β_r [°]"
     assert "made of segments" in e.progress.content
+    assert (e.y_range.label, tuple(e.y_range.value)) == before  # (not relabelled in °)
 
 
 def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):
@@ -2641,6 +2668,16 @@ def test_the_proposed_spring_goes_in_with_one_click(tab, monkeypatch):
     s.use_proposed_spring()
     assert "No spring rate keeps contact" in s.ui.spring_md.content
     assert s.design.dynamics.spring_rate_N_per_m == first.dynamics.spring_rate_N_per_m
+    # a proposal past the field's own limit (1e9 N/m) is said, not put on screen (a
+    # review: the design on screen then failed its own validation at the next edit)
+    s.ui.controls["dynamics.preload_mm"].value = 1e-6
+    assert s.proposed_rate is not None and s.proposed_rate > 1e9
+    kept = s.design
+    s.use_proposed_spring()
+    assert (
+        "is no spring rate here" in s.ui.spring_md.content and "preload" in s.ui.spring_md.content
+    )
+    assert s.design == kept and Design.model_validate(s.design.model_dump()) == kept
     s.ui.controls["cam.base_radius_mm"].value = -5.0  # invalid input
     s.use_proposed_spring()
     assert "input is invalid" in s.ui.spring_md.content

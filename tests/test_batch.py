@@ -337,6 +337,10 @@ def test_a_design_exactly_at_a_limit_meets_it():
     assert at["valid"] and not below["valid"]
     a = analyze(sweep.design_at(data, {}), verify=False)
     assert not checks.run_all(a, None)
+    from camcore.report import report_text
+
+    text = report_text(summary(a), a.design)  # at the limit: printed as the limit
+    assert "30.00 / 30.00 deg" in text and "30.000000" not in text
     b = analyze(sweep.design_at(data, {"cam.base_radius_mm": 11.9999}), verify=False)
     (v,) = [v for v in checks.run_all(b, None) if v.code == "pressure_angle"]
     excess = math.degrees(math.asin(10 / 19.9999)) - 30  # (at the dwell: sin phi = e / R)
@@ -362,6 +366,10 @@ def test_rows_say_which_figures_have_no_bound():
     full = sweep.run_chunk(data, points, verify=False)
     assert [r["unbounded"] for r in full] == [cusp["unbounded"], sound["unbounded"]]
     s = summary(analyze(sweep.design_at(data, points[0]), verify=False))
-    assert (
-        unbounded_figures(s) == set(s["unbounded"]) and s["contact_stress_max_MPa"]["cycle"] > 1e6
-    )
+    assert s["contact_stress_max_MPa"]["cycle"] > 1e6
+    # the same figures the text's notes name (their reasons: report.UNBOUNDED)
+    from camcore.report import UNBOUNDED, unbounded_notes
+
+    notes = unbounded_notes(s)
+    assert notes and set(s["unbounded"]) == {f for why, _ in notes for f in UNBOUNDED[why]}
+    assert unbounded_figures(s) == set(s["unbounded"])
