@@ -371,6 +371,8 @@ def _contact_stress(a) -> list[Violation]:
 def _times(ratio: float) -> str:
     """ "ten times" .. "a million times": the power of ten a ratio (>= 10) passes."""
     words = ("ten", "a hundred", "a thousand", "ten thousand", "a hundred thousand")
+    if not math.isfinite(ratio):  # (rho = 0 at a sample: an infinite stress; a fuzzer's
+        return "a million times"  # OverflowError had stopped report and sweep)
     p = int(math.floor(math.log10(ratio))) if ratio >= 10 else 1
     return f"{words[p - 1] if p <= len(words) else 'a million'} times"
 

@@ -373,3 +373,27 @@ def test_rows_say_which_figures_have_no_bound():
     notes = unbounded_notes(s)
     assert notes and set(s["unbounded"]) == {f for why, _ in notes for f in UNBOUNDED[why]}
     assert unbounded_figures(s) == set(s["unbounded"])
+
+
+def test_an_infinite_stress_at_a_cusp_is_reported_not_raised():
+    """A differential fuzzer (9,605 chunks of random designs, batched against single):
+    a double concave face folding back exactly at a sample (rho = 0: Eq. 42's stress is
+    infinite there) made the single analysis raise OverflowError in the message's
+    "more than ... times", stopping report and a sweep without --fast; the batch gave
+    its row. Now both give the same row, the stress flagged unbounded."""
+    base = load_preset("indexer_345").model_dump(mode="json")
+    point = {
+        "cam.base_radius_mm": 20.817807864386182,
+        "follower.face_radius_mm": -130.09589122247496,
+        "follower.offset_mm": 0.0,
+    }
+    design = sweep.design_at(base, point)
+    fast = batch.summaries([design])[0]
+    single = summary(analyze(design, verify=False))  # (it raised)
+    assert differences(fast, single) == []
+    (stress,) = [v for v in single["violations"] if v["code"] == "contact_stress"]
+    assert stress["message"].startswith("Hertz stress without bound")
+    assert "more than a million times the allowable" in stress["message"]
+    assert fast["unbounded"] == single["unbounded"] == ["life", "stress"]
+    (row,) = sweep.run_chunk(base, [point], verify=False)  # a sweep without --fast
+    assert row["error"] is None and not row["valid"]
