@@ -178,13 +178,13 @@ def _design_tab(gui, base: Design, h: dict) -> None:
         with gui.add_folder(title, expand_by_default=expand):
             for spec in specs:
                 h["controls"][spec.path] = _control(gui, spec, base)
-            if title == "Dynamics":  # (after the spring's own controls)
-                h["spring_btn"] = gui.add_button(
-                    "Use the proposed spring rate",
-                    hint="k = the proposal of the key numbers: n k_min at this preload "
-                    "(and the jump-speed margin, if set), rounded up; Undo takes it back",
-                )
-                h["spring_md"] = gui.add_markdown("")
+                if spec.path == "dynamics.spring_rate_N_per_m":  # (right under it)
+                    h["spring_btn"] = gui.add_button(
+                        "Use the proposed spring rate",
+                        hint="k = the proposal of the key numbers: n k_min at this preload "
+                        "(and the jump-speed margin, if set), rounded up; Undo takes it back",
+                    )
+                    h["spring_md"] = gui.add_markdown("")
             if title == "Motion program":
                 h["low_dwell_md"] = gui.add_markdown("")
                 folder = gui.add_folder("Program segments (any program)", expand_by_default=False)

@@ -139,6 +139,7 @@ class Session:
         self.cutter_note: str | None = None  # the cutter gouges (found with the check)
         self.headline = ""  # the design's headline figures (panels.headline_html)
         self.proposed_rate: float | None = None  # [N/m] the key numbers' spring proposal
+        self.jump_rpm: float | None = None  # their jump speed (None: it never jumps)
         self.gen = 0  # bumped by every new design: background results of older ones drop
         self.theta_deg = 0.0
         self.speed = 45.0  # animation, cam degrees per second
@@ -293,10 +294,11 @@ class Session:
                     "larger preload s_p needs a smaller rate."
                 )
                 return
+            before = _jump_words(self.jump_rpm)
             self.set_design(design, reset_camera=False)
             say.content = (
-                f"Spring rate k: {d.dynamics.spring_rate_N_per_m:g} → {rate:g} N/m{none} "
-                "(the key numbers give its jump speed; Undo takes it back)."
+                f"Spring rate k: {d.dynamics.spring_rate_N_per_m:g} → {rate:g} N/m{none}; "
+                f"jump speed {before} → {_jump_words(self.jump_rpm)} (Undo takes it back)."
             )
 
     def travel(self, label: str) -> None:
@@ -569,6 +571,7 @@ class Session:
         self.ui.summary_md.content = summary_markdown(s)
         self.headline = headline_html(s)  # shown with the status (_show_status)
         self.proposed_rate = s["spring_proposal"]["spring_rate_N_per_m"]  # (None: inf)
+        self.jump_rpm = s["jump_speed_rpm"]
         self.station_events = [st["event"] for st in s["stations"]]
         self.station_faces = [st["contacts"] for st in s["stations"]]
 
@@ -1324,3 +1327,10 @@ def _nothing_to(label: str, counts: str) -> str:
     else:
         why = "Nothing to redo: Redo steps forward again after an Undo."
     return f"{why} {counts}." if counts else why
+
+
+def _jump_words(rpm: float | None) -> str:
+    """A jump speed as the key numbers say it (report.machine_rows)."""
+    if rpm is None:
+        return "never"
+    return "at any speed" if rpm == 0.0 else f"{rpm:.0f} rpm"

@@ -2653,7 +2653,10 @@ def test_the_proposed_spring_goes_in_with_one_click(tab, monkeypatch):
     s.ui.spring_btn.value = True  # click
     assert s.design.dynamics.spring_rate_N_per_m == proposal
     assert s.ui.controls["dynamics.spring_rate_N_per_m"].value == proposal
-    assert f"6772.5 → {proposal:g} N/m" in s.ui.spring_md.content
+    after_rpm = round(report_summary(s.analysis)["jump_speed_rpm"])
+    assert f"6772.5 → {proposal:g} N/m; jump speed 1855 rpm → {after_rpm} rpm" in (
+        s.ui.spring_md.content
+    )
     after = report_summary(s.analysis)
     n = first.dynamics.spring_safety_factor
     assert n <= after["jump_margin"]["spring_rate"] < n * 1.001  # the rule, just met
