@@ -37,6 +37,7 @@ from camcore.model import (
     preset_names,
 )
 from camcore.model import load_preset as load_preset_design
+from camcore.report import jump_speed_text
 
 from . import controls, plots, storage
 from .analyst import Analyst, Result
@@ -294,11 +295,11 @@ class Session:
                     "larger preload s_p needs a smaller rate."
                 )
                 return
-            before = _jump_words(self.jump_rpm)
+            before = jump_speed_text(self.jump_rpm)
             self.set_design(design, reset_camera=False)
             say.content = (
                 f"Spring rate k: {d.dynamics.spring_rate_N_per_m:g} → {rate:g} N/m{none}; "
-                f"jump speed {before} → {_jump_words(self.jump_rpm)} (Undo takes it back)."
+                f"jump speed {before} → {jump_speed_text(self.jump_rpm)} (Undo takes it back)."
             )
 
     def travel(self, label: str) -> None:
@@ -1327,10 +1328,3 @@ def _nothing_to(label: str, counts: str) -> str:
     else:
         why = "Nothing to redo: Redo steps forward again after an Undo."
     return f"{why} {counts}." if counts else why
-
-
-def _jump_words(rpm: float | None) -> str:
-    """A jump speed as the key numbers say it (report.machine_rows)."""
-    if rpm is None:
-        return "never"
-    return "at any speed" if rpm == 0.0 else f"{rpm:.0f} rpm"

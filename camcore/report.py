@@ -421,6 +421,15 @@ def _margin_text(s: dict) -> str:
     return text
 
 
+def jump_speed_text(rpm: float | None) -> str:
+    """A summary's ``jump_speed_rpm`` in words (None: it never jumps)."""
+    if rpm is None:
+        return "never (nothing pulls the follower off)"
+    if rpm == 0.0:  # (an instant drop in V, machine.velocity_drop, or nothing holding it)
+        return "at any speed"
+    return f"{_fmt(rpm, 1)} rpm"
+
+
 def machine_rows(s: dict) -> list[tuple[str, str]]:
     """The running machine's figures of a summary as (label, value) rows: the text
     report and the app's key numbers show the same lines."""
@@ -446,12 +455,7 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
         ("preload min at this rate", f"{_fmt(s['preload_min_mm'], 3)} mm"),
         (
             "jump speed",
-            "never (nothing pulls the follower off)"
-            if s["jump_speed_rpm"] is None
-            # (an instant drop in V, machine.velocity_drop, or nothing holding it on)
-            else "at any speed"
-            if s["jump_speed_rpm"] == 0.0
-            else f"{_fmt(s['jump_speed_rpm'], 1)} rpm",
+            jump_speed_text(s["jump_speed_rpm"]),
         ),
         ("margin to jump", _margin_text(s)),
         (

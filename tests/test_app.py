@@ -2653,8 +2653,8 @@ def test_the_proposed_spring_goes_in_with_one_click(tab, monkeypatch):
     s.ui.spring_btn.value = True  # click
     assert s.design.dynamics.spring_rate_N_per_m == proposal
     assert s.ui.controls["dynamics.spring_rate_N_per_m"].value == proposal
-    after_rpm = round(report_summary(s.analysis)["jump_speed_rpm"])
-    assert f"6772.5 → {proposal:g} N/m; jump speed 1855 rpm → {after_rpm} rpm" in (
+    after_rpm = report_summary(s.analysis)["jump_speed_rpm"]
+    assert f"6772.5 → {proposal:g} N/m; jump speed 1855.0 rpm → {after_rpm:.1f} rpm" in (
         s.ui.spring_md.content
     )
     after = report_summary(s.analysis)
