@@ -375,6 +375,14 @@ def _pareto(args) -> int:
             "valid rows from the batched core (sweep --fast): the profile's checks and the "
             "geometric check run when a design is analysed alone (camcore report)"
         )
+    if f.least:  # (a review: "the smallest cam each follower allows" took many sweeps)
+        first = FIGURES[names[0]]
+        print(f"least {first.label} per follower:")
+        for kind, d in f.least.items():
+            fields = ", ".join(
+                f"{k} {_cell(v)}" for k, v in d["grid"].items() if k != "follower.kind"
+            )
+            print(f"  {kind}: {d['value']:.4g} {first.unit} (row {d['row']}: {fields})")
     again = f" (and {_count(f.repeats, 'repeat')} in a field its follower ignores)"
     print(
         f"Pareto front of {', '.join(FIGURES[n].label for n in names)} over the valid "

@@ -202,6 +202,9 @@ class TableFront:
     repeats: int  # front rows that repeat a listed design (a field its follower ignores)
     lacking: int  # valid rows without a value for a figure (not compared)
     lacking_by: dict[str, int] = field(default_factory=dict)  # figure -> rows without it
+    # per follower kind, the valid row least in the first figure (best_per_kind):
+    # {"row", "grid", "value"}
+    least: dict[str, dict] = field(default_factory=dict)
 
 
 def table_front(path, names: list[str]) -> TableFront:
@@ -275,6 +278,7 @@ def _table_front(path, names: list[str], have: set[str]) -> TableFront:
         if k
     ]
     broken = ~valid & ~refused
+    least = _least_per_kind(t, values[:, 0], grid)
     checked = "profile_checked" not in have or bool(
         _bools(t.column("profile_checked"), True)[valid].all()
     )
@@ -296,7 +300,34 @@ def _table_front(path, names: list[str], have: set[str]) -> TableFront:
             for j, n in enumerate(names)
             if (valid & ~np.isfinite(values[:, j])).any()
         },
+        least=least,
     )
+
+
+def _least_per_kind(t, first: np.ndarray, grid: list[str]) -> dict[str, dict]:
+    """best_per_kind over a table (``first``: the first figure per row, NaN where the
+    row is not valid), column-wise: per follower kind in the table's order, the row
+    least in it (the first of equal ones)."""
+    col = "grid.follower.kind" if "grid.follower.kind" in grid else "follower"
+    if col not in t.column_names:
+        return {}
+    kinds = np.array([str(k) for k in t.column(col).to_pylist()], dtype=object)
+    out: dict[str, dict] = {}
+    for kind in dict.fromkeys(kinds):
+        v = np.where(kinds == kind, first, np.nan)
+        if not np.isfinite(v).any():
+            continue
+        i = int(np.nanargmin(v))
+        r = t.select(grid).slice(i, 1).to_pylist()[0]
+        out[kind] = {
+            "row": i,
+            "grid": {
+                k[5:]: None if k[5:] in ignored_fields({**r, col: kind}) else x
+                for k, x in r.items()
+            },
+            "value": float(first[i]),
+        }
+    return out
 
 
 def _bools(column, null: bool) -> np.ndarray:

@@ -1324,3 +1324,34 @@ def test_the_smallest_cam_each_follower_allows():
     r_c = data["follower"]["roller_radius_mm"]
     phi = {r: np.degrees(np.arctan(dS / (r + r_c + S))).max() for r in (16.0, 17.0)}
     assert phi[16.0] > 30.0 > phi[17.0]
+
+
+def test_pareto_names_the_least_figure_per_follower(tmp_path, capsys):
+    """camcore pareto says, per follower, the valid row least in the first figure: the
+    same rows best_per_kind picks from the rows themselves (the review's job: 17, 12,
+    16 and 15 mm), the ignored fields as null."""
+    from camcore.cli import main
+    from camcore.explore import best_per_kind, table_front
+    from camcore.model import load_preset
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"].update(lift_mm=20, rise_deg=120, high_dwell_deg=60, fall_deg=120)
+    data["cam"].update(speed_rpm=300)
+    kinds = ["single_roller", "double_roller", "single_concave", "double_concave"]
+    grid = {
+        "follower.kind": kinds,
+        "cam.base_radius_mm": {"from": 10, "to": 20, "num": 11},
+        "follower.roller_radius_mm": [8.0],
+    }
+    spec = sweep.parse_spec(json.dumps({"base": data, "grid": grid}))
+    path = tmp_path / "r.parquet"
+    sweep.run(spec, path, fast=True, progress=None)
+    rows = rows_of(path)
+    f = table_front(path, ["cam_size", "stress"])
+    assert {k: d["row"] for k, d in f.least.items()} == best_per_kind(rows, "cam_size")
+    assert [d["grid"]["cam.base_radius_mm"] for d in f.least.values()] == [17, 12, 16, 15]
+    assert f.least["single_concave"]["grid"]["follower.roller_radius_mm"] is None
+    assert main(["pareto", str(path), "--figures", "cam_size,stress"]) == 0
+    out = capsys.readouterr().out
+    assert "least cam size R (high-dwell radius) per follower:" in out
+    assert "  double_roller: " in out and "cam.base_radius_mm 12" in out
