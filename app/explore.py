@@ -583,7 +583,9 @@ def _refused_field(design: Design, label: str, path: str) -> str | None:
         return (  # (a review: every point was "not a design")
             f"✖ {esc(label)}: this design's motion program is made of segments "
             "(the Motion table), which that field does not describe: sweep a cam "
-            "or follower field, or load a rise-dwell-fall design."
+            "or follower field, or load a rise-dwell-fall design. (`camcore sweep` "
+            "sweeps a segment's angle, with a dwell that takes up the turn: its "
+            'SPEC\'s "balance".)'
         )
     return None
 

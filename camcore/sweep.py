@@ -9,7 +9,14 @@ A row equals the single report of that design.
 
     {"base": {...a design...} | {"preset": "paper_example"},
      "grid": {"cam.base_radius_mm": [60, 70, 80] | {"from": 60, "to": 110, "num": 51},
-              "follower.kind": ["single_roller", "double_concave"]}}
+              "follower.kind": ["single_roller", "double_concave"]},
+     "balance": "motion.segments.3.angle_deg"}
+
+``balance`` (optional) names the segment angle that takes up the turn when the grid
+varies other segments' angles: each point sets it to 360 deg less the others, so an
+indexer's rise angle can be swept against its dwell (the program must fill 360 deg;
+without it every such point is no design). A classic program's fields do this already
+(the low dwell is the rest of the turn).
 
 Work is cut into chunks of designs (batches, not single designs). Each finished chunk is
 kept as a Parquet part beside the output (``OUT.parts/``) with the SPEC's fingerprint,
@@ -76,27 +83,32 @@ class Spec:
     # the base design file a {"file": NAME} base was read from (the command line
     # refuses to write its table over it)
     base_file: Path | None = field(default=None, compare=False)
+    balance: str | None = None  # the segment angle that takes up the turn (see above)
 
     def document(self) -> str:
         """The spec as a SPEC document with its base resolved (a preset by its design):
         parse_spec reads it back to the same spec. Kept in the table it wrote, so the
         table says which design each row is (design_of_row)."""
         grid = self.grid if self.grid is not None else {p: list(v) for p, v in self.axes}
-        return json.dumps({"base": self.base, "grid": grid})
+        balance = {} if self.balance is None else {"balance": self.balance}
+        return json.dumps({"base": self.base, "grid": grid, **balance})
 
     @property
     def size(self) -> int:
         return math.prod(len(v) for _, v in self.axes)
 
     def fingerprint(self) -> str:
-        text = json.dumps({"base": self.base, "axes": self.axes}, sort_keys=True)
+        balance = {} if self.balance is None else {"balance": self.balance}  # (a spec
+        text = json.dumps(  # without one keeps its fingerprint)
+            {"base": self.base, "axes": self.axes, **balance}, sort_keys=True
+        )
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
     def points(self) -> Iterable[dict]:
         """Each combination as {path: value}, the last axis varying fastest."""
         names = [p for p, _ in self.axes]
         for combo in itertools.product(*(v for _, v in self.axes)):
-            yield dict(zip(names, combo, strict=True))
+            yield self._balanced(dict(zip(names, combo, strict=True)))
 
     def point(self, index: int) -> dict:
         """The combination number ``index`` of points(), without listing the others."""
@@ -104,7 +116,24 @@ class Spec:
         for path, values in reversed(self.axes):
             index, j = divmod(index, len(values))
             out[path] = values[j]
-        return dict(reversed(out.items()))
+        return self._balanced(dict(reversed(out.items())))
+
+    def _balanced(self, point: dict) -> dict:
+        """``point`` with the balance segment's angle: 360 deg less the other segments'
+        once the point is set (a value <= 0 makes the point no design, said in its
+        row). A point that is no design to begin with is left as it is."""
+        if self.balance is None:
+            return point
+        data = json.loads(json.dumps(self.base))
+        try:
+            for path, value in point.items():
+                set_field(data, path, value, "grid.")
+            segments = data["motion"]["segments"]
+            i = int(self.balance.split(".")[2])
+            others = sum(float(s["angle_deg"]) for k, s in enumerate(segments) if k != i)
+        except (DesignError, KeyError, TypeError, ValueError, IndexError):
+            return point
+        return {**point, self.balance: 360.0 - others}
 
     def chunk(self, i: int, size: int) -> list[dict]:
         """Chunk ``i`` of ``size`` designs (the last one may be shorter)."""
@@ -199,8 +228,8 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
         data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
     except (ValueError, RecursionError) as exc:
         raise DesignError(f"sweep spec: not a JSON document: {str(exc)[:200]}") from None
-    if not isinstance(data, dict) or set(data) - {"base", "grid"} or "grid" not in data:
-        raise DesignError('sweep spec: an object with "grid" and optionally "base"')
+    if not isinstance(data, dict) or set(data) - {"base", "grid", "balance"} or "grid" not in data:
+        raise DesignError('sweep spec: an object with "grid" and optionally "base", "balance"')
     _check_tree(data)
     base = data.get("base", {"preset": "paper_example"})
     base_text = None  # a base design file's text
@@ -234,10 +263,38 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     for path, values in axes:
         _check_values(base_dict, path, values)
     left_out = () if base_text is None else _defaulted(base_text, design, axes)
-    spec = Spec(base_dict, axes, grid, left_out, base_file)
+    balance = _balance_path(data.get("balance"), base_dict, [p for p, _ in axes])
+    spec = Spec(base_dict, axes, grid, left_out, base_file, balance)
     if spec.size > MAX_DESIGNS:
         raise DesignError(f"grid: {spec.size} designs; at most {MAX_DESIGNS} per sweep")
     return spec
+
+
+def _balance_path(raw, base: dict, paths: list[str]) -> str | None:
+    """The SPEC's ``balance``: "motion.segments.N.angle_deg" of a segment of the base
+    design that no grid path sets, in a grid that sets no classic field (those keep
+    the turn already); None if the SPEC has none. DesignError naming what is wrong."""
+    if raw is None:
+        return None
+    m = (
+        re.fullmatch(r"motion\.segments\.([0-9]{1,6})\.angle_deg", raw)
+        if isinstance(raw, str)
+        else None
+    )
+    if m is None:
+        raise DesignError('balance: a segment angle, "motion.segments.N.angle_deg"')
+    path = f"motion.segments.{int(m[1])}.angle_deg"
+    if int(m[1]) >= len(base["motion"]["segments"]):
+        raise DesignError(f"balance: the base design has no segment {int(m[1])}")
+    fields = [_field_of(p) for p in paths]
+    if any(f == path or path.startswith(f + ".") for f in fields):
+        raise DesignError(f"balance: {path} is set by the grid itself")
+    if any(_classic(f) for f in fields):
+        raise DesignError(
+            "balance: the grid sets a classic program's field, whose low dwell takes up "
+            "the turn already"
+        )
+    return path
 
 
 def _field_of(path: str) -> str:

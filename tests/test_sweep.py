@@ -1355,3 +1355,52 @@ def test_pareto_names_the_least_figure_per_follower(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "least cam size R (high-dwell radius) per follower:" in out
     assert "  double_roller: " in out and "cam.base_radius_mm 12" in out
+
+
+def test_a_balance_segment_takes_up_the_turn(tmp_path):
+    """A designer's review swept an indexer's rise angle: 4 of 6 points were no design
+    (the program must fill 360 deg). With "balance" the named dwell takes up the turn:
+    every point is a design, its row records the dwell's angle as a grid column, the
+    rows equal single reports, and the table's SPEC gives each row's design back."""
+    grid = {"motion.segments.0.angle_deg": [70.0, 90.0, 110.0], "cam.base_radius_mm": [60, 80]}
+    loose = sweep.parse_spec(json.dumps({"base": {"preset": "indexer_345"}, "grid": grid}))
+    assert (
+        sum(
+            r["valid"] is False and bool(r["error"])
+            for r in sweep.run_chunk(loose.base, list(loose.points()), verify=False)
+        )
+        == 4
+    )  # (90 deg alone fills the turn)
+    text = {
+        "base": {"preset": "indexer_345"},
+        "grid": grid,
+        "balance": "motion.segments.3.angle_deg",
+    }
+    spec = sweep.parse_spec(json.dumps(text))
+    points = list(spec.points())
+    assert [p["motion.segments.3.angle_deg"] for p in points[::2]] == [110.0, 90.0, 70.0]
+    assert [spec.point(i) for i in range(spec.size)] == points
+    path = tmp_path / "r.parquet"
+    sweep.run(spec, path, verify=False, progress=None)
+    rows = rows_of(path)
+    assert all(r["error"] is None for r in rows)
+    assert [r["grid.motion.segments.3.angle_deg"] for r in rows[::2]] == [110.0, 90.0, 70.0]
+    for i in (0, 5):
+        design = sweep.design_of_row(path, i)
+        assert [g.angle_deg for g in design.motion.segments] == [
+            rows[i]["grid.motion.segments.0.angle_deg"],
+            90.0,
+            90.0,
+            rows[i]["grid.motion.segments.3.angle_deg"],
+        ]
+        assert rows[i] == sweep.row(spec.base, points[i], verify=False)
+    for bad, why in (
+        ("motion.segments.9.angle_deg", "no segment 9"),
+        ("motion.segments.0.angle_deg", "set by the grid itself"),
+        ("motion.rise_deg", "a segment angle"),
+    ):
+        with pytest.raises(DesignError, match=why):
+            sweep.parse_spec(json.dumps({**text, "balance": bad}))
+    classic = {"grid": {"motion.rise_deg": [90, 100]}, "balance": "motion.segments.3.angle_deg"}
+    with pytest.raises(DesignError, match="low dwell takes up the turn"):
+        sweep.parse_spec(json.dumps(classic))
