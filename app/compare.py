@@ -133,8 +133,8 @@ class CompareView:
         ser = [{"label": k.label, "stroke": COLORS[i], "scale": "y"} for i, k in enumerate(KINDS)]
         self.fn = Curve(
             gui,
-            "Contact force F_N of the four followers (Fig. 11)",
-            [("y", "F_N [N]")],
+            "Contact force F_N (per contact) of the four followers (Fig. 11)",
+            [("y", "F_N per contact [N]")],
             ser,
             height=210,
             shading=False,

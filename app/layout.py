@@ -246,6 +246,9 @@ def _files_tab(gui, h: dict, base: Design) -> None:
     h["aside_btn"] = gui.add_button(  # shown while the browser holds one (Session._restore)
         "⬇ The design this version could not open", visible=False
     )
+    # the tab's answers (saved, opened, sent, refused) stand here, under the buttons
+    # whose answer has no other sign (a review: under the ten download buttons a
+    # save's "Saved ..." was off screen at 1280x720; a download shows in the browser)
+    h["files_md"] = gui.add_markdown("")
     gui.add_markdown("**Download**")
     h["download_btns"] = {kind: gui.add_button(label) for kind, label in DOWNLOADS}
-    h["files_md"] = gui.add_markdown("")

@@ -438,7 +438,12 @@ def curve_specs(a) -> list[dict]:
             "Contact force F_N and guide forces F1, F2",
             [("N", "force [N]")],
             [
-                {"label": "F_N [N]", "scale": "N", "stroke": COLORS[0], "fn": lambda a: a.guide.FN},
+                {  # (a teacher's review: the status line says "per face", the curve did not)
+                    "label": "F_N per contact [N]",
+                    "scale": "N",
+                    "stroke": COLORS[0],
+                    "fn": lambda a: a.guide.FN,
+                },
                 {"label": "F1 [N]", "scale": "N", "stroke": COLORS[1], "fn": lambda a: a.guide.F1},
                 {"label": "F2 [N]", "scale": "N", "stroke": COLORS[2], "fn": lambda a: a.guide.F2},
             ],

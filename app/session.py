@@ -723,7 +723,8 @@ class Session:
         return None
 
     def _say(self, markdown: str) -> None:
-        """A line under the Files tab's buttons (user strings already escaped)."""
+        """A line in the Files tab, under its Kept-in-this-browser buttons and above the
+        download list (user strings already escaped)."""
         with self.lock:
             self.ui.files_md.content = markdown
 
