@@ -2648,13 +2648,15 @@ def test_the_proposed_spring_goes_in_with_one_click(tab, monkeypatch):
     monkeypatch.setattr(history, "SETTLE_S", 0.0)  # each change a step
     s = tab
     first = s.design
-    proposal = report_summary(s.analysis)["spring_proposal"]["spring_rate_N_per_m"]
+    before = report_summary(s.analysis)
+    proposal = before["spring_proposal"]["spring_rate_N_per_m"]
     assert proposal != first.dynamics.spring_rate_N_per_m  # (paper: 4201 against 6772.5)
     s.ui.spring_btn.value = True  # click
     assert s.design.dynamics.spring_rate_N_per_m == proposal
     assert s.ui.controls["dynamics.spring_rate_N_per_m"].value == proposal
     after_rpm = report_summary(s.analysis)["jump_speed_rpm"]
-    assert f"6772.5 → {proposal:g} N/m; jump speed 1855.0 rpm → {after_rpm:.1f} rpm" in (
+    before_rpm = before["jump_speed_rpm"]
+    assert f"6772.5 → {proposal:g} N/m; jump speed {before_rpm:.1f} rpm → {after_rpm:.1f} rpm" in (
         s.ui.spring_md.content
     )
     after = report_summary(s.analysis)
