@@ -23,9 +23,8 @@ WHY = (
     "1/ρ − 1/|r_f| for it against 1/ρ + 1/r_c for a roller, so at the same force its "
     "contact stress is far lower. A *double* follower adds the shared load: while both "
     "faces touch (in a dwell: in the paper's program between stations 2 and 3) each "
-    "carries about half, "
-    "which the *high dwell* rows show; elsewhere one face carries it all, so the cycle's "
-    "maxima differ little from the single follower's."
+    "carries about half, which the *high dwell* rows show; elsewhere one face carries "
+    "it all, so the cycle's maxima differ little from the single follower's."
 )
 
 

@@ -1294,7 +1294,8 @@ def test_the_smallest_cam_each_follower_allows():
     grid of r_b: the smallest valid base radius is 17 mm for the single roller (tan phi
     = S'/(r_b + r_c + S): 29.46 deg there, over 30 at 16 mm, by hand), 12 mm for the
     double rollers (phi = asin(e / (r_b + r_c)) = 30 deg exactly), 16 and 15 mm for the
-    concave faces. best_per_kind reads them off the rows, one per follower."""
+    concave faces (these two are camcore's own figures, kept as a regression check, not
+    derived independently). best_per_kind reads them off the rows, one per follower."""
     from camcore.explore import best_per_kind
     from camcore.model import load_preset
 
