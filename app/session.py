@@ -32,6 +32,7 @@ from camcore.model import (
     defaults_note,
     design_from_json,
     design_to_json,
+    edited_note,
     format_validation_error,
     name_follows_kind,
     preset_names,
@@ -695,9 +696,11 @@ class Session:
             name, data = made
             note = export.warning(a)
             mount = export.mounting_note(a) if kind in export.PART_KINDS else None
+            edited = edited_note(d)  # as the files say it
             say(
-                f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*, "
-                f"{d.follower.kind.label}."
+                f"Sent **{esc(name)}** ({len(data):,} bytes) of *{esc(d.name)}*"
+                + ("" if edited is None else f" ({esc(edited)})")
+                + f", {d.follower.kind.label}."
                 + ("" if note is None else f"<br>⚠ **Before you make it:** {esc(note)}.")
                 + ("" if mount is None else f"<br>ℹ {esc(in_words(mount))} (Design → Cam).")
             )

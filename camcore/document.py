@@ -18,7 +18,7 @@ import numpy as np
 from . import profile
 from .analysis import Analysis
 from .checks import accepted_jumps
-from .model import FollowerKind
+from .model import FollowerKind, edited_note
 from .report import inputs_text, report_text, summary
 from .units import to_deg, to_mm
 
@@ -313,6 +313,8 @@ def html_report(a: Analysis) -> str:
     if (accepted := accepted_jumps(a.design)) is not None:  # said, not passed over
         verdict += f"<p>{esc(accepted)}</p>"
     kind = FollowerKind(s["follower"]).label  # (in words: a review read "double_concave")
+    edited = edited_note(a.design)
+    edited_html = f" ({esc(edited)})" if edited else ""
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
 <title>Cam design report: {esc(s["design"])}</title>
@@ -324,7 +326,7 @@ svg {{ max-width: 100%; height: auto; }}
 @media print {{ body {{ margin: 0; }} }}
 </style></head><body>
 <h1>Cam design report</h1>
-<p><b>Design:</b> {esc(s["design"])} &nbsp; <b>Follower:</b> {esc(kind)}</p>
+<p><b>Design:</b> {esc(s["design"])}{edited_html} &nbsp; <b>Follower:</b> {esc(kind)}</p>
 <h2>Verdict</h2>
 {verdict}
 <h2>Inputs</h2>

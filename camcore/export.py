@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .checks import CUSPED
-from .model import NAME_MAX, Design, design_to_json, omega_rad_s
+from .model import NAME_MAX, Design, design_to_json, edited_note, omega_rad_s
 from .motion import RISE, SEGMENT_NAMES, per_second
 from .train import on_grid
 from .units import to_deg, to_mm, to_mpa, to_um_per_mcycle
@@ -247,16 +247,19 @@ def plain(text: str, n: int = 80) -> str:
     return re.sub(r"[^A-Za-z0-9 _.,:=+\-/()&]", "_", text)[:n]
 
 
-def file_label(a) -> str:
+def file_label(a, edited: bool = True) -> str:
     """What an exported part is, written into the file (a maker's review: the STL's
-    header was all zeros, the DXF said nothing of its design)."""
+    header was all zeros, the DXF said nothing of its design), and, if ``edited``,
+    whether it is an edited preset (edited_note; the DXF drawing gives that a line)."""
     from . import package_version
 
     tol = a.design.limits.export_tolerance_mm
     # the fixed part first: a reader that cuts it short (the STL's 80 bytes) cuts the name
+    note = edited_note(a.design) if edited else None
     return (
-        f"camdesigner {package_version()}, mm, profile within {tol:g} mm: "
-        f"cam {plain(a.design.name, NAME_MAX)}"
+        f"camdesigner {package_version()}, mm, profile within {tol:g} mm: cam "
+        + (f"{note}; " if note else "")  # before the name, to stay in the STL's 80 bytes
+        + plain(a.design.name, NAME_MAX)
     )
 
 
@@ -416,7 +419,8 @@ def _reference_layers(doc, a, p: np.ndarray) -> None:
     msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
     top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
     msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
-    for text, y in ((datum_note(a), 0.35), (file_label(a), 0.29)):
+    notes = (datum_note(a), file_label(a, edited=False), edited_note(a.design))
+    for text, y in zip(filter(None, notes), (0.35, 0.29, 0.23), strict=False):
         msp.add_text(text, height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
             (0.02 * r_min, y * r_min)
         )

@@ -1250,6 +1250,68 @@ def load_preset(name: str) -> Design:
     return design_from_json(files(PRESETS).joinpath(shipped + ".json").read_bytes())
 
 
+def _leaves(node, prefix: str = "") -> dict:
+    """A design dump's values by dotted path, lists by index (set_field's paths:
+    ``motion.segments.0.lift_mm``)."""
+    if not isinstance(node, dict | list):
+        return {prefix: node}
+    items = node.items() if isinstance(node, dict) else enumerate(node)
+    out: dict = {}
+    for k, v in items:
+        out.update(_leaves(v, f"{prefix}.{k}" if prefix else str(k)))
+    return out
+
+
+@functools.cache
+def _shipped_leaves() -> dict[str, dict]:
+    """Each preset's fields by dotted path (read once: the presets ship in the package)."""
+    return {key: _leaves(load_preset(key).model_dump(mode="json")) for key in preset_names()}
+
+
+def preset_edits(design: Design) -> tuple[str, list[str]] | None:
+    """The shipped preset whose name ``design`` carries, and the fields it changes from
+    that preset (dotted paths); None if it carries no preset's name, or is the preset.
+
+    A name renamed for another follower (name_follows_kind: the comparison of Table 1)
+    still names its preset, and then the kind is no edit: the name says it. Why: an
+    edited preset keeps the preset's name, so a part cut from the paper example with
+    another base radius was labelled as the paper's cam (edited_note says so).
+    """
+    ours = _leaves(design.model_dump(mode="json"))
+    for key, theirs in _shipped_leaves().items():
+        shipped, kind = theirs["name"], FollowerKind(theirs["follower.kind"])
+        if design.name == shipped:
+            skip = {"name"}
+        elif design.name == renamed_for_kind(shipped, kind, design.follower.kind) != shipped:
+            skip = {"name", "follower.kind"}
+        else:
+            continue
+        paths = [*ours, *(p for p in theirs if p not in ours)]  # (a segment removed)
+        changed = [p for p in paths if p not in skip and ours.get(p) != theirs.get(p)]
+        return (key, changed) if changed else None
+    return None
+
+
+EDITS_NAMED = 3  # fields an edited preset's note names; more are counted
+
+
+def edited_note(design: Design) -> str | None:
+    """ "edited from preset KEY: field, ..." for a design that carries a shipped preset's
+    name but is not that preset (preset_edits), else None: printed beside the
+    name wherever a file names the design, so the part is not taken for the preset's."""
+    edits = preset_edits(design)
+    if edits is None:
+        return None
+    key, paths = edits
+    # a program's segments are one edit: "motion.segments" (its fields' paths ran long)
+    fields = list(
+        dict.fromkeys(re.sub(r"^motion\.segments\..*", "motion.segments", p) for p in paths)
+    )
+    more = len(fields) - EDITS_NAMED
+    named = ", ".join(fields[:EDITS_NAMED]) + (f" and {more} more" if more > 0 else "")
+    return f"edited from preset {key}: {named}"
+
+
 # --- SI conversion at the edge -------------------------------------------------------
 
 

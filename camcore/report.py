@@ -22,6 +22,7 @@ from .model import (
     FollowerKind,
     allowable_contact_stress_MPa,
     contact_stress_limit_MPa,
+    edited_note,
     load_preset,
     omega_rad_s,
 )
@@ -843,6 +844,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
     w = max(len(k) for k, _ in rows)
     lines = [f"{s['design']}", ""]
     if design is not None:
+        if (edited := edited_note(design)) is not None:
+            lines[1:1] = [f"({edited})"]
         lines += [f"  {line}" for line in inputs_text(design).splitlines()] + [""]
     lines += [f"  {k:<{w}}  {_NO_VALUE.sub('-', v)}" for k, v in rows]
     for _, note in reversed(unbounded_notes(s)):

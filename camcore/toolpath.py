@@ -32,6 +32,7 @@ from scipy.spatial import cKDTree
 
 from . import profile
 from .export import ExportError, require_star_shaped, warning
+from .model import edited_note
 from .units import MM, to_deg, to_mm
 
 FEED_PLANE_MM = 1.0  # the first plunge starts this high above the blank [mm]
@@ -314,6 +315,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     lines = [
         "%",
         _comment(f"cam contour: {a.design.name}"),
+        *([_comment(e)] if (e := edited_note(a.design)) else []),
         _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
         _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
         _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),

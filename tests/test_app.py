@@ -738,6 +738,7 @@ def test_a_part_that_breaks_a_limit_comes_with_a_warning(tab, downloads):
     s = tab
     s.ui.download_btns["toolpath"].value = True
     assert "Before you make it" not in s.ui.files_md.content
+    assert "edited" not in s.ui.files_md.content  # the preset as shipped
     assert b"WARNING" not in downloads[-1][1]
     data = load_preset("paper_example").with_kind("single_concave").model_dump(mode="json")
     data["motion"].update(lift_mm=12.0, rise_deg=65.0)
@@ -752,6 +753,7 @@ def test_a_part_that_breaks_a_limit_comes_with_a_warning(tab, downloads):
         shown = s.ui.quick_md.content if quick else s.ui.files_md.content
         assert "Before you make it" in shown and "curvature\\_convex" in shown  # (escaped)
         assert "Do not make it as it is" in shown
+        assert "(edited from preset paper\\_example: motion.segments, cam.speed\\_rpm)" in shown
     gcode = downloads[-2][1].decode()
     assert "(WARNING: the design breaks" in gcode and "Do not make it as it is)" in gcode
 

@@ -15,7 +15,7 @@ from pydantic import ValidationError
 
 from camcore import export, toolpath
 from camcore.analysis import analyze
-from camcore.model import Design, FollowerKind, load_preset
+from camcore.model import Design, FollowerKind, edited_note, load_preset
 
 
 def with_bore(diameter_mm: float, kind=FollowerKind.double_concave) -> Design:
@@ -259,8 +259,9 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
         data["motion"] = {"segments": programs[segments]}
     a = analyze(Design.model_validate(data), verify=False)
     doc = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
-    text, label = [e.dxf.text for e in doc.modelspace() if e.dxftype() == "TEXT"]
+    text, label, *edited = [e.dxf.text for e in doc.modelspace() if e.dxftype() == "TEXT"]
     assert label.startswith("camdesigner ")  # the file says what it is
+    assert edited == [edited_note(a.design)] if offset or segments else not edited
     lo, hi = np.array(doc.header["$EXTMIN"])[:2], np.array(doc.header["$EXTMAX"])[:2]
     P = a.profile.points * 1e3  # the extents hold the cam (viewers zoom to them)
     assert np.all(lo <= P.min(axis=0) + 1e-6) and np.all(hi >= P.max(axis=0) - 1e-6)
@@ -533,3 +534,39 @@ def test_a_follower_without_a_face_to_draw_says_why(kind, says):
     a = analyze(load_preset("paper_example").with_kind(kind), verify=False)
     with pytest.raises(export.ExportError, match="has no face to draw: " + re.escape(says)):
         export.follower_dxf_bytes(a)
+
+
+def test_an_edited_preset_says_so_wherever_its_files_name_it():
+    """A preset edited in place keeps the preset's name: its files had labelled a part
+    with another base radius as the paper's cam. They say it is edited, and what."""
+    from camcore import document
+    from camcore.report import report_text, summary
+
+    paper = load_preset("paper_example")
+    as_shipped = analyze(paper, verify=False)
+    edited = paper.model_copy(update={"cam": paper.cam.model_copy(update={"base_radius_mm": 70})})
+    a = analyze(edited, verify=False)
+    note = "edited from preset paper_example: cam.base_radius_mm"
+    assert edited_note(paper) is None and note not in export.file_label(as_shipped)
+    assert export.file_label(a).endswith(f"cam {note}; {paper.name}")
+    assert export.stl_bytes(a)[:80].endswith(b"cam edited from preset paper_exa")  # (80 bytes)
+    dxf = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
+    assert any(note in e.dxf.text for e in dxf.modelspace().query("TEXT"))
+    assert "(edited from preset paper_example: cam.base_radius_mm)" in toolpath.gcode(a)
+    assert report_text(summary(a), edited).splitlines()[:2] == [paper.name, f"({note})"]
+    assert f"({note})" in document.html_report(a)
+    assert "edited" not in report_text(summary(as_shipped), paper)
+    # Table 1's comparison renames the follower in the name: the kind is then no edit
+    roller = paper.with_kind("single_roller")
+    assert roller.name != paper.name and edited_note(roller) is None
+    # one name, many edits: three named, the rest counted
+    data = edited.model_dump(mode="json")
+    data["follower"]["kind"] = "single_roller"
+    data["cam"]["speed_rpm"] = 100
+    data["material"]["grade"] = "bronze"
+    assert edited_note(Design.model_validate(data)) == (
+        "edited from preset paper_example: follower.kind, cam.base_radius_mm, "
+        "cam.speed_rpm and 1 more"
+    )
+    # a name of the user's own names no preset
+    assert edited_note(edited.model_copy(update={"name": "my cam"})) is None

@@ -338,7 +338,7 @@ def test_gcode_cuts_in_equal_passes_through_the_breakthrough(width, pass_depth, 
     passes = _passes(text)
     assert len(passes) == n and all(p == passes[0] for p in passes)
     assert passes[0][0] == passes[0][-2]  # onto the path, round it, and off to the lead point
-    head = "\n".join(text.splitlines()[:8])
+    head = "\n".join(text.splitlines()[:9])  # (with the edited-preset line)
     assert ("one pass, full depth" if n == 1 else f"({n} passes of ") in head
     if breakthrough:
         assert (
