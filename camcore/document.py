@@ -142,6 +142,7 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
     n_st = a.stations.size
     near = a.local(np.mod(np.concatenate([a.stations - 1e-7, a.stations + 1e-7]), 2 * np.pi))
     touching = near.in_contact[:, :n_st] | near.in_contact[:, n_st:]
+    loads = station_loads(a, near)
     # the insets' Y range [mm], one for all panels: the whole cam below, the highest
     # panel's crop above (the crop's top is r_b + S + 0.2 r_b, as set below)
     r_max = to_mm(float(np.max(np.hypot(P[:, 0], P[:, 1]))))
@@ -202,9 +203,38 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
         # the lift too: the crops follow the contacts, so S = 0 and S = h look alike
         ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°, S = {to_mm(S):.2f} mm", fontsize=10)
         text = events[k].split(": ", 1)[-1]
-        ax.set_xlabel(text, fontsize=8.5, wrap=True)
+        ax.set_xlabel(f"{text}\n{loads[k]}", fontsize=8.5, wrap=True)
         _whole_cam_inset(ax, a, float(th), frame, left=left)
     return fig
+
+
+def station_loads(a: Analysis, near) -> list[str]:
+    """Per station, each touching face's contact force F_N (Eqs. 29-41) and Hertz
+    stress (Eq. 42) just before -> just after it, one value where they agree: what a
+    class reads off the diagram (a teacher's review asked for the numbers of the
+    transitions: at the paper's station 2, S2 takes half of S1's load).
+
+    ``near``: a.local at the stations less, then plus, 1e-7 rad (stations_figure's).
+    """
+    n = a.stations.size
+    out = []
+    for k in range(n):
+        parts = []
+        for i, f in enumerate(a.geo.faces):
+            if not (near.in_contact[i, k] or near.in_contact[i, n + k]):
+                continue
+            fn = _before_after(near.FN[i, k], near.FN[i, n + k], 1.0, "N")
+            sigma = _before_after(near.stress[i, k], near.stress[i, n + k], 1e-6, "MPa")
+            name = f.name.split(" ")[0] + ": " if len(a.geo.faces) == 2 else ""
+            parts.append(f"{name}F_N {fn}, σ_H {sigma}")
+        out.append("\n".join(parts))  # a line per face: a wrap had cut one mid-figure
+    return out
+
+
+def _before_after(before: float, after: float, scale: float, unit: str) -> str:
+    """"98 N", or "196 → 98 N" where the two differ in their printed digits."""
+    b, a = f"{before * scale:.3g}", f"{after * scale:.3g}"
+    return f"{a} {unit}" if a == b else f"{b} → {a} {unit}"
 
 
 def _whole_cam_inset(ax, a: Analysis, th: float, frame: tuple[float, float], left: bool) -> None:

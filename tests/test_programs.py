@@ -265,8 +265,38 @@ def test_stations_figure_has_a_panel_per_station():
     drawn = [ax for ax in fig.axes if ax.axison]
     assert len(drawn) == len(a.stations)
     assert drawn[2].get_title().startswith("station 2: θ = ")
-    assert drawn[2].get_xlabel() == summary(a)["stations"][2]["event"].split(": ", 1)[1]
+    caption = drawn[2].get_xlabel().split("\n")
+    assert caption[0] == summary(a)["stations"][2]["event"].split(": ", 1)[1]
+    assert caption[1].startswith("S") and " N, σ_H " in caption[1]  # the loads, below
     assert "Stations (the paper's Fig. 4" in document.html_report(a)
+
+
+def test_the_stations_say_each_faces_load_before_and_after_the_transition():
+    """A teacher's review: the captions give each touching face's F_N and Hertz stress
+    just before -> just after the station. At the paper's station 2 S2 arrives and the
+    two faces share S1's load (Eqs. 36-38): each carries half of it, and the stress
+    falls as F_N^(1/2) (Eq. 42, the same curvatures on both sides of the station)."""
+    from camcore import document
+
+    a = analyze(PAPER, verify=False)
+    fig = document.stations_figure(a)
+    captions = [ax.get_xlabel().split("\n")[1:] for ax in fig.axes if ax.axison]
+    assert captions[1] == ["S1: F_N 137 N, σ_H 46.6 MPa"]  # the high dwell, one face
+    assert captions[2] == [
+        "S1: F_N 137 → 68.4 N, σ_H 46.6 → 33 MPa",
+        "S2: F_N 0 → 68.4 N, σ_H 0 → 33 MPa",
+    ]
+    st = a.stations[2]
+    near = a.local(np.array([st - 1e-7, st + 1e-7]))
+    alone, shared = near.FN[0]
+    assert shared == pytest.approx(alone / 2, rel=1e-6) and near.FN[1, 1] == pytest.approx(shared)
+    sigma = near.stress[0]
+    assert sigma[1] == pytest.approx(sigma[0] / np.sqrt(2), rel=1e-6)
+    single = document.station_loads(
+        b := analyze(PAPER.with_kind("single_roller"), verify=False),
+        b.local(np.mod(np.concatenate([b.stations - 1e-7, b.stations + 1e-7]), 2 * np.pi)),
+    )
+    assert single[2] == "F_N 137 N, σ_H 212 MPa"  # one face: no name, nothing shared
 
 
 def test_stations_figure_fills_the_faces_touching_at_each_station():
