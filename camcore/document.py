@@ -232,7 +232,7 @@ def station_loads(a: Analysis, near) -> list[str]:
 
 
 def _before_after(before: float, after: float, scale: float, unit: str) -> str:
-    """"98 N", or "196 → 98 N" where the two differ in their printed digits."""
+    """One value with its unit ('98 N'), or two ('196 → 98 N') where they print apart."""
     b, a = f"{before * scale:.3g}", f"{after * scale:.3g}"
     return f"{a} {unit}" if a == b else f"{b} → {a} {unit}"
 

@@ -1296,8 +1296,8 @@ EDITS_NAMED = 3  # fields an edited preset's note names; more are counted
 
 
 def edited_note(design: Design) -> str | None:
-    """ "edited from preset KEY: field, ..." for a design that carries a shipped preset's
-    name but is not that preset (preset_edits), else None: printed beside the
+    """The note 'edited from preset KEY: field, ...' for a design that carries a shipped
+    preset's name but is not that preset (preset_edits), else None: printed beside the
     name wherever a file names the design, so the part is not taken for the preset's."""
     edits = preset_edits(design)
     if edits is None:
