@@ -388,8 +388,8 @@ def get_path(design: Design, path: str):
     classic motion sliders on a program that is not rise-dwell-fall-dwell)."""
     obj = design
     try:
-        for part in path.split("."):
-            obj = getattr(obj, part)
+        for part in path.split("."):  # (a list by index: motion.segments.0.angle_deg)
+            obj = obj[int(part)] if isinstance(obj, list) else getattr(obj, part)
     except ValueError:
         return None
     if obj is None and path in NONE_AS_ZERO:

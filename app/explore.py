@@ -26,6 +26,7 @@ from camcore.explore import (
     OFFERED,
     PANEL_PX,
     PROFILE_FIGURES,
+    balance_for,
     best_per_kind,
     distinct,
     figure_values,
@@ -33,6 +34,7 @@ from camcore.explore import (
     ignored_fields,
     offered,
     pareto,
+    segment_angle_paths,
     spec_document,
     sweep_grid,
 )
@@ -76,6 +78,25 @@ SYMBOLS = {
     "dynamics.external_load_N": "F_e",
 }
 SIGNED = {"follower.single_offset_mm", "dynamics.external_load_N"}  # either side of 0
+
+
+def segment_parameters(design: Design) -> dict[str, str]:
+    """label -> path of the angle of each rise and fall of a program made of segments
+    (camcore.explore.segment_angle_paths), offered beside PARAMETERS: a designer's
+    review could sweep no field of an indexer's program in the tab (a dwell takes up
+    the turn: balance_for)."""
+    return {
+        f"Segment {i + 1} angle, {kind.value} [°]": path
+        for path, (i, kind) in segment_angle_paths(design).items()
+    }
+
+
+def symbol(path: str) -> str:
+    """How the list of designs names a field: SYMBOLS', "β3" for segment 3's angle."""
+    m = re.fullmatch(r"motion\.segments\.(\d+)\.angle_deg", path)
+    return f"β{int(m[1]) + 1}" if m else SYMBOLS.get(path, path)
+
+
 # labels of earlier versions, as a kept setup may hold them
 OLD_LABELS = {"Speed [rpm]": "Cam speed [rpm]"}
 FIGURE_LABELS = {f.label: name for name, f in FIGURES.items()}
@@ -98,6 +119,7 @@ class Ran:
     rows: list[dict]  # the rows of the points analysed (all, unless cancelled)
     batched: bool  # the batched core (else the full analysis, no geometric check)
     total: int  # the grid's points
+    balance: str | None = None  # the segment angle that took up the turn (SPEC's)
 
 
 class ExplorePanel:
@@ -153,6 +175,7 @@ class ExplorePanel:
         self._ran: Ran | None = None  # the sweep on show
         self._send: Callable[[str, bytes], None] | None = None  # a file to the browser
         self._invalid: Callable[[], bool] | None = None  # the tab's input is invalid
+        self._fields = dict(PARAMETERS)  # what x and y offer now (offer_fields)
 
     def bind(
         self,
@@ -207,10 +230,12 @@ class ExplorePanel:
         only if it is one the widget offers; a kept range only with its own field."""
         if not isinstance(data, dict):
             return
+        if self._design is not None:  # (a segment's field is offered with its program)
+            self.offer_fields(self._design())
         for dd, rng, axis in ((self.x, self.x_range, "x"), (self.y, self.y_range, "y")):
             label = data.get(axis)
             label = OLD_LABELS.get(label, label) if isinstance(label, str) else label
-            if not isinstance(label, str) or label not in PARAMETERS:
+            if not isinstance(label, str) or label not in self._fields:
                 continue
             dd.value = label  # proposes a range, replaced by the kept one below
             pair = _kept_pair(data.get(f"{axis}_range"))
@@ -238,10 +263,26 @@ class ExplorePanel:
         if self._write is not None:
             self._write(self.setup())
 
+    def offer_fields(self, design: Design) -> None:
+        """The fields x and y offer for ``design``: PARAMETERS, and for a program made
+        of segments each rise's and fall's angle (segment_parameters). A field no
+        longer offered gives way to the first one the other axis has not (its range
+        proposed anew)."""
+        fields = {**PARAMETERS, **segment_parameters(design)}
+        if fields == self._fields:
+            return
+        self._fields = fields
+        labels = tuple(fields)
+        for dd, other in ((self.x, self.y), (self.y, self.x)):
+            keep = dd.value in fields
+            dd.options = labels  # (viser: a value not among them becomes the first)
+            if not keep:
+                dd.value = next(label for label in labels if label != other.value)
+
     def _suggest(self, dd, rng, axis: str) -> None:
         """A range around the design's value of a newly chosen field (±30 %), labelled
-        with the field's unit."""
-        path = PARAMETERS.get(dd.value)
+        with the field's unit; for a segment's angle, which dwell takes up the turn."""
+        path = self._fields.get(dd.value)
         if path is None or self._design is None:
             return
         design = self._design()
@@ -255,6 +296,9 @@ class ExplorePanel:
             zero = (-10.0, 10.0) if path in SIGNED else (0.0, 10.0)
             lo, hi = sorted((0.7 * v, 1.3 * v)) if v else zero
             rng.value = (round(lo, 1), round(hi, 1))
+        balance = self._balance(design)
+        if balance is not None:
+            self.progress.content = _balance_note(design, balance)
 
     def suggest_ranges(self) -> None:
         """Both fields' ranges around the design on screen (a tab with no kept setup:
@@ -281,7 +325,7 @@ class ExplorePanel:
 
     def _job(self):
         """(base, points, grid, x, y, figures) from the widgets, or None (said why)."""
-        px, py = PARAMETERS.get(self.x.value), PARAMETERS.get(self.y.value)
+        px, py = self._fields.get(self.x.value), self._fields.get(self.y.value)
         names = [FIGURE_LABELS.get(f.value) for f in (self.fig_a, self.fig_b)]
         if self.fig_c.value != NO_FIGURE:
             names.append(FIGURE_LABELS.get(self.fig_c.value))
@@ -326,11 +370,25 @@ class ExplorePanel:
         # the boxes show what runs (a box left empty sends nothing: a review ran the
         # last range while the box stood blank)
         self.x_range.value, self.y_range.value = (x0, x1), (y0, y1)
+        balance = balance_for(design, [px, py])
+        if balance is None and {px, py} & set(segment_angle_paths(design)):
+            self.progress.content = (
+                "✖ A segment's angle is swept against a dwell that takes up the turn, "
+                "and this program has no dwell."
+            )
+            return None
         grid = sweep_grid((px, x0, x1), (py, y0, y1), int(steps), kinds)
         base = design.model_dump(mode="json")
-        return base, grid_points(grid), grid, (px, self.x.value), (py, self.y.value), names
+        points = grid_points(grid, base, balance)
+        return base, points, grid, (px, self.x.value), (py, self.y.value), names, balance
 
-    def _sweep(self, base, points, grid, x, y, names) -> None:
+    def _balance(self, design: Design) -> str | None:
+        """The segment angle that takes up the turn in the sweep the widgets describe
+        (camcore.explore.balance_for), or None."""
+        paths = [self._fields.get(dd.value) for dd in (self.x, self.y)]
+        return balance_for(design, [p for p in paths if p is not None])
+
+    def _sweep(self, base, points, grid, x, y, names, balance=None) -> None:
         """Analyse each distinct design once (points that differ only in a field their
         follower ignores make one design: camcore.sweep.same_designs), in chunks."""
         done: dict[int, dict] = {}  # point index -> its row, for the points analysed
@@ -360,7 +418,8 @@ class ExplorePanel:
             ]
             span = [[p[path] for p in points] for path in (x[0], y[0])]  # the asked ranges
             limits = ((min(span[0]), max(span[0])), (min(span[1]), max(span[1])))
-            self._show(Ran(base, grid, rows, batched, len(points)), x, y, names, limits)
+            ran = Ran(base, grid, rows, batched, len(points), balance)
+            self._show(ran, x, y, names, limits)
         except Exception as exc:  # a worker lost: say so, keep the tab
             self.progress.content = f"✖ The sweep stopped: {esc(exc)}"
         finally:
@@ -506,7 +565,10 @@ class ExplorePanel:
             name, data = f"{stem}-sweep.csv", csv_text(ran.rows).encode()
             said = f"{n} rows, one per point, the columns of `camcore sweep`'s table{cut}"
         else:
-            name, data = f"{stem}-sweep.json", spec_document(ran.base, ran.grid).encode()
+            name, data = (
+                f"{stem}-sweep.json",
+                spec_document(ran.base, ran.grid, ran.balance).encode(),
+            )
             shown = name if _PLAIN_NAME.fullmatch(name) else "SPEC.json"  # (file_stem's
             # slug is plain: inside a code span esc's backslashes would show). The tab
             # ran the batched core, or the full analysis less the geometric check where
@@ -565,29 +627,41 @@ def _offer(row: dict) -> tuple[dict, str]:
             continue
         path = key[5:]
         if path in ignored:
-            shown.append(f"{SYMBOLS.get(path, path)} –")
+            shown.append(f"{symbol(path)} –")
             continue
         point[path] = v
         if path == "follower.kind" and isinstance(v, str) and v in FollowerKind.__members__:
             shown.append(FollowerKind(v).label)
         else:
             value = f"{v:.4g}" if isinstance(v, float) else str(v)
-            shown.append(f"{SYMBOLS.get(path, path)} {value}")
+            shown.append(f"{symbol(path)} {value}")
     return point, ", ".join(shown)
 
 
 def _refused_field(design: Design, label: str, path: str) -> str | None:
     """Why ``design`` cannot be swept over the field ``path`` (``label`` as chosen), or
     None: a motion field of a program made of segments is no field of it."""
-    if path.startswith("motion.") and design.motion.classic is None:
+    if path.startswith("motion.") and not path.startswith("motion.segments."):
+        if design.motion.classic is not None:
+            return None
         return (  # (a review: every point was "not a design")
             f"✖ {esc(label)}: this design's motion program is made of segments "
-            "(the Motion table), which that field does not describe: sweep a cam "
-            "or follower field, or load a rise-dwell-fall design. (`camcore sweep` "
-            "sweeps a segment's angle, with a dwell that takes up the turn: its "
-            'SPEC\'s "balance".)'
+            "(the Motion table), which that field does not describe: sweep a "
+            "segment's angle (*Segment N angle*, a dwell takes up the turn), a cam or "
+            "follower field, or load a rise-dwell-fall design."
         )
     return None
+
+
+def _balance_note(design: Design, balance: str) -> str:
+    """Which dwell takes up the turn in a sweep of segment angles (the tab says it
+    when such a field is chosen: its points change that dwell too)."""
+    i = int(balance.split(".")[2])
+    angle = design.motion.segments[i].angle_deg
+    return (
+        f"Segment {i + 1} (a dwell of {angle:g}°) takes up the turn: each point sets it "
+        "to 360° less the other segments (a point that leaves it no angle is no design)."
+    )
 
 
 def _summary(rows: list[dict], total: int, front, names: list[str], limits, listed: int) -> str:

@@ -10,7 +10,6 @@ the app's background worker) the exploration reads the same table.
 from __future__ import annotations
 
 import io
-import itertools
 import json
 import math
 from dataclasses import dataclass, field
@@ -18,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .checks import CODES
-from .model import PAPER_FOLLOWERS, FollowerKind
-from .sweep import axis_values, first_violation, pareto_mask
+from .model import PAPER_FOLLOWERS, Design, FollowerKind, SegmentKind
+from .sweep import Spec, axis_values, first_violation, pareto_mask
 
 
 @dataclass(frozen=True)
@@ -74,19 +73,53 @@ def sweep_grid(
     }
 
 
-def grid_points(grid: dict) -> list[dict]:
+def grid_points(grid: dict, base: dict | None = None, balance: str | None = None) -> list[dict]:
     """The points of a SPEC's ``grid``, {path: value} each, in the order and with the
-    very values ``camcore sweep`` gives them (the same axes, the last fastest)."""
-    axes = [(path, axis_values(path, raw)) for path, raw in grid.items()]
-    names = [path for path, _ in axes]
-    return [dict(zip(names, c, strict=True)) for c in itertools.product(*(v for _, v in axes))]
+    very values ``camcore sweep`` gives them (the same axes, the last fastest); with
+    ``balance`` (the SPEC's), each point also sets that segment angle of ``base`` (a
+    Design's JSON data) to the rest of the turn, as the sweep does."""
+    axes = tuple((path, axis_values(path, raw)) for path, raw in grid.items())
+    return list(Spec(base or {}, axes, grid, balance=balance).points())
 
 
-def spec_document(base: dict, grid: dict) -> str:
+def spec_document(base: dict, grid: dict, balance: str | None = None) -> str:
     """A SPEC document of the sweep of ``grid`` around the design ``base`` (a Design's
-    JSON data): ``camcore sweep SPEC --out T.parquet --fast`` runs the same designs,
-    and without ``--fast`` adds the profile's figures and checks."""
-    return json.dumps({"base": base, "grid": grid}, indent=1) + "\n"
+    JSON data), with its ``balance`` if any: ``camcore sweep SPEC --out T.parquet
+    --fast`` runs the same designs, and without ``--fast`` adds the profile's figures
+    and checks."""
+    extra = {} if balance is None else {"balance": balance}
+    return json.dumps({"base": base, "grid": grid, **extra}, indent=1) + "\n"
+
+
+def segment_angle_paths(design: Design) -> dict[str, tuple[int, SegmentKind]]:
+    """The angle of each rise and fall of a program made of segments (a classic
+    program has its own fields, motion.rise_deg ...), by its path
+    ("motion.segments.0.angle_deg"): the fields a sweep may vary with a ``balance``."""
+    if design.motion.classic is not None:
+        return {}
+    return {
+        f"motion.segments.{i}.angle_deg": (i, s.kind)
+        for i, s in enumerate(design.motion.segments)
+        if s.kind is not SegmentKind.dwell
+    }
+
+
+def balance_for(design: Design, paths: list[str]) -> str | None:
+    """The segment angle that takes up the turn when ``paths`` sweep segment angles of
+    ``design`` (segment_angle_paths): the longest dwell's, the first of equals after
+    the first swept segment (an indexer's rise against the dwell that follows it).
+    None if no path is a segment angle, or the program has no dwell to give."""
+    swept = [segment_angle_paths(design)[p][0] for p in paths if p in segment_angle_paths(design)]
+    segs = design.motion.segments
+    if not swept:
+        return None
+    n = len(segs)
+    after = [(swept[0] + 1 + k) % n for k in range(n)]  # from the one after, around
+    dwells = [i for i in after if segs[i].kind is SegmentKind.dwell]
+    if not dwells:
+        return None
+    longest = max(dwells, key=lambda i: (segs[i].angle_deg, -after.index(i)))
+    return f"motion.segments.{longest}.angle_deg"
 
 
 def figure_values(rows: list[dict], names: list[str]) -> np.ndarray:

@@ -1361,6 +1361,52 @@ def test_explore_review_names_fields_and_refuses_early(tab):
     assert (e.y_range.label, tuple(e.y_range.value)) == before  # (not relabelled in °)
 
 
+def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn(tab, downloads):
+    """A program made of segments offers each rise's and fall's angle (a designer's
+    review: no field of an indexer's program could be swept in the tab); a dwell takes
+    up the turn (camcore sweep's "balance"), the tab says which, each row has its
+    angle, the SPEC runs to the same rows, and a front design loads whole. A classic
+    program offers them no more."""
+    from camcore import sweep
+
+    s, e = tab, tab.ui.explore
+    s.load_preset("double_index")  # rise 60, dwell 50, fall 60, dwell 10, twice
+    assert "Segment 1 angle, rise [°]" in e.x.options and "Segment 7 angle, fall [°]" in e.y.options
+    assert not any(o.startswith("Segment 2 ") for o in e.x.options)  # (a dwell)
+    e.x.value, e.y.value = "Segment 1 angle, rise [°]", "Base radius r_b [mm]"
+    assert tuple(e.x_range.value) == (42.0, 78.0) and e.x_range.label == "x from, to [°]"
+    assert "Segment 2 (a dwell of 50°) takes up the turn" in e.progress.content
+    e.x_range.value, e.steps.value, e.all_kinds.value = (40.0, 120.0), 3, False
+    e.run_btn.value = True
+    assert wait_for(lambda: not e.csv_btn.disabled, 120.0), e.progress.content
+    rows = e._ran.rows
+    rise, dwell = "grid.motion.segments.0.angle_deg", "grid.motion.segments.1.angle_deg"
+    assert sorted({(r[rise], r[dwell]) for r in rows}) == [
+        (40.0, 70.0),
+        (80.0, 30.0),
+        (120.0, -10.0),
+    ]
+    assert all(r["error"] for r in rows if r[rise] == 120.0)  # no angle left: no design
+    assert not any(r["error"] for r in rows if r[rise] < 120.0)
+    e.spec_btn.value = True
+    spec = sweep.parse_spec(downloads[-1][1])
+    assert spec.balance == "motion.segments.1.angle_deg"
+    assert sweep.run_chunk(spec.base, list(spec.points()), fast=True) == rows
+    first = e.front_dd.options[0]
+    assert re.match(r"1\. double concave, β1 \d+, r_b [\d.]+, β2 \d+ → ", first), first
+    assert wait_for(lambda: not e._thread.is_alive(), 30.0)  # (its map drawn)
+    e.load(first)
+    segs = s.design.motion.segments
+    beta1 = float(first.split("β1 ")[1].split(",")[0])
+    assert segs[0].angle_deg == beta1 and sum(g.angle_deg for g in segs) == 360.0
+    s.load_preset("paper_example")  # a classic program: its own fields, no segments
+    assert not any(o.startswith("Segment ") for o in e.x.options)
+    assert (e.x.value, e.y.value) == ("Offset e (double) [mm]", "Base radius r_b [mm]")
+    assert tuple(e.x_range.value) == (7.0, 13.0)  # around the paper's e = 10 mm
+    e.apply_setup({"x": "Segment 1 angle, rise [°]", "x_range": [1, 2]})  # kept, now stale
+    assert e.x.value == "Offset e (double) [mm]" and tuple(e.x_range.value) == (7.0, 13.0)
+
+
 def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):
     """The spring rate and the cam width are Explore fields too: the paper example's
     spring (k_min 2800 N/m at 1200 rpm, jump speed 1855 rpm) over speed x rate shows
