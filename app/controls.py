@@ -390,7 +390,7 @@ def get_path(design: Design, path: str):
     try:
         for part in path.split("."):  # (a list by index: motion.segments.0.angle_deg)
             obj = obj[int(part)] if isinstance(obj, list) else getattr(obj, part)
-    except ValueError:
+    except (ValueError, IndexError):  # (no such segment)
         return None
     if obj is None and path in NONE_AS_ZERO:
         return 0.0

@@ -38,7 +38,7 @@ from camcore.explore import (
     spec_document,
     sweep_grid,
 )
-from camcore.model import PAPER_FOLLOWERS, Design, DesignError, FollowerKind
+from camcore.model import PAPER_FOLLOWERS, Design, DesignError, FollowerKind, set_field
 from camcore.sweep import csv_text, design_at, with_point
 
 from .controls import SPECS, control_value, get_path
@@ -89,6 +89,11 @@ def segment_parameters(design: Design) -> dict[str, str]:
         f"Segment {i + 1} angle, {kind.value} [°]": path
         for path, (i, kind) in segment_angle_paths(design).items()
     }
+
+
+def fields_of(design: Design) -> dict[str, str]:
+    """label -> path of every field a sweep around ``design`` may vary."""
+    return {**PARAMETERS, **segment_parameters(design)}
 
 
 def symbol(path: str) -> str:
@@ -230,8 +235,6 @@ class ExplorePanel:
         only if it is one the widget offers; a kept range only with its own field."""
         if not isinstance(data, dict):
             return
-        if self._design is not None:  # (a segment's field is offered with its program)
-            self.offer_fields(self._design())
         for dd, rng, axis in ((self.x, self.x_range, "x"), (self.y, self.y_range, "y")):
             label = data.get(axis)
             label = OLD_LABELS.get(label, label) if isinstance(label, str) else label
@@ -268,7 +271,7 @@ class ExplorePanel:
         of segments each rise's and fall's angle (segment_parameters). A field no
         longer offered gives way to the first one the other axis has not (its range
         proposed anew)."""
-        fields = {**PARAMETERS, **segment_parameters(design)}
+        fields = fields_of(design)
         if fields == self._fields:
             return
         self._fields = fields
@@ -282,10 +285,12 @@ class ExplorePanel:
     def _suggest(self, dd, rng, axis: str) -> None:
         """A range around the design's value of a newly chosen field (±30 %), labelled
         with the field's unit; for a segment's angle, which dwell takes up the turn."""
-        path = self._fields.get(dd.value)
-        if path is None or self._design is None:
+        if self._design is None:
             return
         design = self._design()
+        path = fields_of(design).get(dd.value)  # (the design's own: offer_fields may
+        if path is None:  # not have run for it yet)
+            return
         refused = _refused_field(design, dd.value, path)
         if refused is not None:  # (a review: the last field's range stood, relabelled)
             self.progress.content = refused
@@ -325,7 +330,10 @@ class ExplorePanel:
 
     def _job(self):
         """(base, points, grid, x, y, figures) from the widgets, or None (said why)."""
-        px, py = self._fields.get(self.x.value), self._fields.get(self.y.value)
+        assert self._design is not None  # bound before any click
+        design = self._design()
+        fields = fields_of(design)  # (of the design read: offer_fields may lag it)
+        px, py = fields.get(self.x.value), fields.get(self.y.value)
         names = [FIGURE_LABELS.get(f.value) for f in (self.fig_a, self.fig_b)]
         if self.fig_c.value != NO_FIGURE:
             names.append(FIGURE_LABELS.get(self.fig_c.value))
@@ -335,8 +343,6 @@ class ExplorePanel:
         if None in names or len(set(names)) < len(names):
             self.progress.content = "✖ Choose two or three different figures (1, 2 and 3)."
             return None
-        assert self._design is not None  # bound before any click
-        design = self._design()
         if self._invalid is not None and self._invalid():
             self.progress.content = (  # (a review: it ran around the last valid design)
                 "✖ The input is invalid (see the red panel): fix it, and the sweep runs "
@@ -370,13 +376,7 @@ class ExplorePanel:
         # the boxes show what runs (a box left empty sends nothing: a review ran the
         # last range while the box stood blank)
         self.x_range.value, self.y_range.value = (x0, x1), (y0, y1)
-        balance = balance_for(design, [px, py])
-        if balance is None and {px, py} & set(segment_angle_paths(design)):
-            self.progress.content = (
-                "✖ A segment's angle is swept against a dwell that takes up the turn, "
-                "and this program has no dwell."
-            )
-            return None
+        balance = balance_for(design, [px, py])  # (a segment's angle: a dwell's to give)
         grid = sweep_grid((px, x0, x1), (py, y0, y1), int(steps), kinds)
         base = design.model_dump(mode="json")
         points = grid_points(grid, base, balance)
@@ -385,7 +385,8 @@ class ExplorePanel:
     def _balance(self, design: Design) -> str | None:
         """The segment angle that takes up the turn in the sweep the widgets describe
         (camcore.explore.balance_for), or None."""
-        paths = [self._fields.get(dd.value) for dd in (self.x, self.y)]
+        fields = fields_of(design)
+        paths = [fields.get(dd.value) for dd in (self.x, self.y)]
         return balance_for(design, [p for p in paths if p is not None])
 
     def _sweep(self, base, points, grid, x, y, names, balance=None) -> None:
@@ -611,9 +612,24 @@ def edited_since(base: Design, now: Design, point: dict, most: int = 4) -> list[
         a, b = control_value(base, spec), control_value(now, spec)
         if a != b:
             out.append(f"{spec.label}: {a} → {b}")
-    if not classic and base.motion.segments != now.motion.segments:
+    if not classic and _segments_at(base, point) != _segments_at(now, point):
         out.append("the program's segments")
     return out[:most] + ([f"{len(out) - most} more"] if len(out) > most else [])
+
+
+def _segments_at(design: Design, point: dict) -> list | None:
+    """``design``'s segments (JSON data) with ``point``'s segment angles (a swept one
+    and the dwell that took up the turn are the sweep's, not an edit: a review had
+    the second design loaded from one front warn of "edits"); None if it has no
+    such segment."""
+    data = design.model_dump(mode="json")
+    try:
+        for path, value in point.items():
+            if path.startswith("motion.segments."):
+                set_field(data, path, value, "grid.")
+    except DesignError:
+        return None
+    return data["motion"]["segments"]
 
 
 def _offer(row: dict) -> tuple[dict, str]:
@@ -644,11 +660,15 @@ def _refused_field(design: Design, label: str, path: str) -> str | None:
     if path.startswith("motion.") and not path.startswith("motion.segments."):
         if design.motion.classic is not None:
             return None
+        angles = (
+            "a segment's angle (*Segment N angle*, a dwell takes up the turn), "
+            if segment_angle_paths(design)
+            else ""
+        )
         return (  # (a review: every point was "not a design")
             f"✖ {esc(label)}: this design's motion program is made of segments "
-            "(the Motion table), which that field does not describe: sweep a "
-            "segment's angle (*Segment N angle*, a dwell takes up the turn), a cam or "
-            "follower field, or load a rise-dwell-fall design."
+            "(the Motion table), which that field does not describe: sweep "
+            f"{angles}a cam or follower field, or load a rise-dwell-fall design."
         )
     return None
 

@@ -506,13 +506,13 @@ class Session:
         k = self._index()
         ui = self.ui
         with self.client.atomic():
+            ui.explore.offer_fields(design)  # (a program of segments: their angles)
             self.view.build(a)
             self.view.pose(k)
             self._show_curves(r.curves, k)
             plots.relabel_limits(ui.curves, a)
             self._enable_for_kind(design)
             ui.segments.show(design.motion.segments)
-            ui.explore.offer_fields(design)  # (a program of segments: their angles)
             self._show_station_buttons(a)
             if ui.stations_img is not None and geometry_key(design) != self._diagram_of:
                 ui.stations_img.remove()  # of another geometry: the button draws it again

@@ -224,6 +224,8 @@ def station_loads(a: Analysis, near) -> list[str]:
             if not (near.in_contact[i, k] or near.in_contact[i, n + k]):
                 continue
             fn = _before_after(near.FN[i, k], near.FN[i, n + k], 1.0, "N")
+            if min(near.FN[i, k], near.FN[i, n + k]) < 0:  # (the jump check's Eq. 29 sign)
+                fn += " (< 0: the follower leaves the cam)"
             sigma = _before_after(near.stress[i, k], near.stress[i, n + k], 1e-6, "MPa")
             name = f.name.split(" ")[0] + ": " if len(a.geo.faces) == 2 else ""
             parts.append(f"{name}F_N {fn}, σ_H {sigma}")
@@ -233,8 +235,14 @@ def station_loads(a: Analysis, near) -> list[str]:
 
 def _before_after(before: float, after: float, scale: float, unit: str) -> str:
     """One value with its unit ('98 N'), or two ('196 → 98 N') where they print apart."""
-    b, a = f"{before * scale:.3g}", f"{after * scale:.3g}"
+    b, a = _three_digits(before * scale), _three_digits(after * scale)
     return f"{a} {unit}" if a == b else f"{b} → {a} {unit}"
+
+
+def _three_digits(x: float) -> str:
+    """x to 3 significant digits, without an exponent below 10^6 ("1130", not "1.13e+03")."""
+    r = float(f"{x:.3g}")
+    return f"{r:.0f}" if 1000 <= abs(r) < 1e6 else f"{x:.3g}"
 
 
 def _whole_cam_inset(ax, a: Analysis, th: float, frame: tuple[float, float], left: bool) -> None:
@@ -347,7 +355,7 @@ def html_report(a: Analysis) -> str:
     edited_html = f" ({esc(edited)})" if edited else ""
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
-<title>Cam design report: {esc(s["design"])}</title>
+<title>Cam design report: {esc(s["design"])}{edited_html}</title>
 <style>
 body {{ font-family: system-ui, sans-serif; margin: 2em auto; max-width: 60em; color: #222; }}
 pre {{ background: #f6f7f9; padding: 1em; overflow-x: auto; font-size: 0.85em; }}
@@ -385,6 +393,8 @@ def pdf_report(a: Analysis) -> bytes:
 
     s = summary(a)
     text = report_text(s, a.design)
+    edited = edited_note(a.design)
+    title = s["design"] + (f" ({edited})" if edited else "")
     if not s["valid"]:
         text += "\n\nThe design breaks the limits listed above (lines starting with '!')."
     page = Figure(figsize=A4_IN)
@@ -396,7 +406,7 @@ def pdf_report(a: Analysis) -> bytes:
     )
     buf = io.BytesIO()
     with PdfPages(
-        buf, metadata={"Title": f"Cam design report: {s['design']}", "Creator": "camcore"}
+        buf, metadata={"Title": f"Cam design report: {title}", "Creator": "camcore"}
     ) as pdf:
         for fig in (page, _figure(a), _profile_figure(a), stations_figure(a)):
             w, h = fig.get_size_inches()  # every page A4, a wide figure's turned

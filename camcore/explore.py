@@ -94,8 +94,10 @@ def spec_document(base: dict, grid: dict, balance: str | None = None) -> str:
 def segment_angle_paths(design: Design) -> dict[str, tuple[int, SegmentKind]]:
     """The angle of each rise and fall of a program made of segments (a classic
     program has its own fields, motion.rise_deg ...), by its path
-    ("motion.segments.0.angle_deg"): the fields a sweep may vary with a ``balance``."""
-    if design.motion.classic is not None:
+    ("motion.segments.0.angle_deg"): the fields a sweep may vary with a ``balance``;
+    none if no dwell can take up the turn (balance_for)."""
+    segs = design.motion.segments
+    if design.motion.classic is not None or all(s.kind is not SegmentKind.dwell for s in segs):
         return {}
     return {
         f"motion.segments.{i}.angle_deg": (i, s.kind)
@@ -108,16 +110,15 @@ def balance_for(design: Design, paths: list[str]) -> str | None:
     """The segment angle that takes up the turn when ``paths`` sweep segment angles of
     ``design`` (segment_angle_paths): the longest dwell's, the first of equals after
     the first swept segment (an indexer's rise against the dwell that follows it).
-    None if no path is a segment angle, or the program has no dwell to give."""
-    swept = [segment_angle_paths(design)[p][0] for p in paths if p in segment_angle_paths(design)]
-    segs = design.motion.segments
+    None if no path is a segment angle (segment_angle_paths: then there is a dwell)."""
+    angles = segment_angle_paths(design)
+    swept = [angles[p][0] for p in paths if p in angles]
     if not swept:
         return None
+    segs = design.motion.segments
     n = len(segs)
     after = [(swept[0] + 1 + k) % n for k in range(n)]  # from the one after, around
     dwells = [i for i in after if segs[i].kind is SegmentKind.dwell]
-    if not dwells:
-        return None
     longest = max(dwells, key=lambda i: (segs[i].angle_deg, -after.index(i)))
     return f"motion.segments.{longest}.angle_deg"
 

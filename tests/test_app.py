@@ -1399,12 +1399,38 @@ def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn
     segs = s.design.motion.segments
     beta1 = float(first.split("β1 ")[1].split(",")[0])
     assert segs[0].angle_deg == beta1 and sum(g.angle_deg for g in segs) == 360.0
+    other = e.front_dd.options[-1]
+    assert other != first
+    e.load(other)  # the swept angles are the sweep's, not edits: no warning, one click
+    assert e.progress.content.startswith("Loaded design"), e.progress.content
+    assert f"r_b {s.design.cam.base_radius_mm:.4g}," in other
+    # the design read, not the options last offered, says what a field is (a review:
+    # a segment field left on a classic design had raised IndexError, or swept
+    # segment 7 of a 4-segment program)
+    e.x.value = "Segment 7 angle, fall [°]"
+    with s.lock:
+        kept, s.design = s.design, load_preset("paper_example")
+        e._suggest(e.x, e.x_range, "x")  # (no error)
+        assert e._job() is None and "Choose two different fields" in e.progress.content
+        s.design = kept
     s.load_preset("paper_example")  # a classic program: its own fields, no segments
     assert not any(o.startswith("Segment ") for o in e.x.options)
     assert (e.x.value, e.y.value) == ("Offset e (double) [mm]", "Base radius r_b [mm]")
     assert tuple(e.x_range.value) == (7.0, 13.0)  # around the paper's e = 10 mm
     e.apply_setup({"x": "Segment 1 angle, rise [°]", "x_range": [1, 2]})  # kept, now stale
     assert e.x.value == "Offset e (double) [mm]" and tuple(e.x_range.value) == (7.0, 13.0)
+    # a program without a dwell offers no segment's angle: nothing could take up the turn
+    data = s.design.model_dump(mode="json")
+    rise = {"kind": "rise", "angle_deg": 90, "lift_mm": 10}
+    twice = [rise, {**rise, "kind": "fall"}]
+    data["motion"] = {"segments": twice + twice}  # (not rise-dwell-fall-dwell)
+    s.set_design(Design.model_validate(data))
+    assert not any(o.startswith("Segment ") for o in e.x.options)
+    e.y.value = "Rise β_r [°]"  # (the classic field is refused, without a segment's)
+    assert "made of segments" in e.progress.content and "Segment N" not in e.progress.content
+    s.load_preset("double_index")  # a kept setup names a segment's field: restored
+    e.apply_setup({"x": "Segment 3 angle, fall [°]", "x_range": [50, 70]})
+    assert (e.x.value, tuple(e.x_range.value)) == ("Segment 3 angle, fall [°]", (50.0, 70.0))
 
 
 def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):

@@ -554,7 +554,11 @@ def test_an_edited_preset_says_so_wherever_its_files_name_it():
     assert any(note in e.dxf.text for e in dxf.modelspace().query("TEXT"))
     assert "(edited from preset paper_example: cam.base_radius_mm)" in toolpath.gcode(a)
     assert report_text(summary(a), edited).splitlines()[:2] == [paper.name, f"({note})"]
-    assert f"({note})" in document.html_report(a)
+    html = document.html_report(a)
+    assert f"<title>Cam design report: {paper.name.replace('&', '&amp;')} ({note})</title>" in html
+    assert f"({note})</p>" not in html and f"({note}) &nbsp;" in html  # beside the name
+    pdf = document.pdf_report(a)  # (its Info dictionary escapes parentheses)
+    assert rb"\(edited from preset paper_example: cam.base_radius_mm\))" in pdf
     assert "edited" not in report_text(summary(as_shipped), paper)
     # Table 1's comparison renames the follower in the name: the kind is then no edit
     roller = paper.with_kind("single_roller")

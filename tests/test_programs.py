@@ -297,6 +297,15 @@ def test_the_stations_say_each_faces_load_before_and_after_the_transition():
         b.local(np.mod(np.concatenate([b.stations - 1e-7, b.stations + 1e-7]), 2 * np.pi)),
     )
     assert single[2] == "F_N 137 N, σ_H 212 MPa"  # one face: no name, nothing shared
+    # past the jump speed the spring cannot hold the follower: F_N < 0 is said so (a
+    # review read "F_N -921 → 170 N" as a load), and 1133 N prints without an exponent
+    data = load_preset("classroom_harmonic").model_dump(mode="json")
+    data["cam"]["speed_rpm"] = 8000
+    c = analyze(Design.model_validate(data), verify=False)
+    at = np.mod(np.concatenate([c.stations - 1e-7, c.stations + 1e-7]), 2 * np.pi)
+    loads = document.station_loads(c, c.local(at))
+    assert loads[0] == "F_N 34.9 → 1130 N, σ_H 37.4 → 188 MPa"
+    assert loads[1].startswith("F_N -921 → 170 N (< 0: the follower leaves the cam), σ_H 0 →")
 
 
 def test_stations_figure_fills_the_faces_touching_at_each_station():
