@@ -2,7 +2,8 @@
 
 Every plot has the cam angle [deg] on x, units on every axis, a vertical marker
 at the current cam angle (two extra x samples at that angle carry the marker
-series) and, where a design limit is broken, red shading over those angles.
+series) and, where a design limit is broken, red shading over those angles; the
+force and stress plots shade in gold where both faces of a double follower touch.
 
 What each curve shows is a function of the analysis (``curve_specs``); the values are
 computed with the analysis, in the worker (``curve_data``, via app.analyst), so the
@@ -24,6 +25,8 @@ from camcore.units import to_mm, to_mpa, to_um_per_mcycle
 MAX_POINTS = 720
 X_AXIS = {"label": "cam angle θ [°]", "size": 36}
 RED_FILL = "rgba(220,20,30,0.18)"
+SHARED_FILL = "rgba(230,160,0,0.16)"  # gold, as the contact points: both faces touch
+SHARED_LABEL = "both faces touch"
 NONE = "rgba(0,0,0,0)"
 MARK = "rgba(0,0,0,0.55)"
 STATION_MARK = "rgba(90,90,90,0.45)"  # dashed: where the contacts change
@@ -63,11 +66,13 @@ class Curve:
         series: list[dict],
         height: int = 190,
         shading: bool = True,
+        shared: bool = False,
     ):
         """``shading``: a series that shades where a limit is broken (False: none,
-        ``show``'s shade is then ignored)."""
+        ``show``'s shade is then ignored); ``shared``: one that shades where both faces
+        of a double follower touch (the load shared, Eqs. 36-38)."""
         self.gui, self.title = gui, title
-        self.shading = shading
+        self.shading, self.shared_band = shading, shared
         ser: list[dict[str, Any]] = [{"label": "θ [°]"}]
         for s in series:
             cfg: dict[str, Any] = {
@@ -82,6 +87,17 @@ class Curve:
             ser.append(cfg)
         # shading and marker live on their own fixed [0, 1] scales (no axis): they never
         # disturb the auto-range of the curves
+        if shared:  # (a teacher's review: where the load is shared, at a glance)
+            ser.append(
+                {
+                    "label": SHARED_LABEL,
+                    "scale": "shade",
+                    "stroke": NONE,
+                    "fill": SHARED_FILL,
+                    "width": 0,
+                    "points": {"show": False},
+                }
+            )
         if shading:
             ser.append(
                 {
@@ -140,6 +156,7 @@ class Curve:
         self.x: np.ndarray | None = None
         self.ys: list[np.ndarray] = []
         self.shade = np.zeros(0)
+        self.shared = np.zeros(0)  # 1.0 where both faces touch (shared=True)
         self.stations = np.zeros(0)  # [deg]
         self._at = float("nan")  # the marker's cam angle [deg]
 
@@ -150,18 +167,22 @@ class Curve:
         shade: np.ndarray,
         at: float,
         stations: np.ndarray | None = None,
+        shared: np.ndarray | None = None,
     ):
-        """New curves (from curve_data) with the marker at cam angle ``at`` [deg] and
-        dashed lines at the ``stations`` [deg]. Curves that did not change (S after a
-        new speed, say) are not sent again: the data of all plots is most of what a
-        redraw sends."""
+        """New curves (from curve_data) with the marker at cam angle ``at`` [deg],
+        dashed lines at the ``stations`` [deg] and, for a plot made with ``shared``,
+        the angles where both faces touch shaded (``shared``, 1.0 there). Curves that
+        did not change (S after a new speed, say) are not sent again: the data of all
+        plots is most of what a redraw sends."""
         stations = np.zeros(0) if stations is None else stations
+        shared = np.zeros_like(x) if shared is None else shared
         same = (
             self.x is not None
             and self._at == at
             and np.array_equal(x, self.x)
             and np.array_equal(stations, self.stations)
             and np.array_equal(shade, self.shade)
+            and np.array_equal(shared, self.shared)
             and len(ys) == len(self.ys)
             and all(np.array_equal(u, v, equal_nan=True) for u, v in zip(ys, self.ys, strict=True))
         )
@@ -171,6 +192,7 @@ class Curve:
             numbers = station_axes(stations) if stations.size else ()
             self.handle.axes = (*self._axes, *numbers)
         self.x, self.ys, self.shade, self.stations = x, list(ys), shade, stations
+        self.shared = shared
         if self._aligned:
             self._align_zeros()
         self.marker(at)
@@ -205,7 +227,8 @@ class Curve:
         xi = np.repeat(at, 3)
         order = np.argsort(np.concatenate([x, xi]), kind="stable")  # a spike's 3 stay together
         out = [np.concatenate([x, xi])[order]]
-        columns = [*self.ys, self.shade] if self.shading else self.ys
+        columns = [*self.ys, *([self.shared] if self.shared_band else [])]
+        columns += [self.shade] if self.shading else []
         for y in columns:
             out.append(np.concatenate([y, np.interp(xi, x, y)])[order])
         for first, last in ((0, self.stations.size), (self.stations.size, at.size)):
@@ -293,6 +316,7 @@ class CurveData:
     ys: tuple[tuple[np.ndarray, ...], ...]  # per curve, per series: its values on x
     shades: tuple[np.ndarray, ...]  # per curve: 1.0 where one of its limits is broken
     stations: np.ndarray = field(default_factory=lambda: np.zeros(0))  # [deg]
+    shared: np.ndarray = field(default_factory=lambda: np.zeros(0))  # 1.0: both faces touch
 
 
 def curve_data(a) -> CurveData:
@@ -305,12 +329,15 @@ def curve_data(a) -> CurveData:
         tuple(tuple(np.asarray(s["fn"](a), float)[idx] for s in c["series"]) for c in specs),
         tuple(violation_mask(a.violations, x, c["codes"]).astype(float) for c in specs),
         np.degrees(a.stations),
+        (a.in_contact.sum(axis=0) >= 2)[idx].astype(float),
     )
 
 
 def build_curves(gui, a) -> list[Curve]:
     """The plots of the Curves tab (empty until the first Curve.show)."""
-    return [Curve(gui, c["title"], c["axes"], c["series"]) for c in curve_specs(a)]
+    return [
+        Curve(gui, c["title"], c["axes"], c["series"], shared=c["shared"]) for c in curve_specs(a)
+    ]
 
 
 def curve_specs(a) -> list[dict]:
@@ -448,6 +475,7 @@ def curve_specs(a) -> list[dict]:
                 {"label": "F2 [N]", "scale": "N", "stroke": COLORS[2], "fn": lambda a: a.guide.F2},
             ],
             codes={"jump", "guide_jam", "contact_lost"},
+            shared=True,
         ),
         _spec(
             "Contact (Hertz) stress σ_H",
@@ -470,6 +498,7 @@ def curve_specs(a) -> list[dict]:
                 },
             ],
             codes={"contact_stress", "jump"},
+            shared=True,
         ),
         _spec(
             "Spring force and the force that keeps contact (jump where it wins)",
@@ -548,8 +577,11 @@ def curve_specs(a) -> list[dict]:
     ]
 
 
-def _spec(title: str, axes: list, series: list[dict], codes: set[str] | None) -> dict:
-    return {"title": title, "axes": axes, "series": series, "codes": codes}
+def _spec(
+    title: str, axes: list, series: list[dict], codes: set[str] | None, shared: bool = False
+) -> dict:
+    """``shared``: the plot shades where both faces touch (Curve's)."""
+    return {"title": title, "axes": axes, "series": series, "codes": codes, "shared": shared}
 
 
 LIMIT_IN_VIEW = 0.5  # a limit line is drawn once the curve reaches this share of it
@@ -587,6 +619,19 @@ def _stress_limit_line(a) -> np.ndarray:
     return np.full(a.theta.size, contact_stress_limit_MPa(a.design))
 
 
+def _show_shared(curves: list[Curve], double: bool) -> None:
+    """The 'both faces touch' band in the legends of a double follower only (a single
+    one has no second face: an entry that never shades would puzzle)."""
+    for c in curves:
+        if not c.shared_band:
+            continue
+        ser = list(c.handle.series)
+        i = next(i for i, x in enumerate(ser) if x.get("label") == SHARED_LABEL)
+        if ser[i].get("show", True) != double:
+            ser[i] = {**ser[i], "show": double}
+            c.handle.series = tuple(ser)
+
+
 def relabel_limits(curves: list[Curve], a) -> None:
     """Legend labels that carry the current limit values."""
     lim = a.design.limits.max_pressure_angle_deg
@@ -596,6 +641,7 @@ def relabel_limits(curves: list[Curve], a) -> None:
         "Contact (Hertz) stress": (2, _stress_limit_label(a)),
     }
     shown = {"Contact (Hertz) stress": _stress_limit_shown(a)}  # (a far limit: hidden)
+    _show_shared(curves, len(a.geo.faces) == 2)
     for title, (si, text) in labels.items():
         h = next(c for c in curves if c.title.startswith(title)).handle
         ser = list(h.series)

@@ -534,7 +534,7 @@ class Session:
     def _show_curves(self, data: plots.CurveData, k: int) -> None:
         at = math.degrees(self.analysis.theta[k])
         for c, ys, shade in zip(self.ui.curves, data.ys, data.shades, strict=True):
-            c.show(data.x, ys, shade, at, data.stations)
+            c.show(data.x, ys, shade, at, data.stations, data.shared)
 
     def _enable_for_kind(self, design: Design) -> None:
         k, c = design.follower.kind, self.ui.controls

@@ -2400,15 +2400,15 @@ def test_a_kept_program_with_numbers_no_table_sends_is_ignored(app, monkeypatch,
 
 
 def test_every_plot_sends_its_curves_as_float32_and_its_flags_as_int8(tab):
-    """What a redraw sends: each plot's angle and curves float32, its shading (where it
-    has one) and its two vertical lines int8, in that order (app.plots.wire)."""
+    """What a redraw sends: each plot's angle and curves float32, its shadings (where it
+    has them) and its two vertical lines int8, in that order (app.plots.wire)."""
     s = tab
     plots = [*s.ui.curves, s.ui.compare_view.fn, s.ui.compare_view.stress]
     # (the Compare plots get their curves with the refinement, after s.verified is set)
     assert wait_for(lambda: all(len(c.handle.data[0]) > 2 for c in plots))
     for c in plots:
         kinds = [np.asarray(col).dtype for col in c.handle.data]
-        flags = 3 if c.shading else 2
+        flags = 2 + c.shading + c.shared_band  # the lines, limit and both-faces shading
         assert kinds == [np.float32] * (len(kinds) - flags) + [np.int8] * flags, c.title
         assert len(kinds) == c.nser
 
@@ -2878,3 +2878,30 @@ def test_the_3d_cam_marks_its_datum(tab):
     assert not np.array_equal(np.asarray(s.view.nodes["cam"].vertices), round_bore)
     (seg,) = np.asarray(s.view.nodes["datum"].points, float)
     assert seg[0, 1] == pytest.approx((15.0 + 3.3) * 1e-3)  # starts beyond the keyway
+
+
+def test_the_force_and_stress_plots_shade_where_both_faces_touch(tab):
+    """A teacher's wish: where the load is shared (Eqs. 36-38), at a glance. For the
+    paper's program both faces touch from station 2 to 3 (the high dwell less 2 psi_h
+    at each end) and from station 5 round to 0 (the low dwell): shaded in gold there
+    and nowhere else; a single follower has no such band, nor its legend entry."""
+    from app.plots import SHARED_LABEL
+
+    s = tab
+    st = np.degrees(s.analysis.stations)  # 0, 100, 107.4, 162.6, 170, 300
+    for title in ("Contact force", "Contact (Hertz) stress"):
+        c = next(c for c in s.ui.curves if c.title.startswith(title))
+        inside = ((c.x > st[2] + 0.5) & (c.x < st[3] - 0.5)) | (c.x > st[5] + 0.5)
+        outside = ((c.x > st[0] + 0.5) & (c.x < st[2] - 0.5)) | (
+            (c.x > st[3] + 0.5) & (c.x < st[5] - 0.5)
+        )
+        assert c.shared[inside].min() == 1.0 and c.shared[outside].max() == 0.0, title
+        (band,) = [x for x in c.handle.series if x["label"] == SHARED_LABEL]
+        assert band.get("show", True)
+    others = [c for c in s.ui.curves if not c.title.startswith(("Contact force", "Contact (H"))]
+    assert not any(c.shared_band for c in others)
+    s.set_design(s.design.with_kind("single_roller"))
+    c = next(c for c in s.ui.curves if c.title.startswith("Contact force"))
+    assert c.shared.max() == 0.0
+    (band,) = [x for x in c.handle.series if x["label"] == SHARED_LABEL]
+    assert band["show"] is False
