@@ -12,6 +12,7 @@ import ctypes.util
 import gc
 import os
 import signal
+import sys
 import threading
 import time
 import warnings
@@ -169,6 +170,36 @@ def _port_free(host: str, port: int) -> bool:
         return False
 
 
+NO_TCACHE = "glibc.malloc.tcache_count=0"  # a GLIBC_TUNABLES entry
+REEXECED = "CAMDESIGNER_NO_TCACHE"  # set across the restart: the tunable is ours
+
+
+def _reexec_without_tcache() -> None:
+    """Restart this command once (same process, os.execv) with glibc's per-thread
+    cache off: a tunable read only at process start. viser's 32 callback threads live
+    on after a class leaves, each caching freed chunks that pin heap pages malloc_trim
+    cannot return: ~13 MB of a 30-tab class (1.44x idle after it, 1.34x without;
+    per-edit CPU unchanged). The workers spawned later get the default back."""
+    if _MALLOC_TRIM is None or sys.platform != "linux":
+        return
+    tunables = [t for t in os.environ.get("GLIBC_TUNABLES", "").split(":") if t]
+    if NO_TCACHE in tunables:  # already off: ours (restarted) or the user's own
+        if os.environ.pop(REEXECED, None) == "set":  # ours: not for the workers
+            rest = [t for t in tunables if t != NO_TCACHE]
+            if rest:
+                os.environ["GLIBC_TUNABLES"] = ":".join(rest)
+            else:
+                del os.environ["GLIBC_TUNABLES"]
+        return
+    os.environ["GLIBC_TUNABLES"] = ":".join([*tunables, NO_TCACHE])
+    os.environ[REEXECED] = "set"
+    sys.stdout.flush()
+    try:
+        os.execv(sys.executable, sys.orig_argv)
+    except OSError:  # (no restart: the server runs as before, with the cache)
+        os.environ.pop(REEXECED)
+
+
 def _interrupt(signum, frame) -> None:
     raise KeyboardInterrupt
 
@@ -185,6 +216,8 @@ def main(argv: list[str] | None = None) -> None:
         "--port", type=int, default=8080, help="port (default 8080); a busy port is an error"
     )
     args = p.parse_args(argv)
+    if argv is None:  # (the command line's server, not a test's call)
+        _reexec_without_tcache()
     if not _port_free(args.host, args.port):
         p.exit(
             2,

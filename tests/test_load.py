@@ -16,6 +16,7 @@ import asyncio
 import json
 import math
 import time
+from pathlib import Path
 
 import msgspec.msgpack
 import pytest
@@ -295,3 +296,21 @@ def test_slow_class_of_thirty_tabs(server):
         ),
     )
     assert max(result.probe_s) < 30.0, result.probe_s
+
+
+def test_the_server_runs_without_glibcs_thread_cache_and_its_workers_with_it(server):
+    """app.main restarts itself once with GLIBC_TUNABLES' tcache off (viser's idle
+    callback threads had pinned ~13 MB after a class left); the analysis workers it
+    spawns keep glibc's default."""
+    from app.main import NO_TCACHE
+
+    def environ(pid: int) -> list[str]:
+        return Path(f"/proc/{pid}/environ").read_bytes().decode().split("\0")
+
+    tunables = [e for e in environ(server.pid) if e.startswith("GLIBC_TUNABLES=")]
+    assert tunables and NO_TCACHE in tunables[0].split("=", 1)[1].split(":")
+    run(connect_disconnect(server.url, 1), 60)  # (a tab: the workers have analysed)
+    children = Path(f"/proc/{server.pid}/task/{server.pid}/children").read_text().split()
+    assert children
+    for pid in map(int, children):
+        assert not any(NO_TCACHE in e for e in environ(pid)), pid
