@@ -92,8 +92,13 @@ def segment_parameters(design: Design) -> dict[str, str]:
 
 
 def fields_of(design: Design) -> dict[str, str]:
-    """label -> path of every field a sweep around ``design`` may vary."""
-    return {**PARAMETERS, **segment_parameters(design)}
+    """label -> path of every field a sweep around ``design`` may vary: PARAMETERS
+    (their lift, rise and fall only for a classic program: a user's review was
+    offered them for an indexer's, each refused when chosen) and its segments'
+    angles (segment_parameters)."""
+    classic = design.motion.classic is not None
+    own = {k: p for k, p in PARAMETERS.items() if classic or not p.startswith("motion.")}
+    return {**own, **segment_parameters(design)}
 
 
 def symbol(path: str) -> str:
@@ -267,14 +272,18 @@ class ExplorePanel:
             self._write(self.setup())
 
     def offer_fields(self, design: Design) -> None:
-        """The fields x and y offer for ``design``: PARAMETERS, and for a program made
-        of segments each rise's and fall's angle (segment_parameters). A field no
-        longer offered gives way to the first one the other axis has not (its range
-        proposed anew)."""
+        """The fields x and y offer for ``design`` (fields_of). When they change (another
+        kind of program), a finished sweep's results go, and a field no longer offered
+        gives way to the first one the other axis has not (its range proposed anew)."""
         fields = fields_of(design)
         if fields == self._fields:
             return
         self._fields = fields
+        with self._lock:
+            running = self._thread is not None and self._thread.is_alive()
+        if not running:  # a sweep of another program's fields: gone (a user's review
+            self._clear()  # loaded another preset and still had its map, loadable)
+            self.progress.content = ""
         labels = tuple(fields)
         for dd, other in ((self.x, self.y), (self.y, self.x)):
             keep = dd.value in fields
@@ -290,10 +299,6 @@ class ExplorePanel:
         design = self._design()
         path = fields_of(design).get(dd.value)  # (the design's own: offer_fields may
         if path is None:  # not have run for it yet)
-            return
-        refused = _refused_field(design, dd.value, path)
-        if refused is not None:  # (a review: the last field's range stood, relabelled)
-            self.progress.content = refused
             return
         rng.label = _range_label(axis, dd.value)
         v = get_path(design, path)
@@ -349,11 +354,6 @@ class ExplorePanel:
                 "around the design you see."
             )
             return None
-        for label, path in ((self.x.value, px), (self.y.value, py)):
-            refused = _refused_field(design, label, path)
-            if refused is not None:
-                self.progress.content = refused
-                return None
         kinds = (
             [k.value for k in PAPER_FOLLOWERS]
             if self.all_kinds.value
@@ -459,7 +459,9 @@ class ExplorePanel:
                 self.front_dd.value = self.front_dd.options[0]
                 self.load_btn.disabled = not offers
                 self._put_image(png)
-                self.progress.content = _summary(rows, total, front, names, limits, len(offers))
+                self.progress.content = _summary(
+                    rows, total, front, names, limits, len(offers)
+                ) + _balanced_text(ran)
         finally:
             self._redraw()  # for a width the panel took meanwhile; frees the map
 
@@ -654,25 +656,6 @@ def _offer(row: dict) -> tuple[dict, str]:
     return point, ", ".join(shown)
 
 
-def _refused_field(design: Design, label: str, path: str) -> str | None:
-    """Why ``design`` cannot be swept over the field ``path`` (``label`` as chosen), or
-    None: a motion field of a program made of segments is no field of it."""
-    if path.startswith("motion.") and not path.startswith("motion.segments."):
-        if design.motion.classic is not None:
-            return None
-        angles = (
-            "a segment's angle (*Segment N angle*, a dwell takes up the turn), "
-            if segment_angle_paths(design)
-            else ""
-        )
-        return (  # (a review: every point was "not a design")
-            f"✖ {esc(label)}: this design's motion program is made of segments "
-            "(the Motion table), which that field does not describe: sweep "
-            f"{angles}a cam or follower field, or load a rise-dwell-fall design."
-        )
-    return None
-
-
 def _balance_note(design: Design, balance: str) -> str:
     """Which dwell takes up the turn in a sweep of segment angles (the tab says it
     when such a field is chosen: its points change that dwell too)."""
@@ -682,6 +665,15 @@ def _balance_note(design: Design, balance: str) -> str:
         f"Segment {i + 1} (a dwell of {angle:g}°) takes up the turn: each point sets it "
         "to 360° less the other segments (a point that leaves it no angle is no design)."
     )
+
+
+def _balanced_text(ran: Ran) -> str:
+    """Under a finished sweep of segment angles: which dwell took up the turn (its
+    angle is the list's last β; a user's review found it said only before the run)."""
+    if ran.balance is None:
+        return ""
+    i = int(ran.balance.split(".")[2])
+    return f"<br>Segment {i + 1}, a dwell, took up the turn (β{i + 1} in the list)."
 
 
 def _summary(rows: list[dict], total: int, front, names: list[str], limits, listed: int) -> str:
@@ -694,7 +686,9 @@ def _summary(rows: list[dict], total: int, front, names: list[str], limits, list
     some = (
         f" ({listed} of them numbered and listed, spread along it)" if len(front) > listed else ""
     )
-    out = f"{designs}: {ok} valid, {len(front)} on the Pareto front{some}."
+    points = sum(bool(r.get("valid")) for r in rows)
+    valid = f"{ok} valid" + (f" ({points} of the points)" if points != ok else "")
+    out = f"{designs}: {valid}, {len(front)} on the Pareto front{some}."
     errors = [str(r["error"]) for r, f in zip(rows, first, strict=True) if f and r.get("error")]
     if errors:  # one reason is one message but for the numbers in it (each point's own)
         reasons = [re.sub(r"-?[0-9][0-9.e+-]*", "#", e) for e in errors]

@@ -25,7 +25,7 @@ from camcore.units import to_mm, to_mpa, to_um_per_mcycle
 MAX_POINTS = 720
 X_AXIS = {"label": "cam angle θ [°]", "size": 36}
 RED_FILL = "rgba(220,20,30,0.18)"
-SHARED_FILL = "rgba(230,160,0,0.16)"  # gold, as the contact points: both faces touch
+SHARED_FILL = "rgba(230,160,0,0.3)"  # gold, as the contact points (0.16 was faint projected)
 SHARED_LABEL = "both faces touch"
 NONE = "rgba(0,0,0,0)"
 MARK = "rgba(0,0,0,0.55)"

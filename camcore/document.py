@@ -234,15 +234,10 @@ def station_loads(a: Analysis, near) -> list[str]:
 
 
 def _before_after(before: float, after: float, scale: float, unit: str) -> str:
-    """One value with its unit ('98 N'), or two ('196 → 98 N') where they print apart."""
-    b, a = _three_digits(before * scale), _three_digits(after * scale)
+    """One value with its unit ('98.0 N'), or two ('196.0 → 98.0 N') where they print
+    apart; to 0.1, as the app's status line prints F_N (a review compared them)."""
+    b, a = f"{before * scale:.1f}", f"{after * scale:.1f}"  # (as the app's status line)
     return f"{a} {unit}" if a == b else f"{b} → {a} {unit}"
-
-
-def _three_digits(x: float) -> str:
-    """x to 3 significant digits, without an exponent below 10^6 ("1130", not "1.13e+03")."""
-    r = float(f"{x:.3g}")
-    return f"{r:.0f}" if 1000 <= abs(r) < 1e6 else f"{x:.3g}"
 
 
 def _whole_cam_inset(ax, a: Analysis, th: float, frame: tuple[float, float], left: bool) -> None:

@@ -108,19 +108,24 @@ def segment_angle_paths(design: Design) -> dict[str, tuple[int, SegmentKind]]:
 
 def balance_for(design: Design, paths: list[str]) -> str | None:
     """The segment angle that takes up the turn when ``paths`` sweep segment angles of
-    ``design`` (segment_angle_paths): the longest dwell's, the first of equals after
-    the first swept segment (an indexer's rise against the dwell that follows it).
-    None if no path is a segment angle (segment_angle_paths: then there is a dwell)."""
+    ``design`` (segment_angle_paths): the longest dwell's, the nearest of equals to
+    the first swept segment, the one after it before the one before (an indexer's
+    rise against the dwell that follows it, a fall against its own cycle's dwell: a
+    review's fall had moved a dwell of the second cycle). None if no path is a
+    segment angle (segment_angle_paths: then there is a dwell)."""
     angles = segment_angle_paths(design)
     swept = [angles[p][0] for p in paths if p in angles]
     if not swept:
         return None
-    segs = design.motion.segments
+    segs, s = design.motion.segments, swept[0]
     n = len(segs)
-    after = [(swept[0] + 1 + k) % n for k in range(n)]  # from the one after, around
-    dwells = [i for i in after if segs[i].kind is SegmentKind.dwell]
-    longest = max(dwells, key=lambda i: (segs[i].angle_deg, -after.index(i)))
-    return f"motion.segments.{longest}.angle_deg"
+
+    def rank(i: int) -> tuple[float, int, bool]:
+        after, before = (i - s) % n, (s - i) % n
+        return (segs[i].angle_deg, -min(after, before), after <= before)
+
+    dwells = [i for i in range(n) if segs[i].kind is SegmentKind.dwell]
+    return f"motion.segments.{max(dwells, key=rank)}.angle_deg"
 
 
 def figure_values(rows: list[dict], names: list[str]) -> np.ndarray:
@@ -556,7 +561,7 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
             ax.scatter(v[front, 0], v[front, 1], s=70, facecolors="none", edgecolors="k", lw=0.9)
         else:
             ax.plot(v[front, 0], v[front, 1], "k-", lw=0.8, alpha=0.6)
-        _number_front(ax, v, front, gap=2.5 * SMALL / (72 * width))
+        _number_front(ax, v, front)
     ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=FONT)
     ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=FONT)
     if third:
@@ -600,34 +605,56 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
         )
 
 
-def _number_front(ax, v: np.ndarray, front: np.ndarray, gap: float) -> None:
-    """The front's numbers (the app's list): a number closer than ``gap`` (a fraction
-    of the front's extent: about two lines of text) to one already placed joins its
-    label ("3,4", "16-18") instead of printing over it (a review could not find 17)."""
-    span = np.nanmax(v[front, :2], axis=0) - np.nanmin(v[front, :2], axis=0)
-    span = np.where(span > 0, span, 1.0)
-    char = 0.24 * gap  # a character's width (gap: two and a half lines' height)
+def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
+    """The front's numbers (the app's list). Designs at (nearly) one spot, within a
+    line of text, share a label ("3,4", "16-18"); any other gets its own, put above or
+    below, right or left of its design, where it overprints no label placed before it
+    (a review could not find 17 under another label; a later one found designs 13-14
+    unnumbered, their numbers joined to a label 7 mm of R away). Measured in the
+    axes' own fraction, from their size on the figure (the layout moves them little)."""
+    ax.autoscale_view()
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    box = ax.get_position()
+    w_in, h_in = box.width * ax.figure.get_figwidth(), box.height * ax.figure.get_figheight()
+    line = 1.25 * SMALL / 72 / h_in  # a line of text's height, in the axes' fraction
+    char = 0.62 * SMALL / 72 / w_in  # a character's width (digits, commas)
+    pad = (3 / 72 / w_in, 3 / 72 / h_in)  # the label's offset from its design
     groups: list[tuple[np.ndarray, int, list[int]]] = []  # (where, design, its numbers)
     for n, i in enumerate(offered(front, v), start=1):
-        at = v[i, :2] / span
-        near = [  # within two lines above or below, and left of the label's end
-            g
-            for g in groups
-            if abs(at[1] - g[0][1]) < gap
-            and -gap < at[0] - g[0][0] < gap + char * len(numbers_text(g[2]))
-        ]
-        if near:
-            near[0][2].append(n)
+        at = np.array([(v[i, 0] - x0) / (x1 - x0), (v[i, 1] - y0) / (y1 - y0)])
+        same = [g for g in groups if abs(at[0] - g[0][0]) < char and abs(at[1] - g[0][1]) < line]
+        if same:
+            same[0][2].append(n)
         else:
             groups.append((at, i, [n]))
-    for _, i, numbers in groups:
+    placed: list[tuple[float, float, float, float]] = []  # label boxes (x0, x1, y0, y1)
+    sides = [(right, up) for up in (True, False) for right in (True, False)]
+    for at, i, numbers in groups:
+        text = numbers_text(numbers)
+        w, h = char * len(text) + pad[0], line + pad[1]
+        boxes = [
+            (at[0] if right else at[0] - w, at[0] + w if right else at[0],
+             at[1] if up else at[1] - h, at[1] + h if up else at[1])
+            for right, up in sides
+        ]  # fmt: skip
+        free = [k for k, b in enumerate(boxes) if not any(_overlap(b, p) for p in placed)]
+        k = free[0] if free else 0
+        placed.append(boxes[k])
+        right, up = sides[k]
         ax.annotate(
-            numbers_text(numbers),
+            text,
             (v[i, 0], v[i, 1]),
             fontsize=SMALL,
-            xytext=(3, 3),
+            xytext=(3 if right else -3, 3 if up else -3),
             textcoords="offset points",
+            ha="left" if right else "right",
+            va="bottom" if up else "top",
         )
+
+
+def _overlap(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    """Whether boxes (x0, x1, y0, y1) overlap."""
+    return a[0] < b[1] and b[0] < a[1] and a[2] < b[3] and b[2] < a[3]
 
 
 def numbers_text(numbers: list[int]) -> str:

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .checks import CUSPED
-from .model import NAME_MAX, Design, design_to_json, edited_note, omega_rad_s
+from .model import NAME_MAX, Design, design_to_json, edited_note, omega_rad_s, preset_edits
 from .motion import RISE, SEGMENT_NAMES, per_second
 from .train import on_grid
 from .units import to_deg, to_mm, to_mpa, to_um_per_mcycle
@@ -258,18 +258,33 @@ def file_label(a, edited: bool = True) -> str:
     note = edited_note(a.design) if edited else None
     return (
         f"camdesigner {package_version()}, mm, profile within {tol:g} mm: cam "
-        + (f"{note}; " if note else "")  # before the name, to stay in the STL's 80 bytes
+        + (f"{note}; " if note else "")  # before the name (a reader may cut it short)
+        + plain(a.design.name, NAME_MAX)
+    )
+
+
+def stl_label(a) -> str:
+    """file_label in the STL header's 80 bytes: "within", and an edited preset as
+    "edited KEY" (its fields are in the other files: a user's review found the
+    key cut to "paper_exa" and the name gone)."""
+    from . import package_version
+
+    edits = preset_edits(a.design)
+    return (
+        f"camdesigner {package_version()}, mm, within "
+        f"{a.design.limits.export_tolerance_mm:g} mm: "
+        + (f"edited {edits[0]}: " if edits else "cam ")
         + plain(a.design.name, NAME_MAX)
     )
 
 
 def stl_bytes(a) -> bytes:
     """Binary STL of the cam solid [mm], built from the float32-welded profile; its
-    80-byte header says what it is (file_label; never "solid...", which some readers
+    80-byte header says what it is (stl_label; never "solid...", which some readers
     take for an ASCII STL)."""
     p = weld_float32(_profile_mm(a))
     blob = extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
-    header = file_label(a).encode("ascii")[:80].ljust(80, b" ")
+    header = stl_label(a).encode("ascii")[:80].ljust(80, b" ")
     return header + blob[80:]
 
 

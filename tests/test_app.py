@@ -1160,6 +1160,20 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     # single followers ignore the offset e: 16 points make 12 designs
     assert "**16 points**, 12 distinct designs" in e.progress.content
     assert len(sent) == 12  # ... so each of them is analysed once
+    # the valid ones counted both ways (a review compared the app's distinct designs
+    # with camcore sweep's rows, and found them apart)
+    rows, seen, distinct_ok = e._ran.rows, set(), 0
+    for r in rows:  # a design once: its kind and, for a double follower, its offset
+        key = (
+            r["grid.follower.kind"],
+            r["grid.follower.offset_mm"] if "double" in r["grid.follower.kind"] else None,
+            r["grid.cam.base_radius_mm"],
+        )
+        distinct_ok += r["valid"] and key not in seen
+        seen.add(key)
+    points_ok = sum(r["valid"] for r in rows)
+    assert points_ok > distinct_ok
+    assert f": {distinct_ok} valid ({points_ok} of the points), " in e.progress.content
     assert e.image is not None and e.image.image.shape[2] == 3
     # the map is drawn for the panel (twice its pixels): again when the panel widens
     assert e.image.image.shape[1] == 2 * NARROW_PANEL_PX
@@ -1256,11 +1270,13 @@ def test_explore_says_what_it_runs_and_why_points_are_no_designs(tab, monkeypatc
     e.run_btn.value = True
     assert wait_for(lambda: "Cancelled before" in e.progress.content, 10.0)
     assert e.image is None and e.load_btn.disabled and e.front_dd.options == ("–",)
-    # a program of segments: its classic fields are no field of it
+    # a program of segments: its classic fields are no field of it, not offered, and
+    # a client that sends one anyway is refused
     s.load_preset("double_index")
+    assert "Lift h [mm]" not in e.x.options
     e.x.value = "Lift h [mm]"
     e.run_btn.value = True
-    assert "made of segments" in e.progress.content
+    assert "Choose two different fields" in e.progress.content
 
 
 def test_explore_hands_its_sweep_over_as_csv_and_as_a_spec(tab, downloads, monkeypatch):
@@ -1354,10 +1370,10 @@ def test_explore_review_names_fields_and_refuses_early(tab):
     s.ui.controls["cam.base_radius_mm"].value = -5.0  # invalid input
     e.run_btn.value = True
     assert "input is invalid" in e.progress.content and not e._thread.is_alive()
-    s.load_preset("double_index")  # a program of segments
+    s.load_preset("double_index")  # a program of segments: no classic fields offered
+    assert not {"Lift h [mm]", "Rise β_r [°]", "Fall β_f [°]"} & set(e.y.options)
     before = (e.y_range.label, tuple(e.y_range.value))
-    e.y.value = "Rise β_r [°]"
-    assert "made of segments" in e.progress.content
+    e.y.value = "Rise β_r [°]"  # (a forged value: the range box is left alone)
     assert (e.y_range.label, tuple(e.y_range.value)) == before  # (not relabelled in °)
 
 
@@ -1386,6 +1402,8 @@ def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn
         (80.0, 30.0),
         (120.0, -10.0),
     ]
+    said = "Segment 2, a dwell, took up the turn (β2 in the list)"
+    assert wait_for(lambda: said in e.progress.content, 30.0), e.progress.content
     assert all(r["error"] for r in rows if r[rise] == 120.0)  # no angle left: no design
     assert not any(r["error"] for r in rows if r[rise] < 120.0)
     e.spec_btn.value = True
@@ -1415,6 +1433,9 @@ def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn
         s.design = kept
     s.load_preset("paper_example")  # a classic program: its own fields, no segments
     assert not any(o.startswith("Segment ") for o in e.x.options)
+    # ... and the sweep of the indexer's fields is gone, map, list and line
+    assert e.image is None and e.load_btn.disabled and e.front_dd.options == ("–",)
+    assert e.progress.content == "" and e._ran is None
     assert (e.x.value, e.y.value) == ("Offset e (double) [mm]", "Base radius r_b [mm]")
     assert tuple(e.x_range.value) == (7.0, 13.0)  # around the paper's e = 10 mm
     e.apply_setup({"x": "Segment 1 angle, rise [°]", "x_range": [1, 2]})  # kept, now stale
@@ -1425,9 +1446,7 @@ def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn
     twice = [rise, {**rise, "kind": "fall"}]
     data["motion"] = {"segments": twice + twice}  # (not rise-dwell-fall-dwell)
     s.set_design(Design.model_validate(data))
-    assert not any(o.startswith("Segment ") for o in e.x.options)
-    e.y.value = "Rise β_r [°]"  # (the classic field is refused, without a segment's)
-    assert "made of segments" in e.progress.content and "Segment N" not in e.progress.content
+    assert not any(o.startswith(("Segment ", "Lift h", "Rise β_r")) for o in e.x.options)
     s.load_preset("double_index")  # a kept setup names a segment's field: restored
     e.apply_setup({"x": "Segment 3 angle, fall [°]", "x_range": [50, 70]})
     assert (e.x.value, tuple(e.x_range.value)) == ("Segment 3 angle, fall [°]", (50.0, 70.0))

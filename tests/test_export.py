@@ -73,7 +73,7 @@ def test_cut_only_dxf_and_what_the_files_say_they_are():
     # the tolerance and unit come first: a long name is what the 80 bytes cut
     long = analyze(with_bore(0.0).model_copy(update={"name": "n" * 200}), verify=False)
     head = export.stl_bytes(long)[:80]
-    assert b", mm, profile within 0.001 mm: cam nnn" in head and head.endswith(b"n")
+    assert b", mm, within 0.001 mm: cam nnn" in head and head.endswith(b"n")
     mesh = trimesh.load(io.BytesIO(stl), file_type="stl")
     assert mesh.is_watertight
 
@@ -549,7 +549,8 @@ def test_an_edited_preset_says_so_wherever_its_files_name_it():
     note = "edited from preset paper_example: cam.base_radius_mm"
     assert edited_note(paper) is None and note not in export.file_label(as_shipped)
     assert export.file_label(a).endswith(f"cam {note}; {paper.name}")
-    assert export.stl_bytes(a)[:80].endswith(b"cam edited from preset paper_exa")  # (80 bytes)
+    stl = export.stl_bytes(a)[:80]  # (80 bytes: the key, not the fields)
+    assert stl.startswith(b"camdesigner ") and b"mm: edited paper_example: Chuang, Hsu" in stl
     dxf = ezdxf.read(io.StringIO(export.dxf_bytes(a).decode()))
     assert any(note in e.dxf.text for e in dxf.modelspace().query("TEXT"))
     assert "(edited from preset paper_example: cam.base_radius_mm)" in toolpath.gcode(a)

@@ -281,10 +281,10 @@ def test_the_stations_say_each_faces_load_before_and_after_the_transition():
     a = analyze(PAPER, verify=False)
     fig = document.stations_figure(a)
     captions = [ax.get_xlabel().split("\n")[1:] for ax in fig.axes if ax.axison]
-    assert captions[1] == ["S1: F_N 137 N, σ_H 46.6 MPa"]  # the high dwell, one face
+    assert captions[1] == ["S1: F_N 136.8 N, σ_H 46.6 MPa"]  # the high dwell, one face
     assert captions[2] == [
-        "S1: F_N 137 → 68.4 N, σ_H 46.6 → 33 MPa",
-        "S2: F_N 0 → 68.4 N, σ_H 0 → 33 MPa",
+        "S1: F_N 136.8 → 68.4 N, σ_H 46.6 → 33.0 MPa",
+        "S2: F_N 0.0 → 68.4 N, σ_H 0.0 → 33.0 MPa",
     ]
     st = a.stations[2]
     near = a.local(np.array([st - 1e-7, st + 1e-7]))
@@ -296,16 +296,16 @@ def test_the_stations_say_each_faces_load_before_and_after_the_transition():
         b := analyze(PAPER.with_kind("single_roller"), verify=False),
         b.local(np.mod(np.concatenate([b.stations - 1e-7, b.stations + 1e-7]), 2 * np.pi)),
     )
-    assert single[2] == "F_N 137 N, σ_H 212 MPa"  # one face: no name, nothing shared
+    assert single[2] == "F_N 136.5 N, σ_H 212.2 MPa"  # one face: no name, nothing shared
     # past the jump speed the spring cannot hold the follower: F_N < 0 is said so (a
-    # review read "F_N -921 → 170 N" as a load), and 1133 N prints without an exponent
+    # review read "F_N -921 → 170 N" as a load)
     data = load_preset("classroom_harmonic").model_dump(mode="json")
     data["cam"]["speed_rpm"] = 8000
     c = analyze(Design.model_validate(data), verify=False)
     at = np.mod(np.concatenate([c.stations - 1e-7, c.stations + 1e-7]), 2 * np.pi)
     loads = document.station_loads(c, c.local(at))
-    assert loads[0] == "F_N 34.9 → 1130 N, σ_H 37.4 → 188 MPa"
-    assert loads[1].startswith("F_N -921 → 170 N (< 0: the follower leaves the cam), σ_H 0 →")
+    assert loads[0] == "F_N 34.9 → 1126.4 N, σ_H 37.4 → 188.4 MPa"
+    assert loads[1].startswith("F_N -921.1 → 170.4 N (< 0: the follower leaves the cam), σ_H 0.0")
 
 
 def test_stations_figure_fills_the_faces_touching_at_each_station():

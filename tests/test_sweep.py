@@ -1289,6 +1289,43 @@ def test_the_map_finds_every_front_number_and_keeps_its_labels_apart():
     assert legend.y1 < pareto_ax.get_window_extent(r).y0  # below the designs
 
 
+def test_each_front_number_stands_at_its_own_design():
+    """A user's review of an indexer's sweep: the map's "11-14" stood on designs 11-12,
+    and 13-14, 7 mm of R away, had no number. A label holds only designs at one spot
+    (within a line of text), stands by them, and overprints no other label."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from camcore.explore import PANEL_PX, explore_figure, figure_values, offered, pareto
+    from camcore.explore import grid_points as points_of
+    from camcore.explore import sweep_grid as grid_of
+    from camcore.model import load_preset
+
+    base = json.loads(load_preset("double_index").model_dump_json())
+    kinds = ["single_roller", "double_roller", "single_concave", "double_concave"]
+    x, y = ("motion.segments.4.angle_deg", 42.0, 78.0), ("cam.base_radius_mm", 56.0, 104.0)
+    points = points_of(grid_of(x, y, 8, kinds), base, "motion.segments.5.angle_deg")
+    rows = sweep.fast_rows(base, points)
+    names = ["cam_size", "stress"]
+    front = pareto(rows, names)
+    v = figure_values(rows, names)
+    listed = offered(front, v)
+    fig = explore_figure(rows, (x[0], "Segment 5"), (y[0], "r_b"), names, front, PANEL_PX)
+    ax = fig.axes[len(kinds)]
+    span = np.ptp(v[front], axis=0)
+    seen = []
+    for t in ax.texts:
+        for part in t.get_text().split(","):
+            lo, _, hi = part.partition("-")
+            for n in range(int(lo), int(hi or lo) + 1):
+                seen.append(n)
+                assert np.abs((v[listed[n - 1]] - t.xy) / span).max() < 0.05, (t.get_text(), n)
+    assert sorted(seen) == list(range(1, len(listed) + 1))
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    boxes = [t.get_window_extent(canvas.get_renderer()) for t in ax.texts]
+    assert not any(a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1 :])
+
+
 def test_the_smallest_cam_each_follower_allows():
     """A designer's review sized a 20 mm / 120 deg packaging cam at 300 rpm on a 1 mm
     grid of r_b: the smallest valid base radius is 17 mm for the single roller (tan phi
