@@ -334,7 +334,8 @@ class ExplorePanel:
             self._thread.start()
 
     def _job(self):
-        """(base, points, grid, x, y, figures) from the widgets, or None (said why)."""
+        """(base, points, grid, x, y, figures, balance) from the widgets, or None (said
+        why); balance: the segment angle that takes up the turn (balance_for), or None."""
         assert self._design is not None  # bound before any click
         design = self._design()
         fields = fields_of(design)  # (of the design read: offer_fields may lag it)
@@ -389,7 +390,7 @@ class ExplorePanel:
         paths = [fields.get(dd.value) for dd in (self.x, self.y)]
         return balance_for(design, [p for p in paths if p is not None])
 
-    def _sweep(self, base, points, grid, x, y, names, balance=None) -> None:
+    def _sweep(self, base, points, grid, x, y, names, balance) -> None:
         """Analyse each distinct design once (points that differ only in a field their
         follower ignores make one design: camcore.sweep.same_designs), in chunks."""
         done: dict[int, dict] = {}  # point index -> its row, for the points analysed
