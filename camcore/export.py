@@ -254,11 +254,11 @@ def file_label(a, edited: bool = True) -> str:
     from . import package_version
 
     tol = a.design.limits.export_tolerance_mm
-    # the fixed part first: a reader that cuts it short (the STL's 80 bytes) cuts the name
+    # the fixed part first, then the note: a reader that cuts it short cuts the name
     note = edited_note(a.design) if edited else None
     return (
         f"camdesigner {package_version()}, mm, profile within {tol:g} mm: cam "
-        + (f"{note}; " if note else "")  # before the name (a reader may cut it short)
+        + (f"{note}; " if note else "")
         + plain(a.design.name, NAME_MAX)
     )
 
