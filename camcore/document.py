@@ -201,9 +201,9 @@ def stations_figure(a: Analysis, width_in: float = 11.0, cols: int = 3):
         ax.set_xticks([])
         ax.set_yticks([])
         # the lift too: the crops follow the contacts, so S = 0 and S = h look alike
-        ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°, S = {to_mm(S):.2f} mm", fontsize=10)
+        ax.set_title(f"station {k}: θ = {to_deg(th):.1f}°, S = {to_mm(S):.2f} mm", fontsize=11)
         text = events[k].split(": ", 1)[-1]
-        ax.set_xlabel(f"{text}\n{loads[k]}", fontsize=8.5, wrap=True)
+        ax.set_xlabel(f"{text}\n{loads[k]}", fontsize=9.5, wrap=True)
         _whole_cam_inset(ax, a, float(th), frame, left=left)
     return fig
 
