@@ -451,6 +451,13 @@ class ExplorePanel:
                     for m, v in zip(names, values[i], strict=True)
                 )
                 offers[f"{n}. {shown} → {figs}"] = point
+            if fields_of(Design.model_validate(base)) != self._fields:  # (a review: they
+                self._clear()  # came back, loadable, after another program's load)
+                self.progress.content = (
+                    "The design on screen is another kind of program now: the sweep of "
+                    "the earlier one is dropped. Run it again for this one."
+                )
+                return
             with self._lock:
                 self._base, self._offers, self._armed = base, offers, None
                 self._ran, self.files_md.content = ran, ""

@@ -179,18 +179,22 @@ def _reexec_without_tcache() -> None:
     cache off: a tunable read only at process start. viser's 32 callback threads live
     on after a class leaves, each caching freed chunks that pin heap pages malloc_trim
     cannot return: ~13 MB of a 30-tab class (1.44x idle after it, 1.34x without;
-    per-edit CPU unchanged). The workers spawned later get the default back."""
+    per-edit CPU unchanged). The workers spawned later get the default back. A user's
+    own tcache setting is kept; and the restarted process never restarts again (glibc
+    drops tunables for a privileged binary: a review's loop)."""
     if _MALLOC_TRIM is None or sys.platform != "linux":
         return
-    tunables = [t for t in os.environ.get("GLIBC_TUNABLES", "").split(":") if t]
-    if NO_TCACHE in tunables:  # already off: ours (restarted) or the user's own
-        if os.environ.pop(REEXECED, None) == "set":  # ours: not for the workers
-            rest = [t for t in tunables if t != NO_TCACHE]
-            if rest:
-                os.environ["GLIBC_TUNABLES"] = ":".join(rest)
-            else:
-                del os.environ["GLIBC_TUNABLES"]
+    given = os.environ.get("GLIBC_TUNABLES", "")
+    tunables = [t for t in given.split(":") if t]
+    if os.environ.pop(REEXECED, None) == "set":  # restarted: the tunable is not the workers'
+        rest = [t for t in tunables if t != NO_TCACHE]
+        if rest:
+            os.environ["GLIBC_TUNABLES"] = ":".join(rest)
+        else:
+            os.environ.pop("GLIBC_TUNABLES", None)
         return
+    if any(t.startswith("glibc.malloc.tcache_count=") for t in tunables):
+        return  # (the user's own)
     os.environ["GLIBC_TUNABLES"] = ":".join([*tunables, NO_TCACHE])
     os.environ[REEXECED] = "set"
     sys.stdout.flush()
@@ -198,6 +202,10 @@ def _reexec_without_tcache() -> None:
         os.execv(sys.executable, sys.orig_argv)
     except OSError:  # (no restart: the server runs as before, with the cache)
         os.environ.pop(REEXECED)
+        if given:
+            os.environ["GLIBC_TUNABLES"] = given
+        else:
+            os.environ.pop("GLIBC_TUNABLES")
 
 
 def _interrupt(signum, frame) -> None:

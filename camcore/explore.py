@@ -561,7 +561,6 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
             ax.scatter(v[front, 0], v[front, 1], s=70, facecolors="none", edgecolors="k", lw=0.9)
         else:
             ax.plot(v[front, 0], v[front, 1], "k-", lw=0.8, alpha=0.6)
-        _number_front(ax, v, front)
     ax.set_xlabel(f"{fa.label} [{fa.unit}]", fontsize=FONT)
     ax.set_ylabel(f"{fb.label} [{fb.unit}]", fontsize=FONT)
     if third:
@@ -603,6 +602,8 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
             ncols=2 if width < 6 else 4,
             frameon=False,
         )
+    if front.size:  # last: the numbers are placed on the axes as laid out
+        _number_front(ax, v, front)
 
 
 def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
@@ -611,8 +612,9 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
     below, right or left of its design, where it overprints no label placed before it
     (a review could not find 17 under another label; a later one found designs 13-14
     unnumbered, their numbers joined to a label 7 mm of R away). Measured in the
-    axes' own fraction, from their size on the figure (the layout moves them little)."""
-    ax.autoscale_view()
+    axes' own fraction, from their size once the figure is laid out (a colour bar
+    narrows them); the labels take no part in the layout, so it stays as measured."""
+    ax.figure.draw_without_rendering()
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     box = ax.get_position()
     w_in, h_in = box.width * ax.figure.get_figwidth(), box.height * ax.figure.get_figheight()
@@ -649,7 +651,7 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
             textcoords="offset points",
             ha="left" if right else "right",
             va="bottom" if up else "top",
-        )
+        ).set_in_layout(False)
 
 
 def _overlap(a: tuple[float, ...], b: tuple[float, ...]) -> bool:

@@ -1377,7 +1377,9 @@ def test_explore_review_names_fields_and_refuses_early(tab):
     assert (e.y_range.label, tuple(e.y_range.value)) == before  # (not relabelled in °)
 
 
-def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn(tab, downloads):
+def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn(
+    tab, downloads, monkeypatch
+):
     """A program made of segments offers each rise's and fall's angle (a designer's
     review: no field of an indexer's program could be swept in the tab); a dwell takes
     up the turn (camcore sweep's "balance"), the tab says which, each row has its
@@ -1450,6 +1452,20 @@ def test_explore_sweeps_a_segment_angle_against_the_dwell_that_takes_up_the_turn
     s.load_preset("double_index")  # a kept setup names a segment's field: restored
     e.apply_setup({"x": "Segment 3 angle, fall [°]", "x_range": [50, 70]})
     assert (e.x.value, tuple(e.x_range.value)) == ("Segment 3 angle, fall [°]", (50.0, 70.0))
+    # another kind of program loaded while the sweep runs: its results are dropped
+    real, loaded = e._analyst.sweep_chunk, []
+
+    def meanwhile(*a):
+        if not loaded:
+            loaded.append(s.load_preset("paper_example"))
+        return real(*a)
+
+    monkeypatch.setattr(e._analyst, "sweep_chunk", meanwhile)
+    e.steps.value = 2
+    e.run_btn.value = True
+    assert wait_for(lambda: not e._thread.is_alive(), 60.0)
+    assert "another kind of program now" in e.progress.content, e.progress.content
+    assert e._ran is None and e.image is None and e.load_btn.disabled
 
 
 def test_explore_sweeps_the_spring_against_the_speed(tab, monkeypatch):

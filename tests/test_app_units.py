@@ -935,3 +935,43 @@ def test_the_rho_plot_draws_a_roller_s_limit_at_zero_not_at_r_c():
     assert "undercut for −30 < ρ ≤ 0 mm" in rho_limit_label(a.design)
     paper = load_preset("paper_example")
     assert rho_limit_label(paper) == "|r_f| = 250 mm (limit)"
+
+
+def test_the_server_restarts_once_without_glibcs_thread_cache(monkeypatch):
+    """app.main._reexec_without_tcache: one restart with the tunable; the restarted
+    process cleans it for its workers and never restarts again, even when glibc has
+    dropped the tunable (a privileged binary: a review's endless loop); a user's own
+    tcache setting is kept; a failed exec leaves the environment as it was."""
+    import os
+    import sys
+
+    from app import main
+
+    if main._MALLOC_TRIM is None or sys.platform != "linux":
+        pytest.skip("glibc only")
+    calls = []
+    monkeypatch.setattr(os, "execv", lambda exe, argv: calls.append((exe, list(argv))))
+    for key in ("GLIBC_TUNABLES", main.REEXECED):
+        monkeypatch.delenv(key, raising=False)
+    monkeypatch.setenv("GLIBC_TUNABLES", "glibc.malloc.arena_max=2")
+    main._reexec_without_tcache()
+    assert calls == [(sys.executable, list(sys.orig_argv))]  # restarted, arguments kept
+    assert os.environ["GLIBC_TUNABLES"] == f"glibc.malloc.arena_max=2:{main.NO_TCACHE}"
+    main._reexec_without_tcache()  # as the restarted process: no second restart
+    assert len(calls) == 1 and os.environ["GLIBC_TUNABLES"] == "glibc.malloc.arena_max=2"
+    assert main.REEXECED not in os.environ  # (the workers get glibc's default)
+    monkeypatch.delenv("GLIBC_TUNABLES")
+    monkeypatch.setenv(main.REEXECED, "set")  # restarted, the tunable dropped by glibc
+    main._reexec_without_tcache()
+    assert len(calls) == 1 and "GLIBC_TUNABLES" not in os.environ
+    monkeypatch.setenv("GLIBC_TUNABLES", "glibc.malloc.tcache_count=7")  # the user's own
+    main._reexec_without_tcache()
+    assert len(calls) == 1 and os.environ["GLIBC_TUNABLES"] == "glibc.malloc.tcache_count=7"
+
+    def fails(exe, argv):
+        raise OSError("no exec")
+
+    monkeypatch.setattr(os, "execv", fails)
+    monkeypatch.delenv("GLIBC_TUNABLES")
+    main._reexec_without_tcache()
+    assert "GLIBC_TUNABLES" not in os.environ and main.REEXECED not in os.environ

@@ -1289,10 +1289,28 @@ def test_the_map_finds_every_front_number_and_keeps_its_labels_apart():
     assert legend.y1 < pareto_ax.get_window_extent(r).y0  # below the designs
 
 
-def test_each_front_number_stands_at_its_own_design():
+def test_the_nearest_longest_dwell_takes_up_the_turn():
+    """explore.balance_for on the double-indexing cam (rise 60, dwell 50, fall 60,
+    dwell 10, twice): each rise and fall is balanced by its own cycle's 50 deg dwell
+    (a review: the first cycle's fall had moved the second cycle's dwell), the one
+    after it where two are as near; none for a classic program's field."""
+    from camcore.explore import balance_for, segment_angle_paths
+    from camcore.model import load_preset
+
+    d = load_preset("double_index")
+    got = [balance_for(d, [f"motion.segments.{i}.angle_deg"]) for i in (0, 2, 4, 6)]
+    assert got == [f"motion.segments.{i}.angle_deg" for i in (1, 1, 5, 5)]
+    assert balance_for(d, ["cam.base_radius_mm"]) is None
+    assert segment_angle_paths(load_preset("paper_example")) == {}  # (classic: its fields)
+
+
+@pytest.mark.parametrize("third", [None, "pressure_angle"])
+def test_each_front_number_stands_at_its_own_design(third):
     """A user's review of an indexer's sweep: the map's "11-14" stood on designs 11-12,
     and 13-14, 7 mm of R away, had no number. A label holds only designs at one spot
-    (within a line of text), stands by them, and overprints no other label."""
+    (within a line of text), stands by them, and overprints no other label; with a
+    third figure too, whose colour bar narrows the axes (a review: labels measured
+    before it overprinted three others)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
 
     from camcore.explore import PANEL_PX, explore_figure, figure_values, offered, pareto
@@ -1305,10 +1323,11 @@ def test_each_front_number_stands_at_its_own_design():
     x, y = ("motion.segments.4.angle_deg", 42.0, 78.0), ("cam.base_radius_mm", 56.0, 104.0)
     points = points_of(grid_of(x, y, 8, kinds), base, "motion.segments.5.angle_deg")
     rows = sweep.fast_rows(base, points)
-    names = ["cam_size", "stress"]
+    names = ["cam_size", "stress", *([third] if third else [])]
     front = pareto(rows, names)
     v = figure_values(rows, names)
     listed = offered(front, v)
+    v = v[:, :2]  # (the map's plane)
     fig = explore_figure(rows, (x[0], "Segment 5"), (y[0], "r_b"), names, front, PANEL_PX)
     ax = fig.axes[len(kinds)]
     span = np.ptp(v[front], axis=0)
