@@ -101,10 +101,16 @@ def fields_of(design: Design) -> dict[str, str]:
     return {**own, **segment_parameters(design)}
 
 
+def segment_number(path: str) -> int | None:
+    """The segment (counted from 1, as the tab names it) whose angle ``path`` is, or None."""
+    m = re.fullmatch(r"motion\.segments\.(\d+)\.angle_deg", path)
+    return int(m[1]) + 1 if m else None
+
+
 def symbol(path: str) -> str:
     """How the list of designs names a field: SYMBOLS', "β3" for segment 3's angle."""
-    m = re.fullmatch(r"motion\.segments\.(\d+)\.angle_deg", path)
-    return f"β{int(m[1]) + 1}" if m else SYMBOLS.get(path, path)
+    n = segment_number(path)
+    return f"β{n}" if n is not None else SYMBOLS.get(path, path)
 
 
 # labels of earlier versions, as a kept setup may hold them
@@ -667,10 +673,11 @@ def _offer(row: dict) -> tuple[dict, str]:
 def _balance_note(design: Design, balance: str) -> str:
     """Which dwell takes up the turn in a sweep of segment angles (the tab says it
     when such a field is chosen: its points change that dwell too)."""
-    i = int(balance.split(".")[2])
-    angle = design.motion.segments[i].angle_deg
+    n = segment_number(balance)
+    assert n is not None  # (balance_for gives a segment's angle)
+    angle = design.motion.segments[n - 1].angle_deg
     return (
-        f"Segment {i + 1} (a dwell of {angle:g}°) takes up the turn: each point sets it "
+        f"Segment {n} (a dwell of {angle:g}°) takes up the turn: each point sets it "
         "to 360° less the other segments (a point that leaves it no angle is no design)."
     )
 
@@ -678,10 +685,8 @@ def _balance_note(design: Design, balance: str) -> str:
 def _balanced_text(ran: Ran) -> str:
     """Under a finished sweep of segment angles: which dwell took up the turn (its
     angle is the list's last β; a user's review found it said only before the run)."""
-    if ran.balance is None:
-        return ""
-    i = int(ran.balance.split(".")[2])
-    return f"<br>Segment {i + 1}, a dwell, took up the turn (β{i + 1} in the list)."
+    n = None if ran.balance is None else segment_number(ran.balance)
+    return "" if n is None else f"<br>Segment {n}, a dwell, took up the turn (β{n} in the list)."
 
 
 def _summary(rows: list[dict], total: int, front, names: list[str], limits, listed: int) -> str:

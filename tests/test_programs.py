@@ -273,39 +273,64 @@ def test_stations_figure_has_a_panel_per_station():
 
 def test_the_stations_say_each_faces_load_before_and_after_the_transition():
     """A teacher's review: the captions give each touching face's F_N and Hertz stress
-    just before -> just after the station. At the paper's station 2 S2 arrives and the
-    two faces share S1's load (Eqs. 36-38): each carries half of it, and the stress
-    falls as F_N^(1/2) (Eq. 42, the same curvatures on both sides of the station)."""
+    just before -> just after the station. The forces are checked by hand: in the high
+    dwell F_t = M g + k (h + s_p) (Eqs. 29-30, A = 0), one face of the double follower
+    carries F_t / cos psi_h, two share it as F_t / (2 cos psi_h) (Eqs. 36-38, the
+    README's 136.509 and 68.397 N), and the stress falls as F_N^(1/2) (Eq. 42, the same
+    curvatures on both sides of the station)."""
     from camcore import document
 
     a = analyze(PAPER, verify=False)
-    fig = document.stations_figure(a)
-    captions = [ax.get_xlabel().split("\n")[1:] for ax in fig.axes if ax.axison]
-    assert captions[1] == ["S1: F_N 136.8 N, σ_H 46.6 MPa"]  # the high dwell, one face
-    assert captions[2] == [
-        "S1: F_N 136.8 → 68.4 N, σ_H 46.6 → 33.0 MPa",
-        "S2: F_N 0.0 → 68.4 N, σ_H 0.0 → 33.0 MPa",
-    ]
+    dyn = PAPER.dynamics
+    Ft = dyn.mass_g * 1e-3 * dyn.gravity_m_s2 + dyn.spring_rate_N_per_m * (
+        (PAPER.motion.lift_mm + dyn.preload_mm) * 1e-3
+    )
+    alone, shared = Ft / np.cos(a.geo.psi_h), Ft / (2 * np.cos(a.geo.psi_h))
     st = a.stations[2]
     near = a.local(np.array([st - 1e-7, st + 1e-7]))
-    alone, shared = near.FN[0]
-    assert shared == pytest.approx(alone / 2, rel=1e-6) and near.FN[1, 1] == pytest.approx(shared)
-    sigma = near.stress[0]
-    assert sigma[1] == pytest.approx(sigma[0] / np.sqrt(2), rel=1e-6)
+    np.testing.assert_allclose(near.FN, [[alone, shared], [0.0, shared]], rtol=1e-9)
+    s0, s1 = near.stress[0] * 1e-6
+    assert s1 == pytest.approx(s0 / np.sqrt(2), rel=1e-6)
+    fig = document.stations_figure(a)
+    captions = [ax.get_xlabel().split("\n")[1:] for ax in fig.axes if ax.axison]
+    assert captions[1] == [f"S1: F_N {alone:.1f} N, σ_H {s0:.1f} MPa"]  # one face
+    assert captions[2] == [
+        f"S1: F_N {alone:.1f} → {shared:.1f} N, σ_H {s0:.1f} → {s1:.1f} MPa",
+        f"S2: F_N 0.0 → {shared:.1f} N, σ_H 0.0 → {s1:.1f} MPa",
+    ]
+    # a single roller: F_N = F_t, and Eq. 42 by hand for two cylinders, the cam's
+    # radius r_b + h in the dwell against the roller's r_c, both of steel
     single = document.station_loads(
         b := analyze(PAPER.with_kind("single_roller"), verify=False),
         b.local(np.mod(np.concatenate([b.stations - 1e-7, b.stations + 1e-7]), 2 * np.pi)),
     )
-    assert single[2] == "F_N 136.5 N, σ_H 212.2 MPa"  # one face: no name, nothing shared
+    m, w = PAPER.material, PAPER.cam.width_mm * 1e-3
+    compliance = (1 - m.cam_nu**2) / (m.cam_E_GPa * 1e9) + (1 - m.follower_nu**2) / (
+        m.follower_E_GPa * 1e9
+    )
+    radii = 1 / ((PAPER.cam.base_radius_mm + PAPER.motion.lift_mm) * 1e-3) + 1 / (
+        PAPER.follower.roller_radius_mm * 1e-3
+    )
+    sigma = np.sqrt(Ft / (np.pi * w) * radii / compliance) * 1e-6  # 212.15 MPa
+    assert single[2] == f"F_N {Ft:.1f} N, σ_H {sigma:.1f} MPa"  # no face named, none shared
     # past the jump speed the spring cannot hold the follower: F_N < 0 is said so (a
-    # review read "F_N -921 → 170 N" as a load)
+    # review read "F_N -921 → 170 N" as a load). Simple harmonic rise of h over beta:
+    # A = +-pi^2 h / (2 beta^2) at its ends, so F_t = M (g + A w^2) + k (S + s_p) there
     data = load_preset("classroom_harmonic").model_dump(mode="json")
     data["cam"]["speed_rpm"] = 8000
     c = analyze(Design.model_validate(data), verify=False)
+    dyn, prog = c.design.dynamics, c.design.motion.classic
+    h, beta, omega = prog.lift_mm * 1e-3, np.radians(prog.rise_deg), 8000 * 2 * np.pi / 60
+    M, k, s_p = dyn.mass_g * 1e-3, dyn.spring_rate_N_per_m, dyn.preload_mm * 1e-3
+    edge = np.pi**2 * h / (2 * beta**2) * omega**2  # |A w^2| at the rise's ends
+    low, high = M * dyn.gravity_m_s2 + k * s_p, M * dyn.gravity_m_s2 + k * (h + s_p)
     at = np.mod(np.concatenate([c.stations - 1e-7, c.stations + 1e-7]), 2 * np.pi)
     loads = document.station_loads(c, c.local(at))
-    assert loads[0] == "F_N 34.9 → 1126.4 N, σ_H 37.4 → 188.4 MPa"
-    assert loads[1].startswith("F_N -921.1 → 170.4 N (< 0: the follower leaves the cam), σ_H 0.0")
+    assert loads[0].startswith(f"F_N {low:.1f} → {low + M * edge:.1f} N, σ_H ")
+    assert loads[1].startswith(
+        f"F_N {high - M * edge:.1f} → {high:.1f} N (< 0: the follower leaves the cam), σ_H 0.0"
+    )
+    assert high - M * edge < 0 < high
 
 
 def test_stations_figure_fills_the_faces_touching_at_each_station():
