@@ -29,8 +29,9 @@ Speed: the maximum above is over all M vertices at each of N angles, O(N M). Mos
 vertices cannot matter: any vertex's value is a lower bound L of Y_C, and only
 vertices in a wedge of directions (seen from the cam axis) can reach above L:
 
-* roller (r > 0): a vertex counts only if Y_j >= L - r and |X_j| <= |x_c| + r, so if
-  L - r > 0 it lies within atan((|x_c| + r) / (L - r)) of straight up;
+* roller (r > 0): a vertex counts only if Y_j >= L - r and |X_j - x_c| <= r, so if
+  L - r > 0 it lies between the directions of the corners of the box
+  [x_c - r, x_c + r] x [L - r, rho_max] (a double roller's face: on its own side);
 * concave face (r < 0): a vertex counts only if it is at least |r| from the point
   (x_c, L) (it lies on or outside the face circle through L); as every vertex is
   within rho_max of the axis, this confines its direction psi to
@@ -41,7 +42,9 @@ L is the best of the few vertices (and chords) right under the face, where a sou
 touches it, so the wedge is narrow; the vertices are sorted once by polar angle, so
 each wedge is a contiguous run. For concave and flat faces the wedge is then tightened
 with the largest radius inside it instead of the profile's (only those vertices can
-count, and they lie within it). The pruned maximum is over a superset of the vertices
+count, and they lie within it). Each angle evaluates its own run (angles with runs of
+about one length in one pass: a pass over a block of consecutive angles spanned the
+union of their runs, twice a roller's own). The pruned maximum is over a superset of the vertices
 that can attain it, with the same arithmetic, so it equals the full maximum exactly
 whatever L is (a loose L only widens the wedge); angles where no bound applies (a
 follower narrower than the vertex spacing, a wedge of everything) use the full maximum.
@@ -54,7 +57,8 @@ import math
 import numpy as np
 
 CHUNK = 192  # cam angles per block of the full maximum: memory CHUNK x vertices x 8 bytes
-BLOCK = 128  # consecutive cam angles per block of the pruned maximum
+RUN_ELEMENTS = 12000  # angles x vertices per pass of the pruned maximum: its
+# temporaries (96 kB) stay under glibc's mmap threshold (128 kB): no fresh pages each
 _SLACK = 1e-9  # [rad] widening of every wedge against round-off in its bounds
 
 
@@ -64,39 +68,42 @@ def _rotate(c, s, x, y):
     return c * x + s * y, -s * x + c * y
 
 
-def _face_full(pts, nxt, c, s, r, x_c) -> np.ndarray:
+def _face_full(pts, nxt, length, c, s, r, x_c) -> np.ndarray:
     """max Y_C for one face over all vertices (and chords for rollers); pts, nxt:
-    (x, y) of the vertices and of the next vertex of each; c, s: (n, 1)."""
+    (x, y) of the vertices and of the next vertex of each, length: the chords'
+    lengths; c, s: (n, 1)."""
     out = np.empty(c.shape[0])
     for start in range(0, c.shape[0], CHUNK):
         cc, ss = c[start : start + CHUNK], s[start : start + CHUNK]
-        out[start : start + CHUNK] = _face_max(_rotate(cc, ss, *pts), _rotate(cc, ss, *nxt), r, x_c)
+        P, Q = _rotate(cc, ss, *pts), _rotate(cc, ss, *nxt)
+        out[start : start + CHUNK] = _face_max(P, Q, length, r, x_c)
     return out
 
 
-def _face_max(P, Q, r, x_c) -> np.ndarray:
+def _face_max(P, Q, length, r, x_c) -> np.ndarray:
     """Lowest centre height Y_C of a face (r, x_c) above the vertices P and, for a
-    roller (r >= 0), the chords P -> Q; P, Q: (X, Y) arrays of shape (angles, m)."""
+    roller (r >= 0), the chords P -> Q; P, Q: (X, Y) arrays of shape (angles, m);
+    length: the chords' lengths, (m,) or (angles, m) (a rotation keeps them: measured
+    once in the cam frame, as np.hypot over every angle cost a third of the check)."""
     X, Y = P
     if math.isinf(r):  # a flat face (wide enough) rests on the highest vertex
         return np.max(Y, axis=1)
     dx2 = (X - x_c) ** 2
     reach = dx2 <= r * r
     yc = Y + math.copysign(1.0, r) * np.sqrt(np.where(reach, r * r - dx2, 0.0))
-    best = np.max(np.where(reach, yc, -np.inf), axis=1)
+    best = np.where(reach, yc, -np.inf)
     if r < 0:  # a concave face holding both ends of a chord holds all of it
-        return best
+        return np.max(best, axis=1)
     dx, dy = Q[0] - X, Q[1] - Y
-    length = np.hypot(dx, dy)
     with np.errstate(divide="ignore", invalid="ignore"):
-        side = np.sign(dx) / length  # the chord's upward unit normal: side * (-dy, dx)
-        t = (x_c - X + r * dy * side) / dx  # where that normal points at the centre
+        side = np.copysign(1.0 / length, dx)  # the chord's upward unit normal:
+        t = (x_c - X + r * dy * side) / dx  # side * (-dy, dx); where it points at the centre
     # closed, with round-off room: a knife edge (r = 0) exactly over a vertex between
     # two chords must meet one of them (t = 1 - eps on one, -eps on the other)
     ok = (dx != 0) & (t >= -1e-9) & (t <= 1 + 1e-9)
     t = np.clip(t, 0.0, 1.0)
     top = Y + t * dy + r * dx * side
-    return np.maximum(best, np.max(np.where(ok, top, -np.inf), axis=1))
+    return np.max(np.where(ok, np.maximum(best, top), best), axis=1)
 
 
 def _wedge(L, r, x_c, rho_max):
@@ -109,10 +116,15 @@ def _wedge(L, r, x_c, rho_max):
         rho = np.broadcast_to(rho_max, L.shape)
         ok = fin & (L > 0) & (L < rho)  # within acos(L / rho_max) of straight up
         hw[ok] = np.arccos(L[ok] / rho[ok])
-    elif r >= 0:  # rollers, and the knife edge (r = 0)
+    elif r >= 0:  # rollers, and the knife edge (r = 0): what can beat L lies in the
+        # box [x_c - r, x_c + r] x [L - r, rho_max], above the axis if L > r; its
+        # directions span those of its corners (a box is convex), on the face's side
         ymin = L - r
         ok = fin & (ymin > 0)
-        hw[ok] = np.arctan2(abs(x_c) + r, ymin[ok])
+        y0, y1 = ymin[ok], np.broadcast_to(rho_max, L.shape)[ok]
+        first = np.minimum(np.arctan2(y0, x_c + r), np.arctan2(y1, x_c + r))
+        last = np.maximum(np.arctan2(y0, x_c - r), np.arctan2(y1, x_c - r))
+        ctr[ok], hw[ok] = 0.5 * (first + last), 0.5 * (last - first)
     else:
         cnorm = np.hypot(x_c, np.where(fin, L, 0.0))
         ok = fin & (cnorm < -r) & (cnorm > 0)
@@ -125,52 +137,77 @@ def _wedge(L, r, x_c, rho_max):
     return ctr, np.where(hw < math.pi, hw + _SLACK, 4.0)
 
 
-def _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table) -> np.ndarray:
+def _face_lift(
+    pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table
+) -> np.ndarray:
     px, py = pts
     M = px.size
     # a lower bound (any vertex's value is one): the vertices and chords right under
     # the face, where it touches on a sound cam (exact or close: the wedge is narrow)
-    L = _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max)
+    L = _local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max)
     ctr, hw = _wedge(L, r, x_c, rho_max)
     below, above = hw, hw.copy()  # half-widths on each side of ctr
     if not 0 <= r < math.inf:  # concave and flat faces: tighten with the runs' own radii
         below, above = _tighten(L, r, x_c, theta, ctr, below, above, phi3, radius_table, M)
-    # world direction psi = body angle phi - theta: the body window starts at lo
-    lo = ctr - below + theta
     width = below + above
     full = np.maximum(below, above) >= math.pi
     best = L.copy()
-    chords = 0 <= r < math.inf  # only a roller (or knife edge) can rest on a chord
-    reach_all = _reaches_all(r, x_c, rho_max)
     part = np.flatnonzero(~full)
     if part.size:
-        # blocks of consecutive angles share one contiguous run of the polar-sorted
-        # vertices (a view, no gather); extra vertices in the run are harmless. The run
-        # starts one vertex early: a chord starting just before it can reach into it.
-        p3 = (px[idx3], py[idx3])
-        n3 = (nxt[0][idx3], nxt[1][idx3])
-        for i in range(0, part.size, BLOCK):
-            rows = part[i : i + BLOCK]
-            lo_r = lo[rows]
-            lo_r = lo_r - 2 * math.pi * math.floor((lo_r.min() + math.pi) / (2 * math.pi))
-            s0 = int(np.searchsorted(phi3, lo_r.min(), "left")) - 1
-            e0 = int(np.searchsorted(phi3, (lo_r + width[rows]).max(), "right"))
-            if e0 - s0 >= M:
-                full[rows] = True
-                continue
-            cc, ss = c[rows], s[rows]
-            P = _rotate(cc, ss, p3[0][s0:e0], p3[1][s0:e0])
-            if chords:
-                m = _face_max(P, _rotate(cc, ss, n3[0][s0:e0], n3[1][s0:e0]), r, x_c)
-            else:
-                m = _vertex_max(P, r, x_c, reach_all)
-            best[rows] = np.maximum(best[rows], m)
+        # each angle's run of the polar-sorted vertices holding its wedge (world
+        # direction psi = body angle phi - theta), one vertex early: a chord starting
+        # just before the wedge can reach into it
+        s0, e0 = _run(ctr[part] - below[part], width[part], theta[part], phi3)
+        wide = e0 - s0 >= M
+        full[part[wide]] = True
+        part, s0, n = part[~wide], s0[~wide], (e0 - s0)[~wide]
+        p3, len3 = (pts[0][idx3], pts[1][idx3]), length[idx3]  # in polar order
+        chords = 0 <= r < math.inf  # only a roller (or knife edge) can rest on a chord
+        reach_all = _reaches_all(r, x_c, rho_max)
+        for rows, k in _by_length(n):
+            ang = part[rows]
+            m = _run_max(p3, len3, s0[rows], k, c[ang], s[ang], r, x_c, chords, reach_all)
+            best[ang] = np.maximum(best[ang], m)
     if full.any():
-        best[full] = np.maximum(best[full], _face_full(pts, nxt, c[full], s[full], r, x_c))
+        best[full] = np.maximum(best[full], _face_full(pts, nxt, length, c[full], s[full], r, x_c))
     return best
 
 
-TIGHTEN = 2  # rounds of _tighten
+def _by_length(n: np.ndarray):
+    """Groups of the angles (indices into n) with runs of about one length, shortest
+    first, and the longest run of each: RUN_ELEMENTS angles x vertices a group."""
+    order = np.argsort(n, kind="stable")
+    i = 0
+    while i < order.size:
+        k = int(n[order[min(i + RUN_ELEMENTS, order.size) - 1]])  # (at least the group's)
+        j = min(i + max(1, RUN_ELEMENTS // max(k, 1)), order.size)
+        yield order[i:j], int(n[order[j - 1]])
+        i = j
+
+
+def _run_max(p3, len3, s0, k, c, s, r, x_c, chords: bool, reach_all: bool) -> np.ndarray:
+    """The face's maximum over each angle's run: k vertices of the polar order (p3,
+    len3: the tiled vertices and their chords' lengths) from s0 (one per angle: (n,)),
+    and for a roller the chords to the next of each; the extra vertices of a shorter
+    run are harmless (a superset). In polar order the vertices are the polygon's
+    (follower_lift's prune), so a chord ends at the run's next vertex: the run is
+    rotated once. (s0 < 2 M and k < M: the indices stay below 3 M.)"""
+    w = k + 1 if chords else k
+    X, Y = _rotate(c, s, _rows(p3[0], s0, w), _rows(p3[1], s0, w))
+    if not chords:
+        return _vertex_max((X, Y), r, x_c, reach_all)
+    return _face_max((X[:, :-1], Y[:, :-1]), (X[:, 1:], Y[:, 1:]), _rows(len3, s0, k), r, x_c)
+
+
+def _rows(a: np.ndarray, start: np.ndarray, k: int) -> np.ndarray:
+    """a[start[i] : start[i] + k] for each i (a contiguous 1-D array), as rows: each
+    row copied from a strided view of a's windows (no index per element: half the
+    cost of a gather; the plain constructor costs less than as_strided's checks)."""
+    step = a.strides[0]
+    return np.ndarray((a.size - k + 1, k), a.dtype, a, 0, (step, step))[start]
+
+
+TIGHTEN = 1  # rounds of _tighten (a second cost more than its narrower runs saved)
 
 
 def _run(lo, width, theta, phi3):
@@ -222,7 +259,7 @@ def _tighten(L, r, x_c, theta, ctr, below, above, phi3, table, M):
 LOCAL = 3  # vertices on each side of the face's direction in the local lower bound
 
 
-def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
+def _local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray:
     """max Y_C over the 2 LOCAL vertices (and their chords) nearest in polar angle to
     where the line X = x_c meets the profile: a lower bound of the lift, exact or close
     for any face width, and finite even for a roller narrower than the vertex spacing.
@@ -242,7 +279,7 @@ def _local_max(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np.ndarray
     P = _rotate(c, s, pts[0][j], pts[1][j])
     if not 0 <= r < math.inf:  # a concave or flat face rests on vertices only
         return _vertex_max(P, r, x_c, _reaches_all(r, x_c, rho_max))
-    return _face_max(P, _rotate(c, s, nxt[0][j], nxt[1][j]), r, x_c)
+    return _face_max(P, _rotate(c, s, nxt[0][j], nxt[1][j]), length[j], r, x_c)
 
 
 def _reaches_all(r: float, x_c: float, rho_max: float) -> bool:
@@ -289,6 +326,7 @@ def follower_lift(
     rest = r_b if math.isinf(r0) else sigma * math.sqrt((r0 + r_b) ** 2 - x0**2)
     pts = (points[:, 0], points[:, 1])
     nxt = (np.roll(points[:, 0], -1), np.roll(points[:, 1], -1))
+    length = np.hypot(nxt[0] - pts[0], nxt[1] - pts[1])  # each chord's, to the next
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
     phi = np.arctan2(pts[1], pts[0])
@@ -305,9 +343,9 @@ def follower_lift(
     best = np.full(theta.size, -np.inf)
     for r, x_c in faces:
         face = (
-            _face_lift(pts, nxt, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
+            _face_lift(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
             if prune
-            else _face_full(pts, nxt, c, s, r, x_c)
+            else _face_full(pts, nxt, length, c, s, r, x_c)
         )
         best = np.maximum(best, face)
     return best - rest

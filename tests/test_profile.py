@@ -449,6 +449,28 @@ def test_range_maxima_of_the_sparse_table():
     np.testing.assert_array_equal(_range_max(table, s0, e0), want)
 
 
+def test_a_rollers_wedge_holds_every_point_that_can_beat_the_bound():
+    """verify._wedge for rollers: every point of the box a vertex or chord must lie in to
+    beat the bound L (|X - x_c| <= r, Y >= L - r, within rho_max of the axis) is inside
+    the wedge of directions; a double roller's face off the stem looks on its own side
+    only (a symmetric wedge about straight up ran twice the vertices)."""
+    from camcore.verify import _wedge
+
+    rng = np.random.default_rng(11)
+    for _ in range(200):
+        r, x_c = rng.uniform(0.0, 0.02), rng.uniform(-0.04, 0.04)
+        rho_max = rng.uniform(0.05, 0.1)
+        L = np.array([rng.uniform(r + 1e-3, rho_max + r)])
+        ctr, hw = _wedge(L, r, x_c, rho_max)
+        X = x_c + rng.uniform(-r, r, 400)
+        Y = rng.uniform(L[0] - r, rho_max, 400)
+        inside = np.hypot(X, Y) <= rho_max
+        off = np.angle(np.exp(1j * (np.arctan2(Y, X) - ctr[0])))  # wrapped to (-pi, pi]
+        assert hw[0] < np.pi and (np.abs(off[inside]) <= hw[0]).all()
+    ctr, hw = _wedge(np.array([0.07]), 0.008, -0.010, 0.075)  # the paper's left roller
+    assert ctr[0] - hw[0] > np.pi / 2 and hw[0] < np.radians(8)
+
+
 def test_tightened_check_equals_the_brute_force_on_every_paper_follower():
     """The pruned check with tightened wedges gives the plain maximum bit for bit."""
     from camcore.verify import follower_lift
