@@ -5,12 +5,13 @@ Rows (median ms, and the ratio with its goal in the note):
 * floor: the closed forms of the paper example on its grid;
 * analyze(verify=False) / floor (goal <= 3);
 * geometric check / analysis (goal <= 3) and its growth exponent from 0.1 to 0.02 deg
-  (goal: 1, i.e. O(N));
+  (goal: 1, i.e. O(N)); the same ratio for the paper's three other followers;
 * the four-follower comparison (one grid, one motion program) against four separate
   analyses;
 * a sweep's designs per CPU-second against the floor's rate (goal >= 0.5): one full
   analysis per design, and the batched core (``camcore sweep --fast``, camcore.batch)
-  on chunks of 32 designs.
+  on chunks of 64 designs (32 quick), and what of the batched core's time is not the closed
+  forms at its angles (``batch.local``): what a fused kernel of them would leave.
 """
 
 from __future__ import annotations
@@ -79,6 +80,7 @@ def run(quick: bool = False) -> list[dict]:
     from camcore.analysis import compare
 
     kinds = ("single_roller", "double_roller", "single_concave", "double_concave")
+    rows += [_check_row(d.with_kind(k), max(3, n // 2)) for k in kinds if k != d.follower.kind]
     t_cmp = _median_ms(lambda: compare(d), max(3, n // 2))
     t_four = _median_ms(
         lambda: [analyze(d.with_kind(k), verify=False) for k in kinds], max(3, n // 2)
@@ -123,19 +125,67 @@ def run(quick: bool = False) -> list[dict]:
     )
     fast_points = list(fast_spec.points())
     sweep.run_chunk(fast_spec.base, fast_points[:8], fast=True)
-    cpu = min(
-        _cpu_ms(lambda: sweep.run_chunk(fast_spec.base, fast_points, fast=True)) for _ in range(3)
+    cpu, closed = min(
+        _split_cpu_ms(lambda: sweep.run_chunk(fast_spec.base, fast_points, fast=True))
+        for _ in range(3)
     )
+    per, rest = cpu / len(fast_points), (cpu - closed) / len(fast_points)
     rate = len(fast_points) / (cpu / 1e3)
     rows.append(
         _row(
             "sweep --fast (batched core), per design",
-            cpu / len(fast_points),
+            per,
             f"{rate:.0f} designs per CPU-second in chunks of {len(fast_points)}: "
             f"{rate / floor_rate:.3f} of the floor's rate (goal >= 0.5)",
         )
     )
+    rows.append(
+        _row(
+            "sweep --fast: all but the closed forms, per design",
+            rest,
+            f"{rest / t_floor:.1f}x the floor's time; with the closed forms free "
+            f"(batch.local: grids and search, {per - rest:.2f} ms) the rate would be "
+            f"{t_floor / rest:.2f} of the floor's",
+        )
+    )
     return rows
+
+
+def _check_row(design: Design, n: int) -> dict:
+    """The check's ratio to the analysis for another of the paper's followers (its
+    profile, its faces): the goal holds for each, not for the paper's own only."""
+    a = analyze(design, verify=False)
+    t_an = _median_ms(lambda: analyze(design, verify=False), n)
+    t_check = _median_ms(lambda: max_lift_error(a), n)
+    return _row(
+        f"geometric check, {design.follower.kind.value}",
+        t_check,
+        f"ratio to its analysis ({t_an:.1f} ms) {t_check / t_an:.2f}x (goal <= 3x)",
+    )
+
+
+def _split_cpu_ms(fn) -> tuple[float, float]:
+    """CPU ms of fn() and of its calls of camcore.batch.local (the closed forms at
+    every angle of a batch: its grids and the search between samples), the part a
+    fused kernel (bench/experiments/numba_fused.py) would replace."""
+    from camcore import batch
+
+    inner = batch.local
+    spent = [0.0]
+
+    def timed(*args, **kwargs):
+        t0 = time.process_time()
+        try:
+            return inner(*args, **kwargs)
+        finally:
+            spent[0] += time.process_time() - t0
+
+    batch.local = timed
+    try:
+        total = _cpu_ms(fn)
+    finally:
+        batch.local = inner
+    return total, spent[0] * 1e3
 
 
 if __name__ == "__main__":
