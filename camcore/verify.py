@@ -138,13 +138,15 @@ def _wedge(L, r, x_c, rho_max):
 
 
 def _face_lift(
-    pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table
+    pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table, floor
 ) -> np.ndarray:
+    """max(floor, this face's Y_C) at each angle: ``floor`` the follower's other faces'
+    (the lift is the highest face's), so a face that does not touch prunes to nothing."""
     px, py = pts
     M = px.size
     # a lower bound (any vertex's value is one): the vertices and chords right under
     # the face, where it touches on a sound cam (exact or close: the wedge is narrow)
-    L = _local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max)
+    L = np.maximum(_local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max), floor)
     ctr, hw = _wedge(L, r, x_c, rho_max)
     below, above = hw, hw.copy()  # half-widths on each side of ctr
     if not 0 <= r < math.inf:  # concave and flat faces: tighten with the runs' own radii
@@ -341,13 +343,13 @@ def follower_lift(
         rho_max = float(np.hypot(*pts).max())
         radius_table = sparse_table(np.hypot(*pts)[idx3])
     best = np.full(theta.size, -np.inf)
-    for r, x_c in faces:
-        face = (
-            _face_lift(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table)
-            if prune
-            else _face_full(pts, nxt, length, c, s, r, x_c)
-        )
-        best = np.maximum(best, face)
+    for r, x_c in faces:  # (the faces' centres are at one height: the highest lifts it)
+        if prune:
+            best = _face_lift(
+                pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table, best
+            )
+        else:
+            best = np.maximum(best, _face_full(pts, nxt, length, c, s, r, x_c))
     return best - rest
 
 
