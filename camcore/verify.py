@@ -57,8 +57,10 @@ import math
 import numpy as np
 
 CHUNK = 192  # cam angles per block of the full maximum: memory CHUNK x vertices x 8 bytes
-RUN_ELEMENTS = 12000  # angles x vertices per pass of the pruned maximum: its
-# temporaries (96 kB) stay under glibc's mmap threshold (128 kB): no fresh pages each
+RUN_ELEMENTS = 6000  # angles x vertices per pass of the pruned maximum: 48 kB
+# temporaries, which glibc's malloc reuses; from ~10,000 it trimmed and refaulted its
+# heap at every pass (a fresh process: a double roller's check 23 -> 31 ms, 6,000 page
+# faults; where the heap is kept, as in a --fast sweep, larger passes gain ~10 %)
 _SLACK = 1e-9  # [rad] widening of every wedge against round-off in its bounds
 
 
@@ -137,16 +139,11 @@ def _wedge(L, r, x_c, rho_max):
     return ctr, np.where(hw < math.pi, hw + _SLACK, 4.0)
 
 
-def _face_lift(
-    pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table, floor
-) -> np.ndarray:
-    """max(floor, this face's Y_C) at each angle: ``floor`` the follower's other faces'
-    (the lift is the highest face's), so a face that does not touch prunes to nothing."""
-    px, py = pts
-    M = px.size
-    # a lower bound (any vertex's value is one): the vertices and chords right under
-    # the face, where it touches on a sound cam (exact or close: the wedge is narrow)
-    L = np.maximum(_local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max), floor)
+def _face_lift(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table, L):
+    """max(L, this face's Y_C) at each angle; L: a lower bound of the lift (any face's
+    value at any vertex is one: the lift is the highest face's), so that only the
+    vertices that can beat it are visited (a face off the cam: few or none)."""
+    M = pts[0].size
     ctr, hw = _wedge(L, r, x_c, rho_max)
     below, above = hw, hw.copy()  # half-widths on each side of ctr
     if not 0 <= r < math.inf:  # concave and flat faces: tighten with the runs' own radii
@@ -278,10 +275,17 @@ def _local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max) -> np
         j0 = np.searchsorted(phi3, body)  # body >= -pi: the middle period of phi3
         rho = radius[idx3[np.clip(j0, 0, idx3.size - 1)]]
     j = idx3[np.clip((j0 - k // 2)[:, None] + np.arange(k), 0, idx3.size - 1)]
-    P = _rotate(c, s, pts[0][j], pts[1][j])
-    if not 0 <= r < math.inf:  # a concave or flat face rests on vertices only
-        return _vertex_max(P, r, x_c, _reaches_all(r, x_c, rho_max))
-    return _face_max(P, _rotate(c, s, nxt[0][j], nxt[1][j]), length[j], r, x_c)
+    out = np.empty(theta.size)
+    step = max(1, RUN_ELEMENTS // k)  # (a pass over every angle at once mapped MBs afresh)
+    for a in range(0, theta.size, step):
+        jj, cc, ss = j[a : a + step], c[a : a + step], s[a : a + step]
+        P = _rotate(cc, ss, pts[0][jj], pts[1][jj])
+        if not 0 <= r < math.inf:  # a concave or flat face rests on vertices only
+            out[a : a + step] = _vertex_max(P, r, x_c, _reaches_all(r, x_c, rho_max))
+        else:
+            Q = _rotate(cc, ss, nxt[0][jj], nxt[1][jj])
+            out[a : a + step] = _face_max(P, Q, length[jj], r, x_c)
+    return out
 
 
 def _reaches_all(r: float, x_c: float, rho_max: float) -> bool:
@@ -343,13 +347,20 @@ def follower_lift(
         rho_max = float(np.hypot(*pts).max())
         radius_table = sparse_table(np.hypot(*pts)[idx3])
     best = np.full(theta.size, -np.inf)
-    for r, x_c in faces:  # (the faces' centres are at one height: the highest lifts it)
-        if prune:
-            best = _face_lift(
-                pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table, best
-            )
-        else:
+    if not prune:
+        for r, x_c in faces:
             best = np.maximum(best, _face_full(pts, nxt, length, c, s, r, x_c))
+        return best - rest
+    # the faces' centres are at one height and the highest face lifts the follower, so
+    # each face's value at the vertices right under it bounds the lift from below: the
+    # best of them (exact or close where a face touches: the wedges are narrow)
+    for r, x_c in faces:
+        L = _local_max(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max)
+        best = np.maximum(best, L)
+    for r, x_c in faces:
+        best = _face_lift(
+            pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radius_table, best
+        )
     return best - rest
 
 
