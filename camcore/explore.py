@@ -416,6 +416,7 @@ DPI = 2 * 72 * PT_PX  # the PNG's pixels per inch: twice the shown ones
 FONT, SMALL = 9, 8  # [pt] titles and axis labels; ticks, legends and the front's numbers
 PANEL_PX = 384  # the app's narrow panel (app.layout.NARROW_PANEL_PX)
 MAP_IN = 2.4  # [in] the least width of one follower's map (more fit side by side)
+WIDE_IN = 6.0  # [in] from this figure width: one-line titles, four-column legends
 
 
 def explore_png(
@@ -475,15 +476,21 @@ def explore_figure(
     cmap = {c: _colour(c) for c in legend}
     n = max(1, len(kinds))
     width = max(shown_px, 240) / (72 * PT_PX)  # [in]
-    cols = min(n, max(2, int(width // MAP_IN)))
+    # one follower in a wide panel: its map beside the front, not one map the panel's
+    # width and as tall, with the front below the fold (a review at 1920 px)
+    beside = n == 1 and width >= WIDE_IN
+    cols = 2 if beside else min(n, max(2, int(width // MAP_IN)))
     maps = math.ceil(n / cols)
     map_h = 0.72 * width / cols + 0.5  # [in] a map and its title and ticks
-    front_h = min(0.75 * width, 4.2) + 0.6
-    legend_h = 0.3 + 0.2 * math.ceil(len(legend) / (2 if width < 6 else 4))
+    front_h = 0.0 if beside else min(0.75 * width, 4.2) + 0.6
+    legend_h = 0.3 + 0.2 * math.ceil(len(legend) / (2 if width < WIDE_IN else 4))
     fig = MplFigure(
         figsize=(width, legend_h + maps * map_h + front_h), dpi=DPI, layout="constrained"
     )
-    grid = fig.add_gridspec(maps + 1, cols, height_ratios=[map_h] * maps + [front_h])
+    if beside:
+        grid = fig.add_gridspec(1, 2)
+    else:
+        grid = fig.add_gridspec(maps + 1, cols, height_ratios=[map_h] * maps + [front_h])
     xs = np.array([float(r.get(f"grid.{x[0]}", np.nan)) for r in rows])
     ys = np.array([float(r.get(f"grid.{y[0]}", np.nan)) for r in rows])
     xlim = _limits(xs if limits is None else limits[0])
@@ -518,12 +525,15 @@ def explore_figure(
     fig.legend(
         handles=handles,
         loc="outside upper center",
-        ncols=min(2 if width < 6 else 4, len(handles)),
+        ncols=min(2 if width < WIDE_IN else 4, len(handles)),
         fontsize=SMALL,
         title="first limit broken",
         title_fontsize=SMALL,
     )
-    _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front, width)
+    if beside:
+        _pareto_panel(fig.add_subplot(grid[0, 1]), rows, names, front, width / 2)
+    else:
+        _pareto_panel(fig.add_subplot(grid[maps, :]), rows, names, front, width)
     return fig
 
 
@@ -573,7 +583,7 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
         title = "valid designs; ringed and numbered:\nthe Pareto front of all three figures"
     else:
         title = "valid designs; the numbered line is\nthe Pareto front (smaller is better)"
-    ax.set_title(title if width < 6 else title.replace("\n", " "), fontsize=FONT)
+    ax.set_title(title if width < WIDE_IN else title.replace("\n", " "), fontsize=FONT)
     ax.tick_params(labelsize=SMALL)
     if not valid.any():  # (a review: empty axes of -0.04 .. 0.04 "MPa" said nothing)
         ax.text(
@@ -598,8 +608,8 @@ def _pareto_panel(ax, rows: list[dict], names: list[str], front: np.ndarray, wid
             handles=handles if third else None,
             fontsize=SMALL,
             loc="upper center",
-            bbox_to_anchor=(0.5, -0.16 if width < 6 else -0.12),
-            ncols=2 if width < 6 else 4,
+            bbox_to_anchor=(0.5, -0.16 if width < WIDE_IN else -0.12),
+            ncols=2 if width < WIDE_IN else 4,
             frameon=False,
         )
     if front.size:  # last: the numbers are placed on the axes as laid out

@@ -654,6 +654,26 @@ def test_the_map_is_drawn_for_the_panel_it_is_shown_in():
         assert int.from_bytes(png[16:20], "big") == 2 * shown  # the PNG's width
 
 
+def test_one_follower_s_map_stands_beside_its_front_in_a_wide_panel():
+    """One follower in the 1000 px panel: its map had the panel's width and as much
+    height, and the front came below it, 1,280 px down (a review at 1920 px). Now the
+    map and the front stand side by side and the figure is wider than tall; the narrow
+    panel keeps them one above the other."""
+    from camcore.explore import PANEL_PX, explore_figure, pareto
+
+    rows = _paper_rows({"cam.base_radius_mm": [60, 85, 110], "follower.offset_mm": [20, 30]})
+    names = ["cam_size", "stress"]
+    axes = (("cam.base_radius_mm", "r_b [mm]"), ("follower.offset_mm", "e [mm]"))
+    wide = explore_figure(rows, *axes, names, pareto(rows, names), 1000)
+    wide.canvas.draw()
+    the_map, the_front = (ax.get_position() for ax in wide.axes[:2])
+    assert the_map.x1 < the_front.x0 and abs(the_map.y1 - the_front.y1) < 0.05
+    assert wide.get_figheight() < 0.6 * wide.get_figwidth()
+    narrow = explore_figure(rows, *axes, names, pareto(rows, names), PANEL_PX)
+    narrow.canvas.draw()
+    assert narrow.axes[0].get_position().y0 > narrow.axes[1].get_position().y1
+
+
 def test_a_third_figure_colours_the_designs_and_widens_the_front():
     """Three figures (issue 12's cam size vs. stress vs. pressure angle): the front of
     all three holds the front of the first two and the design least in the third; the
