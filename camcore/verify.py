@@ -38,16 +38,20 @@ vertices in a wedge of directions (seen from the cam axis) can reach above L:
   cos(psi - psi_C) <= (rho_max^2 + |C|^2 - r^2) / (2 rho_max |C|), psi_C the
   direction of (x_c, L).
 
-L is the best of the few vertices (and chords) right under the face, where a sound cam
-touches it, so the wedge is narrow; the vertices are sorted once by polar angle, so
-each wedge is a contiguous run. For concave and flat faces the wedge is then tightened
-with the largest radius inside it instead of the profile's (only those vertices can
-count, and they lie within it). Each angle evaluates its own run (angles with runs of
-about one length in one pass: a pass over a block of consecutive angles spanned the
-union of their runs, twice a roller's own). The pruned maximum is over a superset of the vertices
-that can attain it, with the same arithmetic, so it equals the full maximum exactly
-whatever L is (a loose L only widens the wedge); angles where no bound applies (a
-follower narrower than the vertex spacing, a wedge of everything) use the full maximum.
+L is the best value of the few vertices (and chords) right under each face, over all
+the faces (the faces' centres are at one height and the highest lifts the follower,
+so any face's value bounds the lift from below): where a sound cam touches a face it
+is exact or close, so the wedges are narrow, and a face off the cam prunes to little
+or nothing. The vertices are sorted once by polar angle, so each wedge is a contiguous
+run. For concave and flat faces the wedge is then tightened with the largest radius
+inside it instead of the profile's (only those vertices can count, and they lie within
+it). Each angle evaluates its own run (angles with runs of about one length in one
+pass: a pass over a block of consecutive angles spanned the union of their runs,
+twice a roller's own). The pruned maximum is over a superset of the vertices (and
+chords, with the room _face_max gives a chord's ends) that can attain it, with the
+same arithmetic, so it equals the full maximum exactly whatever L is (a loose L only
+widens the wedge); angles where no bound applies (a follower narrower than the vertex
+spacing, a wedge of everything) use the full maximum.
 """
 
 from __future__ import annotations
@@ -62,6 +66,7 @@ RUN_ELEMENTS = 6000  # angles x vertices per pass of the pruned maximum: 48 kB
 # heap at every pass (a fresh process: a double roller's check 23 -> 31 ms, 6,000 page
 # faults; where the heap is kept, as in a --fast sweep, larger passes gain ~10 %)
 _SLACK = 1e-9  # [rad] widening of every wedge against round-off in its bounds
+T_ROOM = 1e-9  # a chord's parameter t may pass its ends by this much (_face_max)
 
 
 def _rotate(c, s, x, y):
@@ -97,20 +102,22 @@ def _face_max(P, Q, length, r, x_c) -> np.ndarray:
     if r < 0:  # a concave face holding both ends of a chord holds all of it
         return np.max(best, axis=1)
     dx, dy = Q[0] - X, Q[1] - Y
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # (a chord of length 0: masked)
         side = np.copysign(1.0 / length, dx)  # the chord's upward unit normal:
         t = (x_c - X + r * dy * side) / dx  # side * (-dy, dx); where it points at the centre
-    # closed, with round-off room: a knife edge (r = 0) exactly over a vertex between
-    # two chords must meet one of them (t = 1 - eps on one, -eps on the other)
-    ok = (dx != 0) & (t >= -1e-9) & (t <= 1 + 1e-9)
-    t = np.clip(t, 0.0, 1.0)
-    top = Y + t * dy + r * dx * side
+        # closed, with round-off room: a knife edge (r = 0) exactly over a vertex between
+        # two chords must meet one of them (t = 1 - eps on one, -eps on the other)
+        ok = (dx != 0) & (t >= -T_ROOM) & (t <= 1 + T_ROOM)
+        t = np.clip(t, 0.0, 1.0)
+        top = Y + t * dy + r * dx * side
     return np.max(np.where(ok, np.maximum(best, top), best), axis=1)
 
 
-def _wedge(L, r, x_c, rho_max):
+def _wedge(L, r, x_c, rho_max, room: float = 0.0):
     """(centre, half-width) [rad] of the world directions where a vertex can beat L;
-    half-width >= pi where nothing can be pruned."""
+    half-width >= pi where nothing can be pruned. ``room`` [m] widens a roller's box
+    on each side: _face_max's T_ROOM takes a chord's end up to T_ROOM x its length
+    beyond the face (a review: a chord longer than its end's radius was missed)."""
     hw = np.full(L.shape, 4.0)
     ctr = np.full(L.shape, math.pi / 2)
     fin = np.isfinite(L)
@@ -124,8 +131,9 @@ def _wedge(L, r, x_c, rho_max):
         ymin = L - r
         ok = fin & (ymin > 0)
         y0, y1 = ymin[ok], np.broadcast_to(rho_max, L.shape)[ok]
-        first = np.minimum(np.arctan2(y0, x_c + r), np.arctan2(y1, x_c + r))
-        last = np.maximum(np.arctan2(y0, x_c - r), np.arctan2(y1, x_c - r))
+        right, left = x_c + r + room, x_c - r - room
+        first = np.minimum(np.arctan2(y0, right), np.arctan2(y1, right))
+        last = np.maximum(np.arctan2(y0, left), np.arctan2(y1, left))
         ctr[ok], hw[ok] = 0.5 * (first + last), 0.5 * (last - first)
     else:
         cnorm = np.hypot(x_c, np.where(fin, L, 0.0))
@@ -144,7 +152,7 @@ def _face_lift(pts, nxt, length, theta, c, s, r, x_c, phi3, idx3, rho_max, radiu
     value at any vertex is one: the lift is the highest face's), so that only the
     vertices that can beat it are visited (a face off the cam: few or none)."""
     M = pts[0].size
-    ctr, hw = _wedge(L, r, x_c, rho_max)
+    ctr, hw = _wedge(L, r, x_c, rho_max, 2 * T_ROOM * float(length.max()))
     below, above = hw, hw.copy()  # half-widths on each side of ctr
     if not 0 <= r < math.inf:  # concave and flat faces: tighten with the runs' own radii
         below, above = _tighten(L, r, x_c, theta, ctr, below, above, phi3, radius_table, M)
@@ -190,7 +198,7 @@ def _run_max(p3, len3, s0, k, c, s, r, x_c, chords: bool, reach_all: bool) -> np
     and for a roller the chords to the next of each; the extra vertices of a shorter
     run are harmless (a superset). In polar order the vertices are the polygon's
     (follower_lift's prune), so a chord ends at the run's next vertex: the run is
-    rotated once. (s0 < 2 M and k < M: the indices stay below 3 M.)"""
+    rotated once. (s0 <= 2 M and k < M: the indices stay below 3 M.)"""
     w = k + 1 if chords else k
     X, Y = _rotate(c, s, _rows(p3[0], s0, w), _rows(p3[1], s0, w))
     if not chords:
@@ -335,6 +343,9 @@ def follower_lift(
     length = np.hypot(nxt[0] - pts[0], nxt[1] - pts[1])  # each chord's, to the next
     theta = np.asarray(theta, dtype=float)
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    # the wedges move to the cam frame by theta: in (-pi, pi] as cos and sin see it
+    # (a review: at |theta| ~ 1e9 a 2 pi wrap in floating point passed the slack)
+    theta = np.arctan2(s[:, 0], c[:, 0])
     phi = np.arctan2(pts[1], pts[0])
     if prune:  # polar order must be the polygon's order for the chord runs to hold
         turns = np.diff(np.unwrap(phi))

@@ -519,6 +519,33 @@ def test_the_pruned_check_equals_the_brute_force_on_random_profiles():
         tried += 1
 
 
+def test_the_pruned_check_keeps_a_long_chord_and_any_cam_angle():
+    """Two cases a review built, pruned against the brute force: (1) a knife edge's
+    chord whose end lies a hair (7e-11 m) beside the other face, where _face_max's
+    round-off room on a chord's parameter reaches past the wedge of a chord longer than
+    its end's radius; (2) cam angles of 1e9 rad, where a 2 pi wrap in floating point
+    had moved the wedges by more than their slack (cos and sin reduce exactly)."""
+    from camcore.verify import follower_lift
+
+    e = -0.005
+    pts = np.array(
+        [(0, 0.05), (-0.001, 0.2), *[(-0.0015 - 0.0005 * i, 0.045) for i in range(5)]]
+        + [(-0.004, 0.049), (e - 7e-11, 0.05 + 1e-11), (-0.2, 0.05), (-0.2, -0.1)]
+        + [(0, -0.1), (0.1, -0.05), (0.05, 0.02)]
+    )
+    args = (pts, [0.0], [(0.0, 0.0), (0.0, e)], 1.0)
+    np.testing.assert_array_equal(follower_lift(*args), follower_lift(*args, prune=False))
+    turn = 1e9
+    body = math.atan2(math.sin(turn), math.cos(turn))  # what the world's 0 is at theta
+    d = np.arange(-20, 21) * 1e-8  # vertices 1e-8 rad apart round straight up, a peak
+    rad = np.concatenate([0.05 - 1e-3 * np.abs(d + 0.5e-8) / 1e-7, np.full(12, 0.04)])
+    world = np.concatenate([np.pi / 2 + d, np.linspace(np.pi / 2 + 0.5, np.pi * 2.5 - 0.5, 12)])
+    phi = world + body
+    pts = np.column_stack([rad * np.cos(phi), rad * np.sin(phi)])[np.argsort(phi % (2 * np.pi))]
+    args = (pts, np.array([turn, turn + 1e-3, 0.3]), [(0.0, 1e-3), (0.0, 0.0)], 1.0)
+    np.testing.assert_array_equal(follower_lift(*args), follower_lift(*args, prune=False))
+
+
 def test_tightened_check_equals_the_brute_force_on_every_paper_follower():
     """The pruned check with tightened wedges gives the plain maximum bit for bit."""
     from camcore.verify import follower_lift
