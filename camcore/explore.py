@@ -464,10 +464,10 @@ def explore_figure(
     the first limit each design breaks (green: valid), side by side as many as fit
     (MAP_IN), all on the same axes: ``limits`` ((x0, x1), (y0, y1)), the sweep's
     ranges, else those of the rows (a sweep cancelled midway leaves a kind part of the
-    range, which must not look like the whole); below, the valid designs in the plane
-    of the first two figures with the Pareto front of ``names`` (two or three figures;
-    a third colours the points) numbered as in the app's list. ``x`` and ``y`` are
-    (grid path, axis label)."""
+    range, which must not look like the whole); below (beside one follower's map in a
+    panel WIDE_IN wide), the valid designs in the plane of the first two figures with
+    the Pareto front of ``names`` (two or three figures; a third colours the points)
+    numbered as in the app's list. ``x`` and ``y`` are (grid path, axis label)."""
     from matplotlib.figure import Figure as MplFigure
 
     kinds = list(dict.fromkeys(_kind(r) for r in rows))
