@@ -2593,7 +2593,9 @@ def test_step_buttons_turn_the_cam_by_hand(tab):
     keys. The step buttons pause and turn the cam; round the turn too; a value that is
     not one of them is ignored."""
     s = tab
-    s.toggle_play()
+    s.ui.speed_slider.value = 0.0  # playing, but no frame turns the cam (under load
+    s.toggle_play()  # a frame between the slider and the step had turned it 4.8 deg)
+    assert s.playing and s.speed == 0.0
 
     def fire(label):  # a click on the button group, through its wiring
         s.ui.step_btns.value = label
