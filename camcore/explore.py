@@ -101,7 +101,7 @@ def segment_angle_paths(design: Design) -> dict[str, tuple[int, SegmentKind]]:
         return {}
     return {
         f"motion.segments.{i}.angle_deg": (i, s.kind)
-        for i, s in enumerate(design.motion.segments)
+        for i, s in enumerate(segs)
         if s.kind is not SegmentKind.dwell
     }
 

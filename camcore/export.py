@@ -251,13 +251,11 @@ def file_label(a, edited: bool = True) -> str:
     """What an exported part is, written into the file (a maker's review: the STL's
     header was all zeros, the DXF said nothing of its design), and, if ``edited``,
     whether it is an edited preset (edited_note; the DXF drawing gives that a line)."""
-    from . import package_version
-
-    tol = a.design.limits.export_tolerance_mm
     # the fixed part first, then the note: a reader that cuts it short cuts the name
     note = edited_note(a.design) if edited else None
     return (
-        f"camdesigner {package_version()}, mm, profile within {tol:g} mm: cam "
+        _label_head(a, "profile within")
+        + "cam "
         + (f"{note}; " if note else "")
         + plain(a.design.name, NAME_MAX)
     )
@@ -267,15 +265,20 @@ def stl_label(a) -> str:
     """file_label in the STL header's 80 bytes: "within", and an edited preset as
     "edited KEY" (its fields are in the other files: a user's review found the
     key cut to "paper_exa" and the name gone)."""
-    from . import package_version
-
     edits = preset_edits(a.design)
     return (
-        f"camdesigner {package_version()}, mm, within "
-        f"{a.design.limits.export_tolerance_mm:g} mm: "
+        _label_head(a, "within")
         + (f"edited {edits[0]}: " if edits else "cam ")
         + plain(a.design.name, NAME_MAX)
     )
+
+
+def _label_head(a, within: str) -> str:
+    """The fixed start of file_label and stl_label: program, version, unit, tolerance."""
+    from . import package_version
+
+    tol = a.design.limits.export_tolerance_mm
+    return f"camdesigner {package_version()}, mm, {within} {tol:g} mm: "
 
 
 def stl_bytes(a) -> bytes:
