@@ -60,6 +60,20 @@ def _apply_set(data: dict, assignment: str) -> None:
     set_field(data, path.strip(), value, "--set ")
 
 
+def _refuse_program_clash(sets: list[str]) -> None:
+    """Refuse --set edits of a classic program's field beside one of its segments
+    (model.program_clash: one would be lost without a word)."""
+    from .files import printable
+    from .model import PROGRAM_CLASH, field_path, program_clash
+
+    fields = [field_path(a.partition("=")[0].strip()) for a in sets]
+    for i, fa in enumerate(fields):
+        for fb in fields[i + 1 :]:
+            if program_clash(fa, fb):
+                a, b = printable(fa, 120), printable(fb, 120)  # (the user's words)
+                raise DesignError(f"--set {a} and --set {b}: {PROGRAM_CLASH}; set one of them")
+
+
 def _design(args, unused_note: bool = True, kinds: tuple[FollowerKind, ...] = ()) -> Design:
     """The design the arguments name: a file or a preset, --follower, --set (with a
     note for a follower field the design's kind does not use, if ``unused_note``).
@@ -83,6 +97,7 @@ def _design(args, unused_note: bool = True, kinds: tuple[FollowerKind, ...] = ()
     if sets:
         from .model import design_from_json
 
+        _refuse_program_clash(sets)
         data = json.loads(design.model_dump_json())
         for assignment in sets:
             _apply_set(data, assignment)
@@ -121,8 +136,7 @@ def _report(args) -> int:
     from .report import report_text, summary
 
     documents = {k: p for k in ("html", "pdf") if (p := getattr(args, f"out_{k}", None))}
-    if args.design:
-        _refuse_collisions(documents, args.design)
+    _checked_outputs(documents, args.design)  # (a preset too: a review's two "wrote")
     a = analyze(_design(args))
     s = summary(a)
     print(json.dumps(s, indent=2) if args.json else report_text(s, a.design))
@@ -157,16 +171,16 @@ def _write(a, outputs: dict[str, str]) -> None:
         print(f"wrote {path} ({len(blobs[kind])} bytes)", file=sys.stderr)
 
 
-def _refuse_collisions(outputs: dict[str, str], design_path: str | None) -> None:
-    """Refuse an output naming the input design, or two outputs naming one file."""
+def _refuse_collisions(
+    outputs: dict[str, str], input_path: str | None, what: str = "the input design file"
+) -> None:
+    """Refuse an output naming the input (``what`` it is), or two outputs naming one file."""
     from .files import same_file
 
     paths = list(outputs.items())
     for i, (k1, p1) in enumerate(paths):
-        if design_path and same_file(p1, design_path):
-            raise DesignError(
-                f"--{k1} {p1}: that is the input design file; refusing to overwrite it"
-            )
+        if input_path and same_file(p1, input_path):
+            raise DesignError(f"--{k1} {p1}: that is {what}; refusing to overwrite it")
         for k2, p2 in paths[i + 1 :]:
             if same_file(p1, p2):
                 raise DesignError(f"--{k1} and --{k2} name the same file {p1}; give two paths")
@@ -176,7 +190,7 @@ def _compare(args) -> int:
     from .report import compare_rows, compare_text
 
     kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWERS
-    if args.followers:
+    if args.followers is not None:  # ("" is no follower, not the default four: a review)
         names = [n.strip() for n in args.followers.split(",") if n.strip()]
         bad = [n for n in names if n not in FollowerKind.__members__]
         if bad or not names:
@@ -200,7 +214,13 @@ def _outputs(args) -> dict[str, str]:
     if not outputs:
         flags = ", ".join(f"--{k.replace('_', '-')}" for k in EXPORT_FLAGS)
         raise DesignError(f"nothing to export: give one or more of {flags} FILE")
-    _refuse_collisions(outputs, args.design)
+    return _checked_outputs(outputs, args.design)
+
+
+def _checked_outputs(outputs: dict[str, str], design_path: str | None) -> dict[str, str]:
+    """``outputs`` (export kind -> path), refusing a path used twice or the input
+    design's, with a note for a path whose suffix is not its format's."""
+    _refuse_collisions(outputs, design_path)
     from .export import EXPORTS
 
     for kind, path in outputs.items():  # (a review wrote an STL into x.dxf unawares)
@@ -272,9 +292,9 @@ def _sweep(args) -> int:
         raise DesignError(f"--chunk: from 1 to {sweep.MAX_CHUNK} designs")
     if args.workers is not None and args.scheduler is not None:
         raise DesignError("--workers starts a cluster, --scheduler uses one: give one of them")
-    _refuse_collisions({"out": args.out}, args.spec)
+    _refuse_collisions({"out": args.out}, args.spec, "the sweep's spec file")
     if spec.base_file is not None:  # (a review: the table had replaced the base design)
-        _refuse_collisions({"out": args.out}, str(spec.base_file))
+        _refuse_collisions({"out": args.out}, str(spec.base_file), "the spec's base design file")
     n = sweep.run(
         spec,
         args.out,

@@ -845,7 +845,8 @@ class Design(_Part):
                 else ("r_c + r_b" if r > 0 else "r_b", "a smaller offset, or a larger r_b")
             )
             raise ValueError(
-                f"follower.{field}: e = {e:g} mm must be below {what} = {reach:g} mm "
+                f"follower.{field}: {'e' if f.kind.is_double else '|e_s|'} = {e:g} mm "
+                f"must be below {what} = {reach:g} mm "
                 f"(the square root in Eq. 3 needs (r + r_b)^2 - e^2 > 0): {fix}"
             )
         if f.kind.is_concave:
@@ -1330,6 +1331,34 @@ def contact_stress_limit_MPa(design: Design) -> float:
 def omega_rad_s(design: Design) -> float:
     """Cam angular speed omega_2 [rad/s] (the magnitude; the cam turns clockwise)."""
     return design.cam.speed_rpm * RPM
+
+
+def field_path(path: str) -> str:
+    """A dotted field path with its list indexes as numbers ("segments.00" is
+    "segments.0")."""
+    return ".".join(  # (an index is 1-6 digits, as _child reads one)
+        str(int(p)) if re.fullmatch(r"[0-9]{1,6}", p) else p for p in path.split(".")
+    )
+
+
+def is_classic_field(field: str) -> bool:
+    """A classic program's field (motion.rise_deg, ...): Motion makes the segments of
+    them, so it sets every part of motion.segments."""
+    head, _, name = field.partition(".")
+    return head == "motion" and name in CLASSIC_KEYS
+
+
+PROGRAM_CLASH = "both set the motion program (its classic fields make its segments)"
+
+
+def program_clash(a: str, b: str) -> bool:
+    """Whether the field paths ``a`` and ``b`` (field_path) both set the motion
+    program, one a classic field, the other a part of motion.segments: the classic
+    one would make the segments and the other's edit be lost (a review: `--set
+    motion.rise_deg=90 --set motion.segments.0.angle_deg=80` dropped the second)."""
+    return (is_classic_field(a) and b.startswith("motion.segments")) or (
+        is_classic_field(b) and a.startswith("motion.segments")
+    )
 
 
 def set_field(data: dict, path: str, value, what: str = "") -> None:

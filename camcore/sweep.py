@@ -45,15 +45,18 @@ import numpy as np
 from . import code_fingerprint, package_version
 from .files import FileError, read_capped, write_atomic
 from .model import (
-    CLASSIC_KEYS,
+    PROGRAM_CLASH,
     Design,
     DesignError,
     FollowerKind,
     defaulted_fields,
     design_from_json,
+    field_path,
     format_validation_error,
+    is_classic_field,
     load_preset,
     name_follows_kind,
+    program_clash,
     read_design,
     set_field,
     with_given,
@@ -286,10 +289,10 @@ def _balance_path(raw, base: dict, paths: list[str]) -> str | None:
     path = f"motion.segments.{int(m[1])}.angle_deg"
     if int(m[1]) >= len(base["motion"]["segments"]):
         raise DesignError(f"balance: the base design has no segment {int(m[1])}")
-    fields = [_field_of(p) for p in paths]
+    fields = [field_path(p) for p in paths]
     if any(f == path or path.startswith(f + ".") for f in fields):
         raise DesignError(f"balance: {path} is set by the grid itself")
-    if any(_classic(f) for f in fields):
+    if any(is_classic_field(f) for f in fields):
         raise DesignError(
             "balance: the grid sets a classic program's field, whose low dwell takes up "
             "the turn already"
@@ -297,33 +300,15 @@ def _balance_path(raw, base: dict, paths: list[str]) -> str | None:
     return path
 
 
-def _field_of(path: str) -> str:
-    """The field a grid path sets, its list indexes as numbers ("segments.00" is
-    "segments.0")."""
-    return ".".join(  # (an index is 1-6 digits, as model._child reads one)
-        str(int(p)) if re.fullmatch(r"[0-9]{1,6}", p) else p for p in path.split(".")
-    )
-
-
-def _classic(field: str) -> bool:
-    """A classic program's field (motion.rise_deg, ...): model.Motion makes the
-    segments of them, so it sets every part of motion.segments."""
-    head, _, name = field.partition(".")
-    return head == "motion" and name in CLASSIC_KEYS
-
-
 def _one_field_each(paths: list[str]) -> None:
     """Refuse two grid paths that set one field, or one a part of the other (a review:
     "motion.segments.0.law" beside "motion.rise_law" ran the second's law while the
     table's column said the first's)."""
-    fields = [_field_of(p) for p in paths]
+    fields = [field_path(p) for p in paths]
     for i, (a, fa) in enumerate(zip(paths, fields, strict=True)):
         for b, fb in zip(paths[i + 1 :], fields[i + 1 :], strict=True):
-            segments = (_classic(fa) and fb.startswith("motion.segments")) or (
-                _classic(fb) and fa.startswith("motion.segments")
-            )
-            if segments:
-                why = "both set the motion program (its classic fields make its segments)"
+            if program_clash(fa, fb):
+                why = PROGRAM_CLASH
             elif fa == fb:
                 why = "both set one field"
             elif fb.startswith(fa + ".") or fa.startswith(fb + "."):

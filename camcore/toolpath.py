@@ -144,11 +144,14 @@ def _tightest_concave(a) -> float:
     return 1.0 / -k.min() if k.min() < 0 else math.inf
 
 
-def _comment(text: str) -> str:
-    """A G-code comment: parentheses made brackets, anything unusual stripped (a design
-    name is user input; in G-code a ')' would end the comment and run the rest)."""
+def _comments(text: str) -> list[str]:
+    """G-code comments of ``text``, parentheses made brackets, anything unusual
+    stripped (a design name is user input; in G-code a ')' would end the comment and
+    run the rest), wrapped at spaces into lines of at most 80 characters (a review: a
+    note cut at 80 had named a field "cam.fe")."""
     text = text.translate(str.maketrans("()", "[]"))
-    return "(" + re.sub(r"[^A-Za-z0-9 _.,:=+\-/&\[\]]", "_", text)[:80] + ")"
+    text = re.sub(r"[^A-Za-z0-9 _.,:=+\-/&\[\]]", "_", text)
+    return [f"({line})" for line in textwrap.wrap(text, 78)] or ["()"]
 
 
 def _round_up(x: float, digits: int = 3) -> float:
@@ -196,8 +199,10 @@ def _deep_pass_comments(depth: float, diameter: float) -> list[str]:
     if depth <= diameter:
         return []
     return [
-        _comment(f"CAUTION: {depth:g} mm per pass, more than the cutter diameter {diameter:g} mm:"),
-        _comment("check the flute length, or set a smaller depth per pass"),
+        *_comments(
+            f"CAUTION: {depth:g} mm per pass, more than the cutter diameter {diameter:g} mm:"
+        ),
+        *_comments("check the flute length, or set a smaller depth per pass"),
     ]
 
 
@@ -212,7 +217,7 @@ def _bore_comments(cam) -> list[str]:
         if cam.bore_flat_mm > 0
         else ""
     )
-    return [_comment(f"not cut here: the {cam.bore_diameter_mm:g} mm bore{key}")]
+    return _comments(f"not cut here: the {cam.bore_diameter_mm:g} mm bore{key}")
 
 
 def _feed_comments(cam) -> list[str]:
@@ -224,16 +229,16 @@ def _feed_comments(cam) -> list[str]:
         defaults.feed_mm_per_min,
         defaults.plunge_mm_per_min,
     ):
-        out.append(_comment("feeds are defaults: check them for your machine and material"))
+        out.extend(_comments("feeds are defaults: check them for your machine and material"))
     if cam.spindle_rpm == 0:
-        out.append(_comment("no spindle speed given: M3 has no S word, set it before the run"))
+        out.extend(_comments("no spindle speed given: M3 has no S word, set it before the run"))
     return out
 
 
 def _warning_comments(a) -> list[str]:
     """export.warning in comments of at most 80 characters (none for a valid design)."""
     text = warning(a)
-    return [] if text is None else [_comment(x) for x in textwrap.wrap("WARNING: " + text, 78)]
+    return [] if text is None else _comments("WARNING: " + text)
 
 
 def _plain(x: float) -> str:
@@ -314,19 +319,19 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     )
     lines = [
         "%",
-        _comment(f"cam contour: {a.design.name}"),
-        *([_comment(e)] if (e := edited_note(a.design)) else []),
-        _comment(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
-        _comment("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
-        _comment(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
-        _comment("the cutter centre path, no cutter compensation G41/G42: G40"),
-        _comment(f"{passes}, feed {feed} plunge {plunge} mm/min"),
-        _comment(bottom),
-        _comment(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
-        _comment("one contour at final size: rough out a larger blank first"),
-        _comment("work zero G54, no tool change and no length offset called: load the"),
-        _comment("cutter and set its length offset first, G43 H on a Fanuc-style control"),
-        _comment(f"rapids at Z{cam.safe_height_mm:g}: above every clamp. No coolant called"),
+        *_comments(f"cam contour: {a.design.name}"),
+        *(_comments(e) if (e := edited_note(a.design)) else []),
+        *_comments(f"follower {a.design.follower.kind.value}, cutter diameter {to_mm(D):g} mm"),
+        *_comments("units mm, absolute, Z0 = top of the blank, cam axis at X0 Y0, theta = 0 on +Y"),
+        *_comments(f"path within {stated:g} mm of the exact offset, climb, clockwise"),
+        *_comments("the cutter centre path, no cutter compensation G41/G42: G40"),
+        *_comments(f"{passes}, feed {feed} plunge {plunge} mm/min"),
+        *_comments(bottom),
+        *_comments(f"plunge off the part, clear of a blank of radius up to {clear:.1f} mm"),
+        *_comments("one contour at final size: rough out a larger blank first"),
+        *_comments("work zero G54, no tool change and no length offset called: load the"),
+        *_comments("cutter and set its length offset first, G43 H on a Fanuc-style control"),
+        *_comments(f"rapids at Z{cam.safe_height_mm:g}: above every clamp. No coolant called"),
         *_bore_comments(cam),
         *_deep_pass_comments(depths[0], to_mm(D)),
         *_feed_comments(cam),

@@ -529,3 +529,47 @@ def test_python_m_camcore_is_the_camcore_command():
         [sys.executable, "-m", "camcore", "--version"], capture_output=True, text=True
     )
     assert out.returncode == 0 and out.stdout.strip() == f"camcore {package_version()}"
+
+
+def test_a_preset_report_refuses_what_a_file_report_refuses(tmp_path, capsys):
+    """A maker's review: `report --preset ... --html same.html --pdf same.html` said
+    "wrote same.html" twice (the first a lie: the PDF replaced it), and a report
+    named .json went without the note export gives. The checks now hold for a preset
+    as for a file."""
+    same = str(tmp_path / "same.html")
+    base = ["report", "--preset", "paper_example"]
+    assert main([*base, "--html", same, "--pdf", same]) == 2
+    assert "--html and --pdf name the same file" in capsys.readouterr().err
+    assert not (tmp_path / "same.html").exists()  # refused before anything is written
+    assert main([*base, "--pdf", str(tmp_path / "r.html")]) == 0
+    assert f"--pdf {tmp_path / 'r.html'}: written as .pdf, whatever its name" in (
+        capsys.readouterr().err
+    )
+    assert (tmp_path / "r.html").read_bytes().startswith(b"%PDF")
+
+
+def test_set_refuses_a_classic_field_beside_a_segment(capsys):
+    """A review: `--set motion.rise_deg=90 --set motion.segments.0.angle_deg=80` made
+    the classic program and dropped the segment's edit without a word (a sweep's grid
+    refused the same mix)."""
+    base = ["report", "--preset", "paper_example", "--json"]
+    for sets in (
+        ["motion.rise_deg=90", "motion.segments.0.angle_deg=80"],
+        ["motion.segments.00.law=harmonic", "motion.fall_law=harmonic"],
+    ):
+        assert main([*base, *(x for s in sets for x in ("--set", s))]) == 2
+        err = capsys.readouterr().err
+        assert "both set the motion program" in err and "set one of them" in err
+    # two classic fields, or two segments, are edits of one program: both kept
+    assert main([*base, "--set", "motion.rise_deg=90", "--set", "motion.fall_deg=120"]) == 0
+    program = json.loads(capsys.readouterr().out)["stations_deg"]
+    high = load_preset("paper_example").motion.high_dwell_deg  # (kept: a classic program)
+    assert program[1] == pytest.approx(90.0) and program[-1] == pytest.approx(90.0 + high + 120)
+
+
+def test_an_empty_follower_list_is_refused(capsys):
+    """A review: `--followers ""` ran the default four while `--followers ",,,"` was
+    refused as empty."""
+    for given in ("", ",,,"):
+        assert main(["compare", "--preset", "paper_example", "--followers", given]) == 2
+        assert "--followers: unknown (empty)" in capsys.readouterr().err

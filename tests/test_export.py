@@ -29,7 +29,7 @@ def test_bored_cam_is_watertight_with_exact_volume(kind):
     a = analyze(with_bore(25.0, kind), verify=False)
     mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
     assert mesh.is_watertight and mesh.is_winding_consistent and mesh.volume > 0
-    m = export.BORE_SEGMENTS
+    m = export.bore_chords(12.5, 2 * math.pi, a.design.limits.export_tolerance_mm)
     hole_mm2 = 0.5 * m * 12.5**2 * math.sin(2 * math.pi / m)  # the bore polygon
     assert mesh.volume == pytest.approx((a.profile.area * 1e6 - hole_mm2) * 15.0, rel=1e-6)
     # the hole goes right through: a closed surface of genus 1 (Euler number 0; 2 without)
@@ -137,10 +137,10 @@ def test_keyway_solid_has_the_exact_volume(kind):
     R, hw, top = 15.0, 4.0, 18.3
     foot = math.sqrt(R * R - hw * hw)
     # hole = the circle's segment polygon without the cap under the slot + the slot
-    m = export.BORE_SEGMENTS
     a_c = math.atan2(foot, hw)
     sweep = 2 * math.pi - (math.pi - 2 * a_c)  # the arc the outline follows
-    arc_poly = 0.5 * R * R * (m - 1) * math.sin(sweep / (m - 1))  # fan of the arc chords
+    m = export.bore_chords(R, sweep, a.design.limits.export_tolerance_mm)
+    arc_poly = 0.5 * R * R * m * math.sin(sweep / m)  # fan of the arc chords
     hole = arc_poly + 0.5 * 2 * hw * foot + 2 * hw * (top - foot)  # + triangle + slot
     assert mesh.volume == pytest.approx((a.profile.area * 1e6 - hole) * 15.0, rel=1e-6)
     # the slot is on the +Y ray (theta = 0): the hole reaches y = top there
@@ -229,6 +229,12 @@ def test_the_dxf_draws_the_dwells_as_true_arcs(kind):
             "follower on this ray in a dwell at S=0 mm, the rise starts at THETA=60 deg",
         ),
         ("fall first", 0.0, "follower on this ray as the fall starts"),
+        # (a review: "the rise starts at THETA=220 deg" where the fall starts at 30)
+        (
+            "high dwell first",
+            0.0,
+            "follower on this ray in a dwell at S=15 mm, the fall starts at THETA=30 deg",
+        ),
         # (a review read "on this ray ... axis at X=-6 mm" as a contradiction)
         (None, 6.0, "follower stroke parallel to this ray, axis at X=-6 mm, as the rise starts"),
     ],
@@ -252,6 +258,13 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
             rise,
             {"kind": "dwell", "angle_deg": 70},
         ],
+        "high dwell first": [
+            {"kind": "dwell", "angle_deg": 30},
+            fall,
+            {"kind": "dwell", "angle_deg": 60},
+            rise,
+            {"kind": "dwell", "angle_deg": 40},
+        ],
     }
     data = load_preset("paper_example").with_kind("single_roller").model_dump(mode="json")
     data["follower"]["single_offset_mm"] = offset
@@ -268,7 +281,12 @@ def test_the_datum_note_says_what_the_follower_does_at_theta_0(segments, offset,
     assert np.all(hi - lo < 2 * np.ptp(P, axis=0))
     assert text == f"THETA=0: {says}; cam turns CW seen from +Z"
     grows = a.theta[np.argmax(a.prog.V > 1e-9)]  # where the rise starts
-    if "dwell" in says:
+    falls = a.theta[np.argmax(a.prog.V < -1e-9)]  # where the fall starts
+    if "the fall starts at" in says:
+        assert a.prog.S[0] == pytest.approx(0.015) and math.degrees(falls) == pytest.approx(
+            30.0, abs=0.2
+        )
+    elif "dwell" in says:
         assert a.prog.S[0] == 0.0 and math.degrees(grows) == pytest.approx(60.0, abs=0.2)
     elif "rise" in says:
         assert a.prog.S[0] == 0.0 and a.prog.V[1] > 0
@@ -292,9 +310,10 @@ def test_a_d_flat_bore_is_cut_square_to_the_datum():
     mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
     assert mesh.is_watertight and mesh.is_winding_consistent and mesh.euler_number == 0
     R, c = 5.0, 4.0
-    hw, m = math.sqrt(R * R - c * c), export.BORE_SEGMENTS
+    hw = math.sqrt(R * R - c * c)
     sweep = math.pi + 2 * math.atan2(c, hw)
-    hole = 0.5 * R * R * (m - 1) * math.sin(sweep / (m - 1)) + hw * c
+    m = export.bore_chords(R, sweep, a.design.limits.export_tolerance_mm)
+    hole = 0.5 * R * R * m * math.sin(sweep / m) + hw * c
     exact = math.pi * R * R - (R * R * math.acos(c / R) - c * hw)
     assert hole == pytest.approx(exact, rel=1e-4)
     assert mesh.volume == pytest.approx((a.profile.area * 1e6 - hole) * 15.0, rel=1e-9)
@@ -575,3 +594,31 @@ def test_an_edited_preset_says_so_wherever_its_files_name_it():
     )
     # a name of the user's own names no preset
     assert edited_note(edited.model_copy(update={"name": "my cam"})) is None
+
+
+@pytest.mark.parametrize("bore, keyway", [(79.0, None), (60.0, (16.0, 4.3))])
+def test_the_bore_is_within_the_export_tolerance(bore, keyway):
+    """A maker's review: a 79 mm bore was a 256-gon whose flats sat 2.97 um inside the
+    circle, under an STL header saying "within 0.001 mm". Every chord of the bore in
+    the mesh (found by their radius, not by the code's count) stays within the
+    tolerance of the circle, its vertices on it."""
+    data = load_preset("valve_lift_roller").model_dump()
+    data["cam"]["bore_diameter_mm"] = bore  # (a 256-gon: 2.97 / 2.26 um inside)
+    if keyway:
+        data["cam"].update(keyway_width_mm=keyway[0], keyway_depth_mm=keyway[1])
+    a = analyze(Design.model_validate(data), verify=False)
+    tol, R = a.design.limits.export_tolerance_mm, bore / 2
+    mesh = trimesh.load(io.BytesIO(export.stl_bytes(a)), file_type="stl")
+    assert mesh.is_watertight
+    ring = mesh.vertices[(mesh.vertices[:, 2] == 0.0)][:, :2]
+    r = np.hypot(*ring.T)
+    on = ring[np.abs(r - R) < 1e-4]  # the circle's vertices (not the slot's corners)
+    assert on.shape[0] > 256 and np.abs(np.hypot(*on.T) - R).max() < 1e-4
+    t = np.sort(np.arctan2(on[:, 1], on[:, 0]))
+    step = np.diff(t)
+    if keyway:  # (the slot's gap between the feet is no chord of the circle)
+        step = step[step < 0.1]
+    else:
+        step = np.append(step, t[0] + 2 * math.pi - t[-1])
+    sagitta = R * (1 - np.cos(step / 2))
+    assert sagitta.max() <= tol * (1 + 1e-6)

@@ -154,6 +154,10 @@ def test_geometry_errors_name_the_quantities_and_the_fix():
     assert "below |r_f| - r_b = 10 mm" in text and "a flatter face (a larger |r_f|)" in text
     text = error(kind="double_roller", offset_mm=100.0)
     assert "below r_c + r_b = 88 mm" in text and "a larger r_b" in text
+    # a single follower's offset has a sign: its size is what breaks (a review read
+    # "e = 1000 mm" for e_s = -1000 mm)
+    text = error(kind="knife_edge", single_offset_mm=-1000.0)
+    assert "single_offset_mm: |e_s| = 1000 mm must be below r_b = 80 mm" in text
     text = error(face_radius_mm=90.0)
     assert "face_radius_mm: Input should be less than 0, a concave face's radius" in text
     assert text.endswith("(got 90.0)")

@@ -302,7 +302,7 @@ def test_cli_sweep_and_its_exit_codes(tmp_path):
         capture_output=True,
         text=True,
     )
-    assert bad.returncode == 2 and "input" in bad.stderr
+    assert bad.returncode == 2 and "that is the sweep's spec file" in bad.stderr
 
 
 def test_dask_local_cluster_gives_the_same_rows(tmp_path):
@@ -1173,7 +1173,7 @@ def test_a_spec_can_name_its_base_design_file(tmp_path, capsys):
     for out in ("mine.json", "sub/../mine.json"):
         (tmp_path / "sub").mkdir(exist_ok=True)
         assert main(["sweep", str(spec_path), "--out", str(tmp_path / out), "--fast"]) == 2
-        assert "that is the input design file" in capsys.readouterr().err
+        assert "that is the spec's base design file" in capsys.readouterr().err
     assert (tmp_path / "mine.json").read_bytes() == kept
     (tmp_path / "sub").rmdir()
     # a grid of other kinds: the base's own kind's fields are not said (none runs it)

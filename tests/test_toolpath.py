@@ -338,7 +338,7 @@ def test_gcode_cuts_in_equal_passes_through_the_breakthrough(width, pass_depth, 
     passes = _passes(text)
     assert len(passes) == n and all(p == passes[0] for p in passes)
     assert passes[0][0] == passes[0][-2]  # onto the path, round it, and off to the lead point
-    head = "\n".join(text.splitlines()[:9])  # (with the edited-preset line)
+    head = "\n".join(ln for ln in text.splitlines() if ln.startswith("("))  # the header
     assert ("one pass, full depth" if n == 1 else f"({n} passes of ") in head
     if breakthrough:
         assert (
@@ -440,3 +440,21 @@ def test_every_program_is_cut_through_every_path_vertex(preset, kind):
         near = np.hypot(*(path - start).T) < 1e-3  # the arc's start, a path vertex
         assert abs(cam_r[near][0] + d_mm - np.hypot(*(start - c))) < 1e-3
     assert sum(m[0] == "G2" for m in moves) >= 1
+
+
+def test_a_long_header_note_is_wrapped_not_cut():
+    """A maker's review: the edited-preset note was cut at 80 characters inside a field
+    name ("cam.fe"). Every header comment is at most 80 characters, and the note's
+    lines read back as the whole note."""
+    from camcore.export import edited_note
+
+    data = PAPER.model_dump()
+    data["cam"].update(
+        pass_depth_mm=4.0, breakthrough_mm=0.5, spindle_rpm=3000.0, feed_mm_per_min=300.0
+    )
+    d = Design.model_validate(data)
+    lines = [ln for ln in toolpath.gcode(analyze(d, verify=False)).splitlines() if ln[:1] == "("]
+    assert max(len(ln) for ln in lines) <= 80
+    note = edited_note(d)
+    assert len(note) > 80 and "cam.feed_mm_per_min" in note  # (the case cut before)
+    assert note in " ".join(ln[1:-1] for ln in lines)
