@@ -101,13 +101,19 @@ def esc(text: object) -> str:
 # violations never hides the controls. The panel itself stays 80 px narrower than the
 # window, and the wide one within 62 % of it (app.layout reckons the wide panel in
 # device pixels: on a high-DPI screen, or zoomed in, it would cover the mechanism).
+# On such a short window the line under the angle slider keeps room for
+# SHORT_WHERE_LINES only (a teacher's review at 1280x720: with 8 lines kept, the tabs'
+# contents began 13 px above the panel's bottom, and a click on a tab seemed to do
+# nothing); a station's sentence then moves the tabs down while it shows.
 # The controls' labels are dark grey (Mantine's "dimmed" #868e96 on white is 3.3:1, a
 # teacher's review found them hard to read projected; #495057 is 8:1).
+SHORT_WHERE_LINES = 3  # the room it keeps on a window 800 px high or less (STATUS_CSS)
 STATUS_CSS = (
     "<style>.mantine-ScrollArea-content div:has(#cam-status){overflow:clip!important;min-width:0}"
     "div:has(> #cam-status){position:sticky;top:0;z-index:10;background:#fff}"
     "#cam-status{max-height:32vh;overflow-y:auto}"
-    "@media (max-height:800px){#cam-status{max-height:20vh}}"
+    "@media (max-height:800px){#cam-status{max-height:20vh}"
+    f".cam-where{{min-height:{SHORT_WHERE_LINES * 1.35:.2f}em!important;font-size:0.9em}}}}"
     "[data-testid='floating-panel']{max-width:min(calc(100vw - 80px),max(384px,62vw));"
     "--mantine-color-dimmed:#495057}</style>"
 )
@@ -563,7 +569,7 @@ def where_markdown(
     )
     # in room kept for the longest of these lines (they wrap by their lengths, the
     # station's words come and go): the panel below does not jump during play
-    return f"<div style='min-height:{room_lines * 1.35:.2f}em'>{body}</div>"
+    return f"<div class='cam-where' style='min-height:{room_lines * 1.35:.2f}em'>{body}</div>"
 
 
 # --- the segment table ---------------------------------------------------------------

@@ -781,12 +781,11 @@ class Session:
             with self.lock:  # the default it replaced was no step of the user's
                 self.history.clear()
                 self.ui.history_md.content = ""
-            note = (  # where the user looks (above the tabs) and in Files
-                f"Restored the design last edited in this browser: *{esc(working.name)}* "
-                "(its tabs share one working design: the browser keeps it per site)."
-            )
-            self._say(note)
-            self._say_quick(note)
+            note = f"Restored the design last edited in this browser: *{esc(working.name)}*"
+            # where the user looks (above the tabs, short: a teacher's review at 1280x720)
+            # and in Files, with why
+            self._say(f"{note} (its tabs share one working design: the browser keeps it per site).")
+            self._say_quick(f"{note}.")
         self._restore_program(typed_text, typed if working is not None else None, gen0 + restore)
         try:  # a view the browser kept must never cost the rest of the restore
             self._restore_view(view)

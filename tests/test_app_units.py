@@ -51,13 +51,15 @@ def test_the_line_under_the_slider_keeps_its_room(paper_analysis):
     words shown) or between two, and whatever its lines' lengths (the panel below had
     jumped up to 30 px during play)."""
     a = paper_analysis
-    room = f"<div style='min-height:{panels.WHERE_LINES * 1.35:.2f}em'>"
+    room = f"<div class='cam-where' style='min-height:{panels.WHERE_LINES * 1.35:.2f}em'>"
     at = panels.where_markdown(a, 0, ["the low dwell ends"])
     between = panels.where_markdown(a, panels.nearest_index(a.theta, 30.0), ["x"])
     assert at.startswith(room) and between.startswith(room)
     assert at.endswith("<br><i>the low dwell ends</i></div>") and "<i>" not in between
     wide = panels.where_markdown(a, 0, [], room_lines=panels.WIDE_WHERE_LINES)
-    assert wide.startswith(f"<div style='min-height:{panels.WIDE_WHERE_LINES * 1.35:.2f}em'>")
+    assert wide.startswith(
+        f"<div class='cam-where' style='min-height:{panels.WIDE_WHERE_LINES * 1.35:.2f}em'>"
+    )
 
 
 def test_at_a_station_a_face_that_leaves_is_said_to(paper_analysis):
