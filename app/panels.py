@@ -19,10 +19,16 @@ import numpy as np
 
 from camcore.model import Design, FollowerKind, design_to_json
 from camcore.motion import segment_word
-from camcore.report import machine_rows, rho_range_text, unbounded_figures, unbounded_notes
+from camcore.report import (
+    folds_back,
+    machine_rows,
+    rho_range_text,
+    unbounded_figures,
+    unbounded_notes,
+)
 from camcore.units import to_mm
 
-from .controls import LABEL_OF_LAW
+from .controls import FOLDERS, LABEL_OF_LAW
 
 
 def program_text(design: Design) -> str:
@@ -317,11 +323,20 @@ _APP_WORDS = (
 )
 
 
+# "(limits.min_hub_wall_mm)" in a message -> "(Min hub wall [mm], Material & limits)":
+# every field a control sets, named as the panel names it (a teacher's review)
+_CONTROL_OF = {
+    f"({spec.path})": f"({spec.label}, {folder})" for folder, _, specs in FOLDERS for spec in specs
+}
+
+
 def _typeset_units(text: str) -> str:
     """The text report's ASCII units (a terminal's) as the curves and Compare write
     them, and a field's path as its control's label."""
     for a, b in _APP_WORDS:
         text = text.replace(a, b)
+    for path in re.findall(r"\([a-z_]+\.[a-z0-9_.]+\)", text):
+        text = text.replace(path, _CONTROL_OF.get(path, path))
     return text
 
 
@@ -356,9 +371,16 @@ def headline_html(s: dict) -> str:
         sigma = f"σ<sub>H</sub> unbounded: {unbounded[0][0]}"
     else:
         sigma = f"σ<sub>H</sub> ≤ {stress:.1f} / {_stress_limit_MPa(s):.6g} MPa"
+    codes = {v["code"] for v in s["violations"]}
+    if folds_back(s):  # (a teacher's review read "ρ ≥ 0.0, concave ≥ 0.0 mm" as harmless)
+        rho_item = "ρ → 0: the profile folds back"
+    elif "profile_crossing" in codes:  # (... and "ρ ≥ 38.6 mm" beside no solid at all)
+        rho_item = "ρ: the profile crosses itself"
+    else:
+        rho_item = f"ρ ≥ {mm(rho['convex_min'])}{concave} mm"
     items = (
         "φ –" if phi is None else f"φ ≤ {phi:.1f}°",
-        f"ρ ≥ {mm(rho['convex_min'])}{concave} mm",
+        rho_item,
         sigma,
         "no jump"
         if jump is None
@@ -415,8 +437,8 @@ def summary_markdown(s: dict) -> str:
             else "– (one contact)",
         ),
         ("Max pressure angle rise / fall", f"{f(pa['rise'])} / {f(pa['fall'])} °"),
-        ("ρ rise", rho_range_text(rho["rise"], lambda x, _nd: f(x, 1))),
-        ("ρ fall", rho_range_text(rho["fall"], lambda x, _nd: f(x, 1))),
+        ("ρ rise", rho_range_text(rho["rise"], lambda x, _nd: f(x, 1), folds_back(s))),
+        ("ρ fall", rho_range_text(rho["fall"], lambda x, _nd: f(x, 1), folds_back(s))),
         (
             "ρ convex min / concave min (cutter at most 2×)",
             f"{f(s['radius_of_curvature_mm']['convex_min'], 1)} / "
@@ -452,7 +474,11 @@ def summary_markdown(s: dict) -> str:
         *((k, _typeset_units(v)) for k, v in machine_rows(s)),
         (
             "Contact half-width max",
-            f"{f(s['contact_half_width_max_mm'], 4)} mm"
+            (
+                "–"
+                if s["contact_half_width_max_mm"] is None
+                else f"{f(s['contact_half_width_max_mm'], 4)} mm"
+            )
             + (
                 " (Hertz beyond validity: conservative stress)"
                 if s["hertz_beyond_validity_deg"]

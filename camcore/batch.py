@@ -557,7 +557,7 @@ def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
     FN, Ft = loc.guide.FN.reshape(B, N), loc.Ft.reshape(B, N)
     stress = loc.stress.reshape(F, B, N)
     if d0.follower.radius_mm == 0.0:  # knife edge: no Hertz contact (contact.hertz_validity)
-        b_half = np.zeros_like(stress)
+        b_half = np.full_like(stress, np.nan)
     else:
         w = d0.cam.width_mm * MM
         fn = np.where(inc, FN[None], 0.0)

@@ -92,10 +92,11 @@ def contact_stress(design: Design, FN, rho) -> np.ndarray:
 def hertz_validity(design: Design, FN, rho) -> tuple[np.ndarray, np.ndarray]:
     """(b, beyond): the Hertz half-width [m] of each contact and where it passes the
     half-space limit (there contact_stress gives the conservative value). Knife edge:
-    b = 0, never beyond (no Hertz stress at all)."""
+    b undefined (NaN, as its stress: no Hertz contact at all; a review read "0.0000 mm"
+    beside no stress), never beyond."""
     r = design.follower.radius_mm * MM
     if r == 0.0:
-        return np.zeros(np.shape(FN)), np.zeros(np.shape(FN), bool)
+        return np.full(np.shape(FN), np.nan), np.zeros(np.shape(FN), bool)
     w = design.cam.width_mm * MM
     b = half_width(FN, hertz_line_stress(FN, r, rho, w, compliance(design)), w)
     return b, b > half_width_limit(r, rho)

@@ -1025,8 +1025,9 @@ def design_from_json(text: str | bytes) -> Design:
     try:
         data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
     except json.JSONDecodeError as exc:  # where the file stops being JSON, in words
+        what = exc.msg.lower().removesuffix(" at")  # ("unterminated string starting at")
         raise DesignError(
-            f"not a JSON document: {exc.msg.lower()} at line {exc.lineno}, column {exc.colno}"
+            f"not a JSON document: {what} at line {exc.lineno}, column {exc.colno}"
         ) from None
     except (ValueError, RecursionError) as exc:
         raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None

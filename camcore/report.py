@@ -713,13 +713,22 @@ def _face_x_text(s: dict) -> str:
     return " / ".join(shown) + " mm" if shown else "-"
 
 
-def rho_range_text(rng: list[float] | None, fmt) -> str:
+def rho_range_text(rng: list[float] | None, fmt, folds: bool = False) -> str:
     """A signed rho range [mm] as "min .. max mm", or, where rho changes sign (it passes
     through infinity at an inflection, so its ends say nothing), that it does (a
-    designer's review read "-5148 .. 24045 mm")."""
+    designer's review read "-5148 .. 24045 mm"); through 0 where the profile ``folds``
+    back (folds_back), which is no inflection (a teacher's review)."""
     if rng is not None and rng[0] < 0 < rng[1]:
+        if folds:
+            return "changes sign through 0: the profile folds back (a cusp)"
         return "changes sign (an inflection): see convex / concave min"
     return f"{fmt(rng, 2)} mm"
+
+
+def folds_back(s: dict) -> bool:
+    """Whether summary ``s`` breaks a limit of a profile with a cusp or folding back
+    (checks.CUSPED): its radius of curvature passes through 0, not through infinity."""
+    return any(v["code"] in checks.CUSPED for v in s["violations"])
 
 
 def _psi_text(s: dict) -> str:
@@ -750,6 +759,7 @@ def report_text(s: dict, design: Design | None = None) -> str:
     """A readable table of one summary, under the ``design``'s inputs if given."""
     limit = None if design is None else design.limits.max_pressure_angle_deg
     free = unbounded_figures(s)
+    rho = s["curvature_radius_mm"]
     rows = [
         ("follower", s["follower"]),
         ("valid", "yes" if s["valid"] else "NO"),
@@ -773,8 +783,8 @@ def report_text(s: dict, design: Design | None = None) -> str:
             f"{_fmt_against(s['pressure_angle_max_deg']['rise'], limit, 2)} / "
             f"{_fmt_against(s['pressure_angle_max_deg']['fall'], limit, 2)} deg",
         ),
-        ("rho rise (min .. max)", rho_range_text(s["curvature_radius_mm"]["rise"], _fmt)),
-        ("rho fall (min .. max)", rho_range_text(s["curvature_radius_mm"]["fall"], _fmt)),
+        ("rho rise (min .. max)", rho_range_text(rho["rise"], _fmt, folds_back(s))),
+        ("rho fall (min .. max)", rho_range_text(rho["fall"], _fmt, folds_back(s))),
         (
             "rho convex min / concave min",
             f"{_fmt(s['radius_of_curvature_mm']['convex_min'], 2)} / "

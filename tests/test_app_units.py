@@ -977,3 +977,42 @@ def test_the_server_restarts_once_without_glibcs_thread_cache(monkeypatch):
     monkeypatch.delenv("GLIBC_TUNABLES")
     main._reexec_without_tcache()
     assert "GLIBC_TUNABLES" not in os.environ and main.REEXECED not in os.environ
+
+
+def test_the_status_names_a_limit_by_its_control():
+    """A teacher's review: the hub wall's violation said "(limits.min_hub_wall_mm)",
+    the design's path, where the panel's control is "Min hub wall [mm]"; the folded
+    cam's headline read "ρ ≥ 0.0, concave ≥ 0.0 mm" beside "the profile folds back"."""
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+    from camcore.report import report_text, summary
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["bore_diameter_mm"] = 158.0
+    a = analyze(Design.model_validate(data), verify=False)
+    assert "limits.min_hub_wall_mm" in " ".join(v.message for v in a.violations)  # the CLI's
+    box = panels.status_html(None, a.violations, None, False)
+    assert "(Min hub wall [mm], Material &amp; limits)" in box
+    assert "limits.min_hub_wall_mm" not in box
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 20.0
+    s = summary(analyze(Design.model_validate(data), verify=False))
+    line = panels.headline_html(s).replace("\u00a0", " ")
+    assert "ρ → 0: the profile folds back" in line and "ρ ≥" not in line
+    assert "the profile folds back (a cusp)" in panels.summary_markdown(s)
+    assert "inflection" not in report_text(s)
+
+
+def test_a_knife_edge_has_no_contact_half_width():
+    """A review: "Contact half-width max 0.0000 mm" beside "σH –" for a knife edge,
+    which has no Hertz contact at all: no half-width either, in the summary (so in a
+    sweep's rows) and the key numbers."""
+    from camcore.analysis import analyze
+    from camcore.model import load_preset
+    from camcore.report import summary
+
+    s = summary(analyze(load_preset("paper_example").with_kind("knife_edge"), verify=False))
+    assert s["contact_half_width_max_mm"] is None
+    assert "| Contact half-width max | – |" in panels.summary_markdown(s)
+    roller = summary(analyze(load_preset("paper_example").with_kind("single_roller")))
+    assert roller["contact_half_width_max_mm"] > 0

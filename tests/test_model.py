@@ -214,6 +214,8 @@ def test_a_file_that_is_no_json_design_says_what_it_is_in_words():
         (b"solid cam\n" + bytes([0x80, 0xFC]) * 50, "not a text file"),
         (b'{"name": }', "not a JSON document: expecting value at line 1, column 10"),
         ('{\n"name": "x",\n', "at line 3, column 1"),
+        # (a review: "unterminated string starting at at line 1")
+        ('{"name": "x', "not a JSON document: unterminated string starting at line 1, column 10"),
     ):
         with pytest.raises(DesignError, match=said):
             design_from_json(content)
