@@ -155,6 +155,7 @@ class ExplorePanel:
         self.x_range = gui.add_vector2(_range_label("x", labels[0]), (60.0, 110.0), step=0.5)
         self.y = gui.add_dropdown("y field", labels, initial_value=labels[1])
         self.y_range = gui.add_vector2(_range_label("y", labels[1]), (20.0, 40.0), step=0.5)
+        self.centre_btn = gui.add_button("Ranges around the design on screen")
         self.steps = gui.add_slider("Steps per field", 2, MAX_STEPS, 1, 8)
         self.all_kinds = gui.add_checkbox("All four followers (the paper's claim)", True)
         figs = tuple(FIGURE_LABELS)
@@ -208,6 +209,7 @@ class ExplorePanel:
         for widget in self._setup_widgets():
             widget.on_update(lambda _: self._keep_setup())
         self.run_btn.on_click(lambda _: self.start())
+        self.centre_btn.on_click(lambda _: self.centre())
         self.cancel_btn.on_click(lambda _: self.cancel())
         self.load_btn.on_click(lambda _: self.load(self.front_dd.value))
         self.csv_btn.on_click(lambda _: self.download("csv"))
@@ -321,6 +323,12 @@ class ExplorePanel:
         a designer's review found fixed ranges far from a small cam's)."""
         self._suggest(self.x, self.x_range, "x")
         self._suggest(self.y, self.y_range, "y")
+
+    def centre(self) -> None:
+        """Both ranges around the design on screen, kept (a teacher's review: ranges kept
+        from an earlier design left the one on screen out of the sweep)."""
+        self.suggest_ranges()
+        self._keep_setup()
 
     # --- the sweep ----------------------------------------------------------------
     def start(self) -> None:
@@ -473,9 +481,11 @@ class ExplorePanel:
                 self.front_dd.value = self.front_dd.options[0]
                 self.load_btn.disabled = not offers
                 self._put_image(png)
-                self.progress.content = _summary(
-                    rows, total, front, names, limits, len(offers)
-                ) + _balanced_text(ran)
+                self.progress.content = (
+                    _summary(rows, total, front, names, limits, len(offers))
+                    + _balanced_text(ran)
+                    + _outside_text(Design.model_validate(base), (x, y), limits)
+                )
         finally:
             self._redraw()  # for a width the panel took meanwhile; frees the map
 
@@ -739,6 +749,24 @@ def _least_text(rows: list[dict], name: str) -> str:
     )
     several = len({r.get("grid.follower.kind") for r in rows}) > 1
     return f"<br>Least {fig.label}{' per follower' if several else ''}: {esc(each)}."
+
+
+def _outside_text(design: Design, axes, limits) -> str:
+    """A warning where ``design`` (the one the sweep ran around) lies outside a field's
+    range (``axes``: (path, label) of x and y; ``limits``: their (lo, hi)): ranges kept
+    in the browser from an earlier design (a teacher's review) leave it out of the map
+    and of the front. "" if it lies inside both."""
+    out = []
+    for (path, label), (lo, hi) in zip(axes, limits, strict=True):
+        v = get_path(design, path)
+        if isinstance(v, int | float) and not lo <= v <= hi:
+            out.append(f"{esc(label)} = {v:g} is outside its range {lo:g} … {hi:g}")
+    if not out:
+        return ""
+    return (
+        "\n\n⚠ The design on screen: " + "; ".join(out) + " (ranges kept from an earlier "
+        "design?): *Ranges around the design on screen* centres them on it."
+    )
 
 
 def _valid_designs(rows: list[dict]) -> int:

@@ -2942,3 +2942,30 @@ def test_the_force_and_stress_plots_shade_where_both_faces_touch(tab):
     assert c.shared.max() == 0.0
     (band,) = [x for x in c.handle.series if x["label"] == SHARED_LABEL]
     assert band["show"] is False
+
+
+def test_explore_says_when_the_design_is_outside_its_ranges(tab):
+    """A teacher's review: ranges kept from an earlier design (r_b 28-52 mm) swept
+    around the paper's 80 mm cam without a word, the design on screen off the map.
+    The summary says so, and *Ranges around the design on screen* centres them."""
+    from app.panels import esc
+
+    e = tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (28.0, 52.0), (8.0, 12.0)
+    e.steps.value, e.all_kinds.value = 2, False
+    e.run_btn.value = True  # click
+    assert wait_for(lambda: "on the Pareto front" in e.progress.content, 120.0), e.progress.content
+    said = e.progress.content
+    label = esc("Base radius r_b [mm]")  # (Markdown: shown as typed)
+    assert f"⚠ The design on screen: {label} = 80 is outside its range 28 … 52" in said
+    assert "Offset" not in said.partition("⚠")[2]  # (e = 10 mm is inside 8 … 12)
+    e.centre_btn.value = True  # click
+    r_b, offset = tab.design.cam.base_radius_mm, tab.design.follower.offset_mm
+    assert tuple(e.x_range.value) == (round(0.7 * r_b, 1), round(1.3 * r_b, 1))
+    assert tuple(e.y_range.value) == (round(0.7 * offset, 1), round(1.3 * offset, 1))
+    assert e.setup()["x_range"] == list(e.x_range.value)  # kept in the browser too
+    assert wait_for(lambda: not e._thread.is_alive(), 30.0)  # (its map drawn: a click
+    e.run_btn.value = True  # while it draws runs nothing)
+    done = lambda: "on the Pareto front" in e.progress.content and "⚠" not in e.progress.content  # noqa: E731
+    assert wait_for(done, 120.0), e.progress.content
