@@ -620,8 +620,9 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
     """The front's numbers (the app's list). Designs at (nearly) one spot, within a
     line of text, share a label ("3,4", "16-18"); any other gets its own, put above or
     below, right or left of its design, where it overprints no label placed before it
-    (a review could not find 17 under another label; a later one found designs 13-14
-    unnumbered, their numbers joined to a label 7 mm of R away). Measured in the
+    and, if it can, stays within the axes (a review could not find 17 under another
+    label; a later one found designs 13-14 unnumbered, their numbers joined to a label
+    7 mm of R away; another saw "4-6" cut at the image's edge). Measured in the
     axes' own fraction, from their size once the figure is laid out (a colour bar
     narrows them); the labels take no part in the layout, so it stays as measured."""
     ax.figure.draw_without_rendering()
@@ -650,7 +651,8 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
             for right, up in sides
         ]  # fmt: skip
         free = [k for k, b in enumerate(boxes) if not any(_overlap(b, p) for p in placed)]
-        k = free[0] if free else 0
+        inside = [k for k in free if _within_axes(boxes[k])]  # (a review: "4-6" cut off
+        k = inside[0] if inside else free[0] if free else 0  # at the image's right edge)
         placed.append(boxes[k])
         right, up = sides[k]
         ax.annotate(
@@ -662,6 +664,11 @@ def _number_front(ax, v: np.ndarray, front: np.ndarray) -> None:
             ha="left" if right else "right",
             va="bottom" if up else "top",
         ).set_in_layout(False)
+
+
+def _within_axes(b: tuple[float, ...]) -> bool:
+    """Whether box (x0, x1, y0, y1), in the axes' fraction, lies within the axes."""
+    return 0.0 <= b[0] and b[1] <= 1.0 and 0.0 <= b[2] and b[3] <= 1.0
 
 
 def _overlap(a: tuple[float, ...], b: tuple[float, ...]) -> bool:

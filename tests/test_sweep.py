@@ -1363,6 +1363,8 @@ def test_each_front_number_stands_at_its_own_design(third):
     canvas.draw()
     boxes = [t.get_window_extent(canvas.get_renderer()) for t in ax.texts]
     assert not any(a.overlaps(b) for k, a in enumerate(boxes) for b in boxes[k + 1 :])
+    # ... and stays in the image (a review: "4-6" cut at its right edge)
+    assert all(fig.bbox.x0 <= b.x0 and b.x1 <= fig.bbox.x1 for b in boxes)
 
 
 def test_the_smallest_cam_each_follower_allows():
@@ -1481,3 +1483,27 @@ def test_a_balance_segment_takes_up_the_turn(tmp_path):
     classic = {"grid": {"motion.rise_deg": [90, 100]}, "balance": "motion.segments.3.angle_deg"}
     with pytest.raises(DesignError, match="low dwell takes up the turn"):
         sweep.parse_spec(json.dumps(classic))
+
+
+def test_a_front_number_at_the_axes_edge_stays_in_the_image():
+    """A teacher's review: the front's last label, "4-6", at the largest cam of the
+    sweep, ran off the image's right edge. A label goes to whichever side keeps it in
+    the axes."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from camcore.explore import PANEL_PX, explore_figure, pareto
+    from camcore.explore import grid_points as points_of
+    from camcore.explore import sweep_grid as grid_of
+    from camcore.model import load_preset
+
+    base = json.loads(load_preset("paper_example").model_dump_json())
+    kinds = ["single_roller", "double_roller", "single_concave", "double_concave"]
+    x, y = ("cam.base_radius_mm", 28.0, 52.0), ("follower.offset_mm", 7.0, 13.0)
+    rows = sweep.fast_rows(base, points_of(grid_of(x, y, 4, kinds), base, None))
+    names = ["cam_size", "stress"]
+    fig = explore_figure(rows, (x[0], "r_b"), (y[0], "e"), names, pareto(rows, names), PANEL_PX)
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    ax = fig.axes[len(kinds)]
+    boxes = [t.get_window_extent(canvas.get_renderer()) for t in ax.texts]
+    assert boxes and all(ax.bbox.x0 <= b.x0 and b.x1 <= ax.bbox.x1 for b in boxes)
