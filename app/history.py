@@ -4,7 +4,8 @@ Every design the tab shows replaces the one before it; the one before is kept he
 so that a designer can try a change and step back. A slider dragged through twenty
 values is one step: a change within SETTLE_S of the previous one joins it (the design
 before the burst is the one kept), as the refiner waits for the tab to be still. At
-most MOST steps are kept each way; a new change empties the redo side. Pure
+most MOST steps are kept each way; a new change empties the redo side. The browser
+keeps the last KEPT each way (app.storage.HISTORY_KEY), so a reload keeps them. Pure
 bookkeeping: app.session applies what it returns.
 """
 
@@ -15,6 +16,7 @@ import math
 from camcore.model import Design
 
 MOST = 50  # steps kept back (and forward)
+KEPT = 20  # of them, the steps each way the browser keeps across a reload (app.storage)
 SETTLE_S = 0.6  # a change within this of the previous one is the same step [s]
 
 
@@ -25,9 +27,12 @@ class History:
         self.past: list[Design] = []
         self.future: list[Design] = []
         self._last = -math.inf  # when the last change was recorded [s, monotonic]
+        self.version = 0  # counts changes of the steps (not of a burst joining one)
 
     def record(self, before: Design, now: float) -> None:
         """The design on screen changed at ``now`` [s]; ``before`` is the one it replaced."""
+        if now - self._last >= SETTLE_S or not self.past or self.future:
+            self.version += 1
         if now - self._last >= SETTLE_S or not self.past:
             self.past.append(before)
             del self.past[:-MOST]
@@ -51,12 +56,17 @@ class History:
         dest.append(current)
         del dest[:-MOST]
         self._last = -math.inf  # the next change is a step of its own
+        self.version += 1
         return source.pop()
 
     def clear(self) -> None:
-        self.past.clear()
-        self.future.clear()
+        self.restore([], [])
+
+    def restore(self, past: list[Design], future: list[Design]) -> None:
+        """Take ``past`` and ``future`` as the steps (a reload's, app.storage)."""
+        self.past, self.future = past[-MOST:], future[-MOST:]
         self._last = -math.inf
+        self.version += 1
 
     def text(self) -> str:
         """How many steps each way, for the line under the buttons ("" if none)."""

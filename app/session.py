@@ -161,6 +161,8 @@ class Session:
         # (name, design): a Save of that design under that kept name replaces it
         self._replace_armed: tuple[str, Design] | None = None
         self._persist = False  # on once the browser's stored design has been read
+        self._steps_read = False  # ... and its Undo and Redo steps taken back
+        self._steps_written = -1  # the history's version last written to the browser
         self._view_edits = 0  # the user's view changes (a kept view never overrides one)
         self.history = History()  # the designs before and after the one on screen
         self._travelling = False  # True while undo or redo replaces the design
@@ -753,6 +755,7 @@ class Session:
         typed_text = stored[storage.PROGRAM_KEY]
         typed = storage.parse_program(typed_text)
         view = storage.parse_view(stored[storage.VIEW_KEY])
+        steps = storage.parse_history(stored[storage.HISTORY_KEY])  # Undo's and Redo's
         aside = stored[storage.UNREADABLE_KEY]  # set aside by an earlier visit?
         if self.closed.is_set():
             return
@@ -772,15 +775,20 @@ class Session:
                 self.ui.aside_btn.visible = True
         with self.lock:
             self._show_saved(saved)
-            restore = working is not None and self.gen == gen0 and working != self.design
+            mine = working is not None and self.gen == gen0  # (no edit of the user's yet)
+            restore = mine and working != self.design
             self._persist = True
             if not restore:
+                if mine:  # the kept steps lead to the design on screen
+                    self._restore_steps(steps)
+                self._steps_read = True
                 self._save_working()
         if working is not None and restore:
             self.set_design(working, save_as=working.name)
             with self.lock:  # the default it replaced was no step of the user's
-                self.history.clear()
-                self.ui.history_md.content = ""
+                self._restore_steps(steps)
+                self._steps_read = True
+                self._save_history()
             note = f"Restored the design last edited in this browser: *{esc(working.name)}*"
             # where the user looks (above the tabs, short: a teacher's review at 1280x720)
             # and in Files, with why
@@ -910,6 +918,26 @@ class Session:
         if self._persist and self.error is None:
             self.store.write(storage.WORKING_KEY, design_to_json(self.design))
             self._pair_program()
+        self._save_history()
+
+    def _restore_steps(self, steps: tuple[list[Design], list[Design]]) -> None:
+        """Undo's and Redo's designs as the browser kept them (storage.parse_history).
+        Lock held."""
+        self.history.restore(*steps)
+        self.ui.history_md.content = self.history.text()
+
+    def _save_history(self) -> None:
+        """Write Undo's and Redo's designs (storage.HISTORY_KEY) when their steps have
+        changed (not at each value of a slider's drag, which joins one step); not
+        before the restore has read the kept ones (they must not be replaced unseen).
+        Lock held."""
+        if not (self._persist and self._steps_read):
+            return
+        if self.history.version != self._steps_written:
+            self.store.write(
+                storage.HISTORY_KEY, storage.history_text(self.history.past, self.history.future)
+            )
+            self._steps_written = self.history.version
 
     def _pair_program(self) -> None:
         """Write this tab's unfinished program (or none) beside the working design it

@@ -41,7 +41,19 @@ PROGRAM_KEY = "camdesigner.program"
 # how the tab was looking at the design: cam angle, play speed, pause at stations, wide
 # panel, overlays, camera preset (a teacher's review: a reload kept the design only)
 VIEW_KEY = "camdesigner.view"
-KEYS = (WORKING_KEY, SAVED_KEY, EXPLORE_KEY, PROGRAM_KEY, VIEW_KEY, UNREADABLE_KEY)  # all read
+# the designs Undo and Redo go to (app.history: the last KEPT each way), so that a
+# reload keeps a designer's steps back as well as the design
+HISTORY_KEY = "camdesigner.history"
+KEYS = (  # all read at once
+    WORKING_KEY,
+    SAVED_KEY,
+    EXPLORE_KEY,
+    PROGRAM_KEY,
+    VIEW_KEY,
+    UNREADABLE_KEY,
+    HISTORY_KEY,
+)
+MAX_HISTORY_CHARS = 2_000_000  # of its stored text: 40 designs of 50 kB (one is ~3 kB)
 MAX_SETUP_BYTES = 4096  # characters of the stored text
 MAX_SAVED = 20  # named designs per browser
 MAX_NAME = 60  # characters of a saved design's name
@@ -223,6 +235,42 @@ def proposed_name(name: str) -> str:
 
 def _refuse(name: str):
     raise ValueError(name)
+
+
+def history_text(past: list[Design], future: list[Design]) -> str:
+    """The steps of an app.history.History to keep: the last KEPT each way."""
+    from .history import KEPT
+
+    def texts(designs: list[Design]) -> list[str]:
+        return [design_to_json(d) for d in designs[-KEPT:]]
+
+    return json.dumps({"past": texts(past), "future": texts(future)})
+
+
+def parse_history(text: str | None) -> tuple[list[Design], list[Design]]:
+    """(past, future) from history_text's text, as untrusted as any stored design:
+    at most KEPT each way, each parsed like an uploaded file; a step that is not a
+    valid design is left out (the others still count); ([], []) if the text is not
+    history_text's."""
+    from .history import KEPT
+
+    if not text or len(text) > MAX_HISTORY_CHARS:
+        return [], []
+    try:
+        raw = json.loads(text)
+    except (ValueError, RecursionError):
+        return [], []
+    if not isinstance(raw, dict):
+        return [], []
+
+    def designs(key: str) -> list[Design]:
+        entries = raw.get(key)
+        if not isinstance(entries, list):
+            return []
+        parsed = (parse_working(e) if isinstance(e, str) else None for e in entries[-KEPT:])
+        return [d for d in parsed if d is not None]
+
+    return designs("past"), designs("future")
 
 
 def with_saved(saved: dict[str, str], name: str, design: Design) -> dict[str, str]:

@@ -2969,3 +2969,53 @@ def test_explore_says_when_the_design_is_outside_its_ranges(tab):
     e.run_btn.value = True  # while it draws runs nothing)
     done = lambda: "on the Pareto front" in e.progress.content and "⚠" not in e.progress.content  # noqa: E731
     assert wait_for(done, 120.0), e.progress.content
+
+
+def test_undo_and_redo_survive_a_reload(app, monkeypatch):
+    """Nothing the user made is lost: a reload had kept the design but not its steps
+    back (Undo said "nothing to undo"). The tab writes Undo's and Redo's designs
+    when a step is made or taken (not at each value of a drag, which joins one
+    step), and a new tab takes them back, each parsed like a file: a tampered step is
+    left out, the others still count."""
+    from app import history, storage
+    from app.layout import HISTORY_BUTTONS
+
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {}, writes) as s:
+        monkeypatch.setattr(history, "SETTLE_S", 0.0)  # each change a step
+        lifts = (16.0, 17.0, 18.0)
+        for h in lifts:
+            s.ui.controls["motion.lift_mm"].value = h
+        s.travel(HISTORY_BUTTONS[0])  # undo: 18 -> 17, one step to redo
+        assert s.design.motion.lift_mm == 17.0
+        keys: list[str] = []  # what is written, in order
+        sink = storage.BrowserStore.write
+        monkeypatch.setattr(
+            storage.BrowserStore, "write", lambda st, k, v: keys.append(k) or sink(st, k, v)
+        )
+        monkeypatch.setattr(history, "SETTLE_S", 60.0)  # a drag: one step
+        for h in (17.5, 17.6, 17.7):
+            s.ui.controls["motion.lift_mm"].value = h
+        kept = writes[storage.HISTORY_KEY]
+        assert keys.count(storage.WORKING_KEY) == 3  # the design at each value ...
+        assert keys.count(storage.HISTORY_KEY) == 1  # ... the steps once: the drag's
+    past, future = storage.parse_history(kept)
+    assert [d.motion.lift_mm for d in past] == [15.0, 16.0, 17.0]
+    assert future == []  # (the drag's new step emptied Redo)
+    stored = {storage.WORKING_KEY: writes[storage.WORKING_KEY], storage.HISTORY_KEY: kept}
+    with restored_tab(app, monkeypatch, stored) as s:
+        assert s.design.motion.lift_mm == 17.7
+        assert "3 steps to undo" in s.ui.history_md.content
+        s.travel(HISTORY_BUTTONS[0])
+        assert s.design.motion.lift_mm == 17.0
+        s.travel(HISTORY_BUTTONS[0])
+        assert s.design.motion.lift_mm == 16.0
+        s.travel(HISTORY_BUTTONS[1])  # redo
+        assert s.design.motion.lift_mm == 17.0
+    data = json.loads(kept)
+    data["past"][1] = data["past"][1].replace('"lift_mm": 16.0', '"lift_mm": -4.0')
+    data["past"].insert(0, {"not": "a design"})
+    past, _ = storage.parse_history(json.dumps(data))
+    assert [d.motion.lift_mm for d in past] == [15.0, 17.0]
+    for junk in ("[1]", "{", '{"past": 3}', "x" * (storage.MAX_HISTORY_CHARS + 1)):
+        assert storage.parse_history(junk) == ([], [])
