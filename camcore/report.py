@@ -883,6 +883,7 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
                 # figures without a bound (a jam, a cusp, a velocity jump): said beside
                 # them (a designer's review read 2,004,164 MPa in the table unflagged)
                 "unbounded": [note for _, note in unbounded_notes(s)],
+                "unbounded_figures": sorted(unbounded_figures(s)),  # (UNBOUNDED's names)
                 "FN_high_dwell_N": s["contact_force_max_N"]["high_dwell"],
                 "FN_high_dwell_two_contact_N": s["contact_force_max_N"]["high_dwell_two_contact"],
                 "paper_table1_N": paper_table1_N(design, kind),
@@ -908,6 +909,15 @@ def compare_rows(design: Design, kinds: tuple[FollowerKind, ...] = PAPER_FOLLOWE
             }
         )
     return rows
+
+
+# compare_rows' cycle figures and their names in UNBOUNDED (the dwell's are bounded)
+_FIGURE_OF = {
+    "FN_cycle_N": "force",
+    "F1_max_N": "guide",
+    "F2_max_N": "guide",
+    "stress_max_MPa": "stress",
+}
 
 
 def compare_text(rows: list[dict]) -> str:
@@ -938,8 +948,10 @@ def compare_text(rows: list[dict]) -> str:
         "  ".join(f"{h:>14}" for h in head),
         "  ".join(f"{u:>14}" for u in ("", "N", "N", "N", "N", "N", "N", "MPa", "MPa", "MPa")),
     ]
-    for r in rows:
-        lines.append(f"{r['follower']:>14}  " + "  ".join(f"{_fmt(r[k], 3):>14}" for k in keys))
+    for r in rows:  # a figure with no bound says so (a review read 3019079.610 MPa)
+        free = set(r["unbounded_figures"])
+        shown = (bounded(r[k], 3, _FIGURE_OF.get(k, ""), free) for k in keys)
+        lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in shown))
     tabulated = [r for r in rows if FollowerKind(r["follower"]) in PAPER_TABLE1_N]
     if tabulated and all(r["paper_table1_N"] is None for r in tabulated):
         lines.append(
@@ -977,13 +989,17 @@ def compare_text(rows: list[dict]) -> str:
         "  ".join(f"{u:>14}" for u in ("", "um/Mcycle", "cycles", "N/m", "rpm", "N m")),
     ]
     for r in rows:
-        life = r["pitting_life_cycles"]
+        life, free = r["pitting_life_cycles"], set(r["unbounded_figures"])
         cells = (
             _fmt(r["wear_depth_max_um_per_Mcycle"], 4),
-            _life_text(r["follower"]) if life is None else f"{life:.3g}",
+            "none"
+            if "life" in free
+            else _life_text(r["follower"])
+            if life is None
+            else f"{life:.3g}",
             _fmt(r["spring_rate_min_N_per_m"], 1),
             "any" if r["jump_speed_rpm"] == 0.0 else _fmt(r["jump_speed_rpm"], 1),
-            _fmt(r["cam_torque_drive_max_Nm"], 3),
+            bounded(r["cam_torque_drive_max_Nm"], 3, "torque", free),
         )
         lines.append(f"{r['follower']:>14}  " + "  ".join(f"{c:>14}" for c in cells))
     return "\n".join(lines + _verdict_lines(rows))

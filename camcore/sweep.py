@@ -860,6 +860,18 @@ def load_spec(path: str | Path) -> Spec:
     return parse_spec(read_capped(path, MAX_SPEC_BYTES), base_dir=Path(path).parent)
 
 
+SAME_DIGITS = 12  # significant digits two figures must share to count as equal
+
+
+def _significant(x: np.ndarray, digits: int) -> np.ndarray:
+    """``x`` rounded to ``digits`` significant digits (0, inf and NaN as they are)."""
+    with np.errstate(all="ignore"):
+        exp = np.floor(np.log10(np.abs(x)))
+        scale = 10.0 ** (digits - 1 - exp)
+        rounded = np.round(x * scale) / scale
+        return np.where(np.isfinite(rounded), rounded, x)  # (beyond 1e±290: as it is)
+
+
 def pareto_mask(values: np.ndarray) -> np.ndarray:
     """Which rows of ``values`` (n designs x k figures, all to be minimized) are on the
     Pareto front: no other row is at least as good in every figure and better in one.
@@ -870,8 +882,12 @@ def pareto_mask(values: np.ndarray) -> np.ndarray:
     dominated by one before it. Two figures: by the running minimum of the second
     (O(n log n)). More: blocks of points are tested against the front found so far and
     against each other (O(n |front| k)), so a million-row sweep with a front of a few
-    thousand takes about a second; a front of n points would take O(n^2)."""
-    v = np.asarray(values, dtype=float)
+    thousand takes about a second; a front of n points would take O(n^2).
+
+    Figures equal to SAME_DIGITS significant digits count as equal (a review: a
+    single roller stayed on the front beside a face whose R was 95.00000000000003 mm
+    against its 95.0: round-off, not a better cam)."""
+    v = _significant(np.asarray(values, dtype=float), SAME_DIGITS)
     ok = np.isfinite(v).all(axis=1)
     front = np.zeros(len(v), dtype=bool)
     if not ok.any():

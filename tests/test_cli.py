@@ -573,3 +573,19 @@ def test_an_empty_follower_list_is_refused(capsys):
     for given in ("", ",,,"):
         assert main(["compare", "--preset", "paper_example", "--followers", given]) == 2
         assert "--followers: unknown (empty)" in capsys.readouterr().err
+
+
+def test_compare_text_says_unbounded_where_the_report_does(capsys):
+    """A README review: compare's table printed a cusp's samples (3019079.610 MPa,
+    a pitting life of 1.16e-38 cycles) where `report` says "unbounded" and "none"."""
+    args = ["compare", "--preset", "paper_example", "--set", "cam.base_radius_mm=12"]
+    assert main(args) == 1
+    out = capsys.readouterr().out
+    for kind in ("single_concave", "double_concave"):  # the faces that fold back here
+        forces = next(ln for ln in out.splitlines() if ln.strip().startswith(kind))
+        assert forces.split()[7] == "unbounded", forces  # sigma max
+    assert main([*args, "--json"]) == 1
+    rows = json.loads(capsys.readouterr().out)
+    folded = {r["follower"]: r["unbounded_figures"] for r in rows}
+    assert folded["double_concave"] == ["life", "stress"] and folded["single_roller"] == []
+    assert "unbounded" not in next(ln for ln in out.splitlines() if "single_roller" in ln)

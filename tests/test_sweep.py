@@ -466,6 +466,21 @@ def test_pareto_mask_against_a_brute_force_definition(k):
     assert not pareto_mask(np.full((3, k), np.nan)).any()
 
 
+def test_pareto_mask_takes_round_off_for_equal():
+    """A review: a single roller (R 95.0 mm, 212.2 MPa) stayed on the front beside a
+    single concave face (R 95.00000000000003 mm, 51.88 MPa), better only by round-off.
+    Figures equal to 12 significant digits are equal; 13 digits apart still count."""
+    from camcore.sweep import pareto_mask
+
+    r = 95.00000000000003
+    assert pareto_mask(np.array([[95.0, 212.2], [r, 51.88]])).tolist() == [False, True]
+    for k in (2, 3):  # (both paths: the running minimum and the blocks)
+        v = np.array([[95.0, 212.2, 1.0], [r, 51.88, 1.0]])[:, :k]
+        assert pareto_mask(v).tolist() == [False, True]
+    apart = 95.0 * (1 + 1e-11)  # a real difference, however small
+    assert pareto_mask(np.array([[95.0, 212.2], [apart, 51.88]])).tolist() == [True, True]
+
+
 def test_pareto_mask_of_a_large_front():
     """Thousands of points (the seeded filter of _front_by_blocks): all of a plane are
     on the front and a point behind it is not; random points with ties against the
