@@ -68,7 +68,10 @@ def table_markdown(results: dict, design: Design) -> str:
         ("φ max [°]", lambda k, s: f(largest_pressure_angle(s), 2)),
         ("ρ convex min [mm]", lambda k, s: f(s["radius_of_curvature_mm"]["convex_min"], 1)),
         ("outer Ø [mm]", lambda k, s: f(s["profile"]["outer_diameter_mm"], 2)),
-        ("wear max [µm/10⁶ cycles]", lambda k, s: f(s["wear_depth_max_um_per_Mcycle"], 4)),
+        (
+            "wear max [µm/10⁶ cycles]",
+            lambda k, s: bounded(s, "wear", s["wear_depth_max_um_per_Mcycle"], 4),
+        ),
         ("limits", lambda k, s: "✔" if s["valid"] else f"⚠ {len(s['violations'])}"),
     ]
     kinds = list(results)

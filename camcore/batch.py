@@ -732,7 +732,7 @@ def summaries(designs: list[Design]) -> list[dict]:
             "valid": not codes,
             "profile_checked": False,
             "violations": [{"code": c} for c in codes],
-            "unbounded": unbounded_of(codes),
+            "unbounded": unbounded_of(codes, d.follower.kind),
             **geometry,
             **grid,
             **spring,

@@ -294,7 +294,7 @@ def summary(a: Analysis) -> dict:
         "follower": a.design.follower.kind.value,
         "valid": a.valid,
         "violations": [v.as_dict() for v in a.violations],
-        "unbounded": unbounded_of([v.code for v in a.violations]),
+        "unbounded": unbounded_of([v.code for v in a.violations], a.design.follower.kind),
         "dwell_radius_mm": a.geo.dwell_radius * 1e3,
         "psi_h_deg": a.geo.psi_h * R2D,
         "psi_l_deg": a.geo.psi_l * R2D,
@@ -484,6 +484,8 @@ def machine_rows(s: dict) -> list[tuple[str, str]]:
             # (a designer's review read "0.0000 um ... sliding up to 0.00 m/s" of rollers)
             "none: a roller rolls (no sliding wear to model)"
             if FollowerKind(s["follower"]).is_roller
+            else "unbounded"
+            if "wear" in free
             else f"{_fmt(s['wear_depth_max_um_per_Mcycle'], 4)} um per "
             f"million cycles (sliding up to {_fmt(s['sliding_speed_max_m_per_s'], 2)} m/s)",
         ),
@@ -652,10 +654,20 @@ def impulse_note(s: dict) -> str | None:
 # what has no bound for each reason of unbounded_notes (the figures its note names)
 UNBOUNDED = {
     # (F1, F2 are linear in F_t, the torque is F_N times its lever; an impulse's energy,
-    # the flywheel's, is finite)
-    "the velocity jumps": {"force", "guide", "stress", "torque", "power", "life"},
-    "the cam has a cusp": {"stress", "life"},
-    "the guide jams": {"force", "guide", "stress", "torque", "power", "flywheel", "life"},
+    # the flywheel's, is finite; a sliding face's wear grows with F_N, and at a cusp with
+    # 1 / u as the contact stalls on the cam: camcore.wear; a roller's is 0)
+    "the velocity jumps": {"force", "guide", "stress", "torque", "power", "life", "wear"},
+    "the cam has a cusp": {"stress", "life", "wear"},
+    "the guide jams": {
+        "force",
+        "guide",
+        "stress",
+        "torque",
+        "power",
+        "flywheel",
+        "life",
+        "wear",
+    },
 }
 
 
@@ -665,7 +677,7 @@ def unbounded_figures(s: dict) -> set[str]:
     the samples' largest (a designer's review read "101036570.5 MPa" in the key numbers
     beside a headline of "unbounded"). The JSON keeps the numbers, the notes, and
     these names as ``unbounded``."""
-    return set(unbounded_of([v["code"] for v in s["violations"]]))
+    return set(unbounded_of([v["code"] for v in s["violations"]], s["follower"]))
 
 
 # the violation codes behind each reason of unbounded_notes
@@ -676,13 +688,14 @@ UNBOUNDED_BY = {
 }
 
 
-def unbounded_of(codes: list[str]) -> list[str]:
+def unbounded_of(codes: list[str], follower: str) -> list[str]:
     """The figures (UNBOUNDED's names, sorted) that the violations ``codes`` leave
-    without bound: a post-processor of a sweep's table reads them beside the numbers
-    (a review: a cusp's 28,672,817 MPa read as a stress)."""
-    return sorted(
-        {f for why, by in UNBOUNDED_BY.items() if by & set(codes) for f in UNBOUNDED[why]}
-    )
+    without bound for a ``follower`` (FollowerKind's value; a roller has no sliding
+    wear at all): a post-processor of a sweep's table reads them beside the numbers (a
+    review: a cusp's 28,672,817 MPa read as a stress; another a face's wear of 20,220
+    um per million cycles)."""
+    found = {f for why, by in UNBOUNDED_BY.items() if by & set(codes) for f in UNBOUNDED[why]}
+    return sorted(found - ({"wear"} if FollowerKind(follower).is_roller else set()))
 
 
 def bounded(x, nd: int, figure: str, unbounded: set[str]) -> str:
@@ -991,7 +1004,7 @@ def compare_text(rows: list[dict]) -> str:
     for r in rows:
         life, free = r["pitting_life_cycles"], set(r["unbounded_figures"])
         cells = (
-            _fmt(r["wear_depth_max_um_per_Mcycle"], 4),
+            bounded(r["wear_depth_max_um_per_Mcycle"], 4, "wear", free),
             "none"
             if "life" in free
             else _life_text(r["follower"])

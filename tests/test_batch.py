@@ -361,7 +361,7 @@ def test_rows_say_which_figures_have_no_bound():
         {"follower.kind": "single_concave", "cam.base_radius_mm": 40.0},
     ]
     cusp, sound = sweep.run_chunk(data, points, fast=True)
-    assert json.loads(cusp["unbounded"]) == ["life", "stress"]
+    assert json.loads(cusp["unbounded"]) == ["life", "stress", "wear"]  # (a face slides)
     assert json.loads(sound["unbounded"]) == []
     full = sweep.run_chunk(data, points, verify=False)
     assert [r["unbounded"] for r in full] == [cusp["unbounded"], sound["unbounded"]]
@@ -373,6 +373,13 @@ def test_rows_say_which_figures_have_no_bound():
     notes = unbounded_notes(s)
     assert notes and set(s["unbounded"]) == {f for why, _ in notes for f in UNBOUNDED[why]}
     assert unbounded_figures(s) == set(s["unbounded"])
+    # a sliding face's wear grows without bound there too (a review read 20,220 um per
+    # million cycles as a figure); a roller has none to grow (its wear is a true 0)
+    from camcore.report import unbounded_of
+
+    for code in ("roller_undercut", "velocity_jump", "guide_jam"):
+        assert "wear" in unbounded_of([code], "single_concave")
+        assert "wear" not in unbounded_of([code], "double_roller")
 
 
 def test_an_infinite_stress_at_a_cusp_is_reported_not_raised():
@@ -394,6 +401,6 @@ def test_an_infinite_stress_at_a_cusp_is_reported_not_raised():
     (stress,) = [v for v in single["violations"] if v["code"] == "contact_stress"]
     assert stress["message"].startswith("Hertz stress without bound")
     assert "more than a million times the allowable" in stress["message"]
-    assert fast["unbounded"] == single["unbounded"] == ["life", "stress"]
+    assert fast["unbounded"] == single["unbounded"] == ["life", "stress", "wear"]
     (row,) = sweep.run_chunk(base, [point], verify=False)  # a sweep without --fast
     assert row["error"] is None and not row["valid"]

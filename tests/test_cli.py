@@ -587,5 +587,5 @@ def test_compare_text_says_unbounded_where_the_report_does(capsys):
     assert main([*args, "--json"]) == 1
     rows = json.loads(capsys.readouterr().out)
     folded = {r["follower"]: r["unbounded_figures"] for r in rows}
-    assert folded["double_concave"] == ["life", "stress"] and folded["single_roller"] == []
+    assert folded["double_concave"] == ["life", "stress", "wear"] and folded["single_roller"] == []
     assert "unbounded" not in next(ln for ln in out.splitlines() if "single_roller" in ln)
