@@ -48,9 +48,19 @@ class History:
         """The design undone last, None if there is none."""
         return self._step(self.future, self.past, current)
 
-    def _step(self, source: list[Design], dest: list[Design], current: Design) -> Design | None:
-        while source and source[-1] == current:  # (a change undone by hand in one burst)
+    def drop_same(self, current: Design) -> None:
+        """Drop the last steps back that are ``current`` itself (a change undone by hand
+        in one burst): none of them would change the design."""
+        self._drop_same(self.past, current)
+
+    def _drop_same(self, source: list[Design], current: Design) -> None:
+        if source and source[-1] == current:
+            self.version += 1
+        while source and source[-1] == current:
             source.pop()
+
+    def _step(self, source: list[Design], dest: list[Design], current: Design) -> Design | None:
+        self._drop_same(source, current)
         if not source:
             return None
         dest.append(current)

@@ -312,11 +312,17 @@ class Session:
         if label not in HISTORY_BUTTONS:
             return
         with self.lock:
-            step = self.history.undo if label == HISTORY_BUTTONS[0] else self.history.redo
-            design = step(self.design)
+            pending = self.error is not None or self._typed_program is not None
+            if label == HISTORY_BUTTONS[0] and pending:
+                # an input error or an unfinished program undone: the design on screen,
+                # the last valid one, and no step of the history (a designer's review:
+                # Undo had also taken back the valid change made before the typing)
+                self.history.drop_same(self.design)
+                design: Design | None = self.design
+            else:
+                step = self.history.undo if label == HISTORY_BUTTONS[0] else self.history.redo
+                design = step(self.design)
             self.ui.history_md.content = self.history.text()  # (also when none is left)
-            if design is None and self.error is not None:
-                design = self.design  # an input error undone: the design on screen
             if design is None:  # said, not silent (a teacher's review after a reload)
                 self.ui.history_md.content = _nothing_to(label, self.history.text())
                 return

@@ -2850,6 +2850,20 @@ def test_undo_and_redo_step_through_the_designs(tab, monkeypatch):
     undo()
     assert s.error is None and s.ui.controls["motion.lift_mm"].value == s.design.motion.lift_mm
     assert s.design.cam.width_mm == 20.0 and s.ui.history_md.content == ""
+    # ... and with steps to undo, the first Undo drops only the typing: the valid
+    # change before it stays (a designer's review: it went too, Redo alone gave it back)
+    monkeypatch.setattr(history, "SETTLE_S", 0.0)
+    s.ui.controls["limits.max_pressure_angle_deg"].value = 33.0
+    valid = s.design
+    s.ui.segments.rows[1]["angle"].value = 50.0  # an unfinished program: 340 deg
+    assert s.error is not None and s._typed_program is not None
+    undo()
+    assert s.error is None and s._typed_program is None and s.design == valid
+    assert [r["angle"].value for r in s.ui.segments.rows] == [
+        g.angle_deg for g in valid.motion.segments
+    ]
+    undo()  # then the steps, as before: the pressure angle's limit first
+    assert s.design.limits.max_pressure_angle_deg != 33.0
 
 
 def test_a_table_edit_waiting_on_the_restore_still_wins(tab):
