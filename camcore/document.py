@@ -353,7 +353,8 @@ def html_report(a: Analysis) -> str:
 <title>Cam design report: {esc(s["design"])}{edited_html}</title>
 <style>
 body {{ font-family: system-ui, sans-serif; margin: 2em auto; max-width: 60em; color: #222; }}
-pre {{ background: #f6f7f9; padding: 1em; overflow-x: auto; font-size: 0.85em; }}
+pre {{ background: #f6f7f9; padding: 1em; font-size: 0.85em; white-space: pre-wrap;
+  overflow-wrap: anywhere; }}
 .ok {{ color: #17692e; font-weight: bold; }} .bad {{ color: #a11; }}
 svg {{ max-width: 100%; height: auto; }}
 @media print {{ body {{ margin: 0; }} }}

@@ -429,3 +429,33 @@ def test_trust_in_the_browser(tmp_path):
             browser.close()
     finally:
         app.stop()
+
+
+@pytest.mark.browser
+def test_the_printed_report_keeps_every_line(tmp_path):
+    """A designer's review: printed at A4 width, the HTML report's Inputs and Key
+    numbers were cut at the page's edge (its <pre> blocks scrolled, and paper does not
+    scroll). In print, at 794 px (A4 at 96 dpi), no block is wider than its box."""
+    if not os.path.exists(CHROMIUM):
+        pytest.skip("no /usr/bin/chromium")
+    from playwright.sync_api import sync_playwright
+
+    from camcore.analysis import analyze
+    from camcore.document import html_report
+    from camcore.model import load_preset
+
+    page_file = tmp_path / "report.html"
+    page_file.write_text(html_report(analyze(load_preset("paper_example"))), encoding="utf-8")
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=FLAGS, headless=True)
+        try:
+            page = browser.new_page(viewport={"width": 794, "height": 1123})
+            page.emulate_media(media="print")
+            page.goto(page_file.as_uri())
+            widths = page.evaluate(
+                "() => [...document.querySelectorAll('pre')]"
+                ".map(e => [e.scrollWidth, e.clientWidth])"
+            )
+        finally:
+            browser.close()
+    assert len(widths) >= 2 and all(s <= c for s, c in widths), widths
