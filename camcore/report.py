@@ -539,7 +539,16 @@ def inputs_text(design) -> str:
             f"mm, guide mu {dyn.guide_friction:g}, d {dyn.guide_width_mm:g} mm, "
             f"l1 {dyn.overhang_mm:g} mm, l2 {dyn.guide_length_mm:g} mm"
             + (f", contact mu {dyn.contact_friction:g}" if dyn.contact_friction else "")
-            + (f", external load {dyn.external_load_N:g} N" if dyn.external_load_N else ""),
+            + (f", external load {dyn.external_load_N:g} N" if dyn.external_load_N else "")
+            # what else the figures depend on (a designer's review could not reproduce
+            # the jump speed from "M 800 g": the analysis moves M + m_s / 3)
+            + (f", spring mass {dyn.spring_mass_g:g} g" if dyn.spring_mass_g else "")
+            + f", g {dyn.gravity_m_s2:g} m/s2"
+            + (
+                f", train k1 {dyn.train_stiffness_N_per_m:g} N/m zeta {dyn.damping_ratio:g}"
+                if dyn.train_stiffness_N_per_m
+                else ""
+            ),
         ),
         (
             "material",

@@ -571,3 +571,19 @@ def test_an_external_load_acts_as_weight_does():
     assert s["jump_speed_rpm"] == 0.0
     assert s["jump_margin"]["jump_speed"] == 0.0
     assert "none: the follower leaves the cam at any speed" in report.report_text(s)
+
+
+def test_the_reports_inputs_name_what_the_figures_depend_on():
+    """A designer's review: the report's inputs said "M 800 g" while the jump speed
+    came from M + m_s / 3 = 820 g, and named neither the spring's mass nor the
+    elastic train: its inputs could not reproduce its own key numbers."""
+    from camcore.model import Design
+    from camcore.report import inputs_text
+
+    data = load_preset("paper_example").model_dump()
+    data["dynamics"].update(spring_mass_g=60.0, train_stiffness_N_per_m=2e5, damping_ratio=0.07)
+    line = next(ln for ln in inputs_text(Design.model_validate(data)).splitlines() if "M " in ln)
+    assert "spring mass 60 g" in line and "train k1 200000 N/m zeta 0.07" in line
+    assert "g 9.81 m/s2" in line
+    plain = inputs_text(load_preset("paper_example"))
+    assert "spring mass" not in plain and "train" not in plain  # (none: not said)
