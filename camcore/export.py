@@ -558,7 +558,8 @@ def csv_text(a) -> str:
 def series_columns(a) -> dict[str, np.ndarray]:
     """Per cam angle, every quantity a designer plots or checks (issue 11).
 
-    Motion per radian of cam angle and per second (x w, w^2, w^3); the pressure angle
+    The program's segment (program_rows: numbered from 1, as the app's table). Motion
+    per radian of cam angle and per second (x w, w^2, w^3); the pressure angle
     and cam radius of curvature rho at the touching face (the rise face when both
     touch); the load F_t (Eq. 29), the guide forces, and per face (``_1`` the rise face
     S1 / left roller, ``_2`` the fall face of a double follower) F_N, rho and the Hertz
@@ -569,7 +570,7 @@ def series_columns(a) -> dict[str, np.ndarray]:
     v, acc, jerk = per_second(p, omega_rad_s(a.design))
     cols = {
         "theta_deg": to_deg(a.theta),
-        "segment": p.index,
+        "segment": program_rows(a.segments)[p.index],
         "S_mm": to_mm(p.S),
         "V_mm_per_rad": to_mm(p.V),
         "A_mm_per_rad2": to_mm(p.A),
@@ -596,6 +597,18 @@ def series_columns(a) -> dict[str, np.ndarray]:
         cols["Fc_train_N"] = on_grid(a.train, a.theta, a.train.contact_force)
         cols["x_train_mm"] = to_mm(on_grid(a.train, a.theta, a.train.x))
     return cols
+
+
+def program_rows(segs) -> np.ndarray:
+    """Per motion.Segment of ``segs``, the program's segment it is, numbered from 1 as
+    the app's table numbers them; an empty dwell motion.segments adds between a fall
+    and a rise counts as the fall's (a designer's review read 0, 1, 2, 4 for a program
+    of four)."""
+    rows, last = [], 0
+    for g in segs:
+        last = g.row if g.row is not None else last
+        rows.append(last + 1)
+    return np.array(rows)
 
 
 def series_csv_text(a) -> str:

@@ -188,6 +188,7 @@ class Segment:
     S1: float
     law: MotionLaw | None = None
     coeffs: tuple[float, ...] | None = None
+    row: int | None = None  # the program's segment it is (0-based); None: a dwell added
 
     @property
     def is_motion(self) -> bool:
@@ -239,13 +240,15 @@ def segments(design: Design) -> tuple[Segment, ...]:
         low = min(low, S)
     S, t = -low, 0.0
     raw: list[Segment] = []
-    for m in spec:
+    for row, m in enumerate(spec):
         S1 = S + m.signed_lift_mm * MM
         t1 = t + m.angle_deg * DEG
         if m.kind.value == "dwell":
-            raw.append(Segment(LOW if abs(S) <= REST_TOL_M else HIGH, t, t1, S, S))
+            code = LOW if abs(S) <= REST_TOL_M else HIGH
+            raw.append(Segment(code, t, t1, S, S, row=row))
         else:
-            raw.append(Segment(RISE if m.kind.value == "rise" else FALL, t, t1, S, S1, m.law))
+            code = RISE if m.kind.value == "rise" else FALL
+            raw.append(Segment(code, t, t1, S, S1, m.law, row=row))
         S, t = S1, t1
     # the angles sum to 360 deg to round-off (1e-6 deg): no segment runs past 2 pi
     two_pi = 2 * math.pi

@@ -622,3 +622,26 @@ def test_the_bore_is_within_the_export_tolerance(bore, keyway):
         step = np.append(step, t[0] + 2 * math.pi - t[-1])
     sagitta = R * (1 - np.cos(step / 2))
     assert sagitta.max() <= tol * (1 + 1e-6)
+
+
+def test_the_series_numbers_the_programs_own_segments():
+    """A designer's review: a program of four segments (rise, dwell, fall, rise) read
+    0, 1, 2, 4 in the series' segment column (motion.segments adds an empty dwell
+    between the fall and the rise). The column numbers the program's segments from 1,
+    as the app's table does."""
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"] = {
+        "segments": [
+            {"kind": "rise", "angle_deg": 120, "lift_mm": 20, "law": "cycloidal"},
+            {"kind": "dwell", "angle_deg": 60},
+            {"kind": "fall", "angle_deg": 120, "lift_mm": 25, "law": "cycloidal"},
+            {"kind": "rise", "angle_deg": 60, "lift_mm": 5, "law": "cycloidal"},
+        ]
+    }
+    a = analyze(Design.model_validate(data), verify=False)
+    cols = export.series_columns(a)
+    seg, th = cols["segment"], cols["theta_deg"]
+    assert sorted(set(seg.tolist())) == [1, 2, 3, 4]
+    for lo, hi, row in ((0, 120, 1), (120, 180, 2), (180, 300, 3), (300, 360, 4)):
+        inside = (th > lo + 0.05) & (th < hi - 0.05)
+        assert np.all(seg[inside] == row), (lo, hi, row)
