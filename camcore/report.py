@@ -434,11 +434,20 @@ def jump_speed_text(rpm: float | None) -> str:
 def machine_rows(s: dict) -> list[tuple[str, str]]:
     """The running machine's figures of a summary as (label, value) rows: the text
     report and the app's key numbers show the same lines."""
+    k_min, prop = s["spring_rate_min_N_per_m"], s["spring_proposal"]
+    n, k = prop["safety_factor"], prop["spring_rate_N_per_m"]
+    # n k_min is rounded up to 3 digits (machine.proposed_rate); a proposal above it
+    # is the rate limits.min_jump_speed_ratio asks (a review read "safety factor 1.5"
+    # beside 2.06 k_min)
+    by_margin = k_min and k is not None and k > 1.01 * n * k_min
     spring = (
-        f"{_fmt(s['spring_rate_min_N_per_m'], 1)} / "
-        f"{_fmt(s['spring_proposal']['spring_rate_N_per_m'], 1)} N/m (preload "
-        f"{s['spring_proposal']['preload_mm']:g} mm, safety factor "
-        f"{s['spring_proposal']['safety_factor']:g})"
+        f"{_fmt(k_min, 1)} / {_fmt(k, 1)} N/m (preload {prop['preload_mm']:g} mm, "
+        + (
+            "the rate the min jump-speed ratio asks: above safety factor "
+            if by_margin
+            else "safety factor "
+        )
+        + f"{n:g})"
     )
     if s["spring_rate_min_N_per_m"] is None:  # (inf: see machine.spring_rate_min)
         spring = "no spring rate keeps contact at this preload"

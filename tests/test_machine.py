@@ -587,3 +587,25 @@ def test_the_reports_inputs_name_what_the_figures_depend_on():
     assert "g 9.81 m/s2" in line
     plain = inputs_text(load_preset("paper_example"))
     assert "spring mass" not in plain and "train" not in plain  # (none: not said)
+
+
+def test_the_spring_proposal_says_when_the_jump_margin_sets_it():
+    """A designer's review: with a min jump-speed ratio of 1.3 the key numbers read
+    "(preload 10 mm, safety factor 1.5)" beside a proposal of 2.06 k_min: the margin,
+    not the safety factor, had set it."""
+    from camcore.analysis import analyze
+    from camcore.model import Design
+    from camcore.report import machine_rows, summary
+
+    def line(ratio):
+        data = load_preset("paper_example").model_dump()
+        data["limits"]["min_jump_speed_ratio"] = ratio
+        s = summary(analyze(Design.model_validate(data), verify=False))
+        (text,) = [v for k, v in machine_rows(s) if k.startswith("spring rate min")]
+        k_min, n = s["spring_rate_min_N_per_m"], s["spring_proposal"]["safety_factor"]
+        return text, s["spring_proposal"]["spring_rate_N_per_m"] / (n * k_min)
+
+    text, over = line(1.3)
+    assert over > 1.01 and "the rate the min jump-speed ratio asks" in text
+    text, over = line(None)
+    assert over < 1.01 and "min jump-speed ratio" not in text and "safety factor 1.5" in text
