@@ -158,13 +158,24 @@ def _dwells(a: Analysis) -> list[dict]:
     return out
 
 
-def _event(k: int, names: list[str], before, after, seg_before: str, seg_after: str) -> str:
+def _event(
+    k: int,
+    names: list[str],
+    before,
+    after,
+    seg_before: str,
+    seg_after: str,
+    next_motion: bool = False,
+) -> str:
     """What happens at station k, in words (for a class): the segment that begins (its
-    motion.segment_word) and the faces that start or stop touching, and who carries the
-    load from there."""
+    motion.segment_word; ``next_motion``: a rise or fall begins after another of the
+    same word) and the faces that start or stop touching, and who carries the load from
+    there."""
     parts = []
     if seg_before != seg_after:
         parts.append(f"the {seg_before} ends and the {seg_after} begins")
+    elif next_motion:  # (a review read "nothing changes" where a rise met a rise)
+        parts.append(f"one {seg_before} ends and the next begins")
     gained = [names[i] for i in range(len(names)) if after[i] and not before[i]]
     lost = [names[i] for i in range(len(names)) if before[i] and not after[i]]
     parts += [f"{n} touches" for n in gained] + [f"{n} leaves the cam" for n in lost]
@@ -185,8 +196,11 @@ def _station_list(a: Analysis) -> list[dict]:
     x = np.mod(np.concatenate([st - 1e-7, st + 1e-7]), two_pi)
     both = contacts(a.design, a.geo, a.segments, x)  # the geometry alone, once
     before_in, after_in = both.in_contact[:, :n], both.in_contact[:, n:]
-    words = [segment_word(a.segments, int(i)) for i in both.prog.index]
+    index = [int(i) for i in both.prog.index]
+    words = [segment_word(a.segments, i) for i in index]
     before_seg, after_seg = words[:n], words[n:]
+    # a rise or fall that begins where another ends (not a run of dwells: one dwell)
+    new_motion = [index[k] != index[n + k] and a.segments[index[n + k]].is_motion for k in range(n)]
     return [
         {
             "theta_deg": float(t * R2D),
@@ -202,6 +216,7 @@ def _station_list(a: Analysis) -> list[dict]:
                     after_in[:, k],
                     before_seg[k],
                     after_seg[k],
+                    new_motion[k],
                 )
             ),
         }

@@ -662,3 +662,26 @@ def test_stations_crop_follows_an_offset_follower(offset_mm):
         x0, x1 = ax.get_xlim()
         x = float(dot.get_xdata()[0])
         assert x0 + 0.25 * (x1 - x0) < x < x1 - 0.25 * (x1 - x0)
+
+
+def test_a_rise_into_a_rise_is_no_station_where_nothing_changes():
+    """A designer's review: where one rise met the next, the station said "nothing
+    changes", although a segment (its law, its lift) ends there."""
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+    from camcore.report import summary
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    rise = {"kind": "rise", "angle_deg": 60, "law": "cycloidal"}
+    data["motion"] = {
+        "segments": [
+            {**rise, "lift_mm": 8},
+            {**rise, "lift_mm": 7},
+            {"kind": "dwell", "angle_deg": 60},
+            {"kind": "fall", "angle_deg": 120, "lift_mm": 15, "law": "cycloidal"},
+            {"kind": "dwell", "angle_deg": 60},
+        ]
+    }
+    events = [st["event"] for st in summary(analyze(Design.model_validate(data)))["stations"]]
+    assert "station 1: one rise ends and the next begins" in events
+    assert not any("nothing changes" in e for e in events)
