@@ -130,7 +130,11 @@ class Curve:
         )
         ax = [X_AXIS]
         for j, (scale, label) in enumerate(axes):
-            ax.append({"scale": scale, "label": label, "side": 3 if j == 0 else 1, "size": 52})
+            # ticks 20 px apart at least, not uPlot's 30: on a plot ~95 px high that
+            # left one tick ("0" of J, "50" of F_t: a designer's review could not read
+            # the scale)
+            side = 3 if j == 0 else 1
+            ax.append({"scale": scale, "label": label, "side": side, "size": 52, "space": 20})
         scales = {
             "x": {"time": False, "range": (0.0, 360.0)},
             "shade": {"auto": False, "range": (0.0, 1.0)},

@@ -1987,6 +1987,16 @@ def test_two_axis_plots_share_the_level_of_zero(tab):
     assert max(fracs) - min(fracs) < 1e-9
 
 
+def test_every_value_axis_keeps_room_for_its_ticks(tab):
+    """A designer's review read one tick ("0" of J, "50" of F_t) on a plot ~95 px high:
+    uPlot's default 30 px between ticks left no second round number in range. Every
+    value axis (side 1 or 3) asks 20 px at most. (Configuration only: the ticks
+    themselves are drawn on a canvas; a screenshot showed -10, 0, 10 and ±200,000.)"""
+    for c in tab.ui.curves:
+        values = [ax for ax in c.handle.axes if ax.get("side") in (1, 3)]
+        assert values and all(ax.get("space", 30) <= 20 for ax in values), c.handle.title
+
+
 def test_an_edit_during_a_rename_is_not_lost(tab, monkeypatch):
     """A review: the rename wrote the name box from inside the kind's callback, which
     took a new edit ticket, so a user's edit waiting on the lock was dropped as
