@@ -58,6 +58,21 @@ def _panels(a: Analysis) -> Iterator[tuple[str, str, list[tuple[str, np.ndarray]
     yield "Hertz contact stress (Eq. 42)", "sigma [MPa]", _face_curves(a, a.stress, 1e-6)
 
 
+def _limit_lines(a: Analysis) -> dict[str, list[tuple[float, str]]]:
+    """Per plot title, the limits drawn on it as (value, legend): the pressure angle's
+    +-limit and the stress the design may reach (allowable / safety factor), as the
+    app's curves draw them (a designer's review: the report's plots had none)."""
+    from .model import allowable_contact_stress_MPa
+
+    lim = a.design.limits
+    phi = lim.max_pressure_angle_deg
+    out = {"Pressure angle (Eqs. 5, 13)": [(phi, f"limit +-{phi:g} deg"), (-phi, "")]}
+    if np.isfinite(a.stress).any():  # (a knife edge has no Hertz stress to limit)
+        sigma = allowable_contact_stress_MPa(a.design) / lim.contact_stress_safety_factor
+        out["Hertz contact stress (Eq. 42)"] = [(sigma, f"limit {sigma:.4g} MPa")]
+    return out
+
+
 def _figure(a: Analysis):
     from matplotlib.figure import Figure
 
@@ -66,15 +81,18 @@ def _figure(a: Analysis):
     axes = fig.subplots((len(panels) + 1) // 2, 2, sharex=True).ravel()
     k = _decimate(a.theta.size)
     th = to_deg(a.theta[k])
+    limits = _limit_lines(a)
     for ax, (title, ylabel, curves) in zip(axes, panels, strict=False):
         for label, y in curves:
             ax.plot(th, y[k], lw=1.2, label=label)
+        for value, label in limits.get(title, []):
+            ax.axhline(value, color="#d62728", ls="--", lw=0.9, label=label or None)
         for s in to_deg(a.stations):
             ax.axvline(s, color="0.8", lw=0.6, zorder=0)
         ax.set_title(title, fontsize=10)
         ax.set_ylabel(ylabel)
         ax.grid(alpha=0.3)
-        if len(curves) > 1:
+        if len(curves) > 1 or title in limits:
             ax.legend(fontsize=7, loc="best")
     for ax in axes[-2:]:
         ax.set_xlabel("cam angle theta [deg] (grey: stations)")

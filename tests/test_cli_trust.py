@@ -371,3 +371,36 @@ def test_the_html_report_says_what_a_valid_design_accepts(tmp_path):
     text = page.read_text()
     assert "All limits met." in text
     assert "acceleration jumps accepted at theta = 0.000, 150.000" in text
+
+
+def test_the_report_plots_draw_the_limits():
+    """A designer's review: the report's pressure-angle and stress plots had no limit
+    lines, where the app's curves draw them; a design over its stress limit read as
+    sound there."""
+    from camcore.analysis import analyze
+    from camcore.document import _figure
+    from camcore.model import load_preset
+
+    a = analyze(load_preset("paper_example"), verify=False)
+    fig = _figure(a)
+    by_title = {ax.get_title(): ax for ax in fig.axes if ax.get_visible()}
+    phi = a.design.limits.max_pressure_angle_deg
+    levels = sorted(
+        ln.get_ydata()[0]
+        for ln in by_title["Pressure angle (Eqs. 5, 13)"].lines
+        if ln.get_linestyle() == "--"
+    )
+    assert levels == [-phi, phi]
+    (stress,) = [
+        ln for ln in by_title["Hertz contact stress (Eq. 42)"].lines if ln.get_linestyle() == "--"
+    ]
+    limit = a.design.limits
+    from camcore.model import allowable_contact_stress_MPa
+
+    expected = allowable_contact_stress_MPa(a.design) / limit.contact_stress_safety_factor
+    assert stress.get_ydata()[0] == pytest.approx(expected)
+    knife = _figure(analyze(load_preset("paper_example").with_kind("knife_edge"), verify=False))
+    titled = {ax.get_title(): ax for ax in knife.axes}
+    assert not [
+        ln for ln in titled["Hertz contact stress (Eq. 42)"].lines if ln.get_linestyle() == "--"
+    ]
