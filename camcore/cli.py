@@ -304,7 +304,7 @@ def _sweep(args) -> int:
         workers=args.workers,
         scheduler=args.scheduler,
     )
-    print(f"wrote {args.out} ({n} designs: {sweep.tally(args.out)})")
+    print(f"wrote {args.out} ({n} design{'' if n == 1 else 's'}: {sweep.tally(args.out)})")
     return EXIT_VALID
 
 

@@ -18,7 +18,7 @@ import numpy as np
 
 from .checks import CODES
 from .model import PAPER_FOLLOWERS, Design, FollowerKind, SegmentKind
-from .sweep import Spec, axis_values, first_violation, pareto_mask
+from .sweep import Spec, axis_values, first_violation, front_order, pareto_mask
 
 
 @dataclass(frozen=True)
@@ -221,8 +221,7 @@ def pareto(rows: list[dict], names: list[str]) -> np.ndarray:
     v = figure_values(rows, names)
     valid = np.array([bool(r.get("valid")) for r in rows], dtype=bool)
     v[~(valid & distinct(rows))] = np.nan
-    idx = np.flatnonzero(pareto_mask(v))
-    return idx[np.argsort(v[idx, 0], kind="stable")]
+    return front_order(v, np.flatnonzero(pareto_mask(v)))
 
 
 # --- the front of a sweep's table (camcore pareto) ---------------------------------
@@ -299,7 +298,7 @@ def _table_front(path, names: list[str], have: set[str]) -> TableFront:
     values = np.column_stack([FIGURES[n].of_table(cols) for n in names])
     values[~valid] = np.nan
     idx = np.flatnonzero(pareto_mask(values))
-    idx = idx[np.lexsort(values[idx].T[::-1])]  # by the first figure, then the next
+    idx = front_order(values, idx)  # by the first figure, then the next, then row
     # the follower kind tells which grid fields a row's design ignores (distinct)
     rows = t.select([*grid, *present, *extra]).take(idx).to_pylist()
     keep = distinct(rows)

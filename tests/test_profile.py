@@ -676,3 +676,32 @@ def test_top_peaks_takes_the_largest_local_maxima_the_earlier_of_ties(seed):
     assert list(zip(row.tolist(), k.tolist(), strict=True)) == _top_peaks_by_hand(
         values, mask, extremes.CANDIDATES
     )
+
+
+def test_the_area_does_not_depend_on_blas_threads():
+    """A review: a sweep's Dask workers (BLAS on one thread) gave a profile area 4e-14
+    apart from the same design's report (BLAS on all threads: np.dot sums in another
+    order), so a row no longer equalled its report. Same design, same area, whatever
+    the threads."""
+    import os
+    import subprocess
+    import sys
+
+    code = (
+        "import camcore\n"
+        "from camcore.model import Design\n"
+        "d = camcore.load_preset('paper_example').model_dump()\n"
+        "d['follower']['kind'] = 'double_roller'\n"
+        "d['cam']['base_radius_mm'] = 10000.0\n"
+        "a = camcore.analyze(Design.model_validate(d), verify=False)\n"
+        "print(repr(a.profile.area))\n"
+    )
+    areas = set()
+    for threads in ("1", None):
+        env = {k: v for k, v in os.environ.items() if not k.endswith("_NUM_THREADS")}
+        if threads:
+            env |= {"OPENBLAS_NUM_THREADS": threads, "OMP_NUM_THREADS": threads}
+        run = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True)
+        assert run.returncode == 0, run.stderr
+        areas.add(run.stdout.strip())
+    assert len(areas) == 1, areas

@@ -1522,3 +1522,15 @@ def test_a_front_number_at_the_axes_edge_stays_in_the_image():
     ax = fig.axes[len(kinds)]
     boxes = [t.get_window_extent(canvas.get_renderer()) for t in ax.texts]
     assert boxes and all(ax.bbox.x0 <= b.x0 and b.x1 <= ax.bbox.x1 for b in boxes)
+
+
+def test_the_app_and_the_cli_number_one_front_alike():
+    """A review: designs on the front whose stress differed by round-off (115.06532248048867
+    and ...822 MPa at one cam size) came in one order in the app's list and in another
+    in `camcore pareto`, so `--design 10` was not the app's #10. Both take the order of
+    front_order: figures equal to 12 digits are equal, then by row."""
+    from camcore.sweep import front_order
+
+    values = np.array([[86.65, 115.06532248048867], [90.0, 100.0], [86.65, 115.06532248048822]])
+    assert front_order(values, np.array([0, 2, 1])).tolist() == [0, 2, 1]
+    assert front_order(values, np.array([2, 0, 1])).tolist() == [0, 2, 1]
