@@ -31,9 +31,10 @@ class History:
 
     def record(self, before: Design, now: float) -> None:
         """The design on screen changed at ``now`` [s]; ``before`` is the one it replaced."""
-        if now - self._last >= SETTLE_S or not self.past or self.future:
+        new_step = now - self._last >= SETTLE_S or not self.past
+        if new_step or self.future:  # (a burst joining a step changes no step)
             self.version += 1
-        if now - self._last >= SETTLE_S or not self.past:
+        if new_step:
             self.past.append(before)
             del self.past[:-MOST]
         self._last = now

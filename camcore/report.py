@@ -1036,13 +1036,13 @@ def compare_text(rows: list[dict]) -> str:
     ]
     for r in rows:
         life, free = r["pitting_life_cycles"], set(r["unbounded_figures"])
+        if "life" in free:  # (the stress has no bound: no life to estimate)
+            life_cell = "none"
+        else:
+            life_cell = _life_text(r["follower"]) if life is None else f"{life:.3g}"
         cells = (
             bounded(r["wear_depth_max_um_per_Mcycle"], 4, "wear", free),
-            "none"
-            if "life" in free
-            else _life_text(r["follower"])
-            if life is None
-            else f"{life:.3g}",
+            life_cell,
             _fmt(r["spring_rate_min_N_per_m"], 1),
             "any" if r["jump_speed_rpm"] == 0.0 else _fmt(r["jump_speed_rpm"], 1),
             bounded(r["cam_torque_drive_max_Nm"], 3, "torque", free),
