@@ -680,35 +680,12 @@ def run(
     n_chunks = -(-total // chunk)
     parts = _parts_dir(out, stamp)  # a bad output fails before any work or cluster
     todo = [i for i in range(n_chunks) if not _kept(parts / f"chunk-{i:06d}.parquet")]
-    found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
-    done = found
-    # (a bad scheduler leaves parts with no chunk in them, which the next run takes over)
-    with _cluster(workers if todo else None, scheduler if todo else None) as client:
-        t0 = time.perf_counter()  # the rate: of this run's work, from when it can start
-
-        def keep(i: int, rows: list[dict]) -> None:
-            nonlocal done
-            buf = pa.BufferOutputStream()
-            pq.write_table(_table(rows), buf)
-            write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
-            done += len(rows)
-            if progress:
-                progress(done, total, (done - found) / max(time.perf_counter() - t0, 1e-9))
-
-        try:
-            if client is None:
-                memo: dict[str, dict] = {}  # a design repeated in a later chunk is not redone
-                for i in todo:
-                    keep(i, run_chunk(spec.base, spec.chunk(i, chunk), verify, fast, memo))
-            else:
-                _run_dask(client, spec, chunk, todo, (verify, fast), keep)
-        except KeyboardInterrupt:
-            if progress:
-                sys.stderr.write(
-                    f"\ninterrupted: {done} of {total} designs are kept in {parts}; "
-                    "the same command resumes\n"
-                )
-            raise
+    try:
+        _compute(spec, chunk, todo, (verify, fast), (workers, scheduler), parts, progress)
+    except BaseException:  # a bad scheduler, Ctrl-C before a chunk was kept: no litter
+        if not any(parts.glob("chunk-*.parquet")):
+            shutil.rmtree(parts, ignore_errors=True)
+        raise
     if progress:
         sys.stderr.write("\n")
     tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
@@ -725,6 +702,56 @@ def run(
     write_atomic(out, buf.getvalue().to_pybytes())
     shutil.rmtree(parts)
     return table.num_rows
+
+
+def _compute(
+    spec: Spec,
+    chunk: int,
+    todo: list[int],
+    how: tuple[bool, bool],
+    where: tuple[int | None, str | None],
+    parts: Path,
+    progress: Callable[[int, int, float], None] | None,
+) -> None:
+    """Compute the chunks ``todo`` into ``parts``, with ``how`` = (verify, fast), in
+    this process or on the cluster ``where`` = (workers, scheduler), each kept as soon
+    as it is done. On Ctrl-C the terminal hears how much is kept and that the same
+    command resumes."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    total = spec.size
+    found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
+    done = found
+    workers, scheduler = where
+    with _cluster(workers if todo else None, scheduler if todo else None) as client:
+        t0 = time.perf_counter()  # the rate: of this run's work, from when it can start
+
+        def keep(i: int, rows: list[dict]) -> None:
+            nonlocal done
+            buf = pa.BufferOutputStream()
+            pq.write_table(_table(rows), buf)
+            write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
+            done += len(rows)
+            if progress:
+                progress(done, total, (done - found) / max(time.perf_counter() - t0, 1e-9))
+
+        try:
+            if client is None:
+                memo: dict[str, dict] = {}  # a design repeated in a later chunk is not redone
+                for i in todo:
+                    keep(i, run_chunk(spec.base, spec.chunk(i, chunk), how[0], how[1], memo))
+            else:
+                _run_dask(client, spec, chunk, todo, how, keep)
+        except KeyboardInterrupt:
+            if progress and done:
+                sys.stderr.write(
+                    f"\ninterrupted: {done} of {total} designs are kept in {parts}; "
+                    "the same command resumes\n"
+                )
+            elif progress:
+                sys.stderr.write("\ninterrupted before a chunk was finished: nothing kept\n")
+            raise
 
 
 def _kept(part: Path) -> bool:
@@ -756,6 +783,7 @@ def _cluster(workers: int | None, scheduler: str | None):
             n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
         )
         client = Client(cluster)
+        client.run(_quiet_cancellations)
     else:
         try:
             client = Client(scheduler, timeout="10s")
@@ -767,6 +795,15 @@ def _cluster(workers: int | None, scheduler: str | None):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _quiet_cancellations() -> None:
+    """On a worker of our own LocalCluster: do not log the chunks that Ctrl-C cancels
+    (a CancelledError warning per running chunk, printed after the terminal has been
+    told what is kept). A user's own cluster keeps its logging as it is."""
+    import logging
+
+    logging.getLogger("distributed.worker.state_machine").setLevel(logging.ERROR)
 
 
 def same_code_on_workers(client) -> None:

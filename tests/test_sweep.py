@@ -113,6 +113,26 @@ def test_an_interrupted_sweep_resumes_without_recomputing(tmp_path, monkeypatch)
     assert not (tmp_path / "r.parquet.parts").exists()
 
 
+def test_a_run_that_keeps_nothing_leaves_no_parts(tmp_path, monkeypatch, capsys):
+    """A scheduler that cannot be reached, or Ctrl-C before the first chunk is done,
+    leaves no OUT.parts/ behind (it had left one holding only its label), and the
+    terminal is not told of a resume with nothing to resume."""
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    out = tmp_path / "r.parquet"
+    with pytest.raises(DesignError, match="--scheduler nonsense"):
+        sweep.run(spec, out, scheduler="nonsense", progress=None)
+    assert list(tmp_path.iterdir()) == []
+
+    def stopped(*args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sweep, "run_chunk", stopped)
+    with pytest.raises(KeyboardInterrupt):
+        sweep.run(spec, out, chunk=2, progress=lambda *a: None)
+    assert list(tmp_path.iterdir()) == []
+    assert "interrupted before a chunk was finished: nothing kept" in capsys.readouterr().err
+
+
 def _interrupted(spec, out, chunk: int, **how) -> None:
     """Run until two chunks are kept, then stop as Ctrl-C would."""
 
@@ -1534,3 +1554,16 @@ def test_the_app_and_the_cli_number_one_front_alike():
     values = np.array([[86.65, 115.06532248048867], [90.0, 100.0], [86.65, 115.06532248048822]])
     assert front_order(values, np.array([0, 2, 1])).tolist() == [0, 2, 1]
     assert front_order(values, np.array([2, 0, 1])).tolist() == [0, 2, 1]
+
+
+def test_our_local_cluster_does_not_log_the_chunks_ctrl_c_cancels():
+    """After Ctrl-C on a --workers run, each running chunk's cancellation was logged
+    as a worker WARNING under the clean 'interrupted: ... kept' message."""
+    pytest.importorskip("dask.distributed")
+    import logging
+
+    def level():
+        return logging.getLogger("distributed.worker.state_machine").getEffectiveLevel()
+
+    with sweep._cluster(1, None) as client:
+        assert set(client.run(level).values()) == {logging.ERROR}
