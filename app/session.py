@@ -30,7 +30,6 @@ from camcore.model import (
     DesignError,
     defaulted_fields,
     defaults_note,
-    design_from_json,
     design_to_json,
     edited_note,
     format_validation_error,
@@ -641,12 +640,11 @@ class Session:
 
     def upload(self, name: str, content: bytes) -> None:
         name = _short(name)  # (a client's file name: shown, so bounded)
-        try:
-            d = design_from_json(content)
-        except DesignError as exc:
+        d = storage.open_untrusted(content)
+        if isinstance(d, str):
             with self.lock:
-                self._show_file_error(f"{name or 'the upload'}: {exc}")
-            return self._say(f"✖ Could not open **{esc(name)}**: {esc(exc)}")
+                self._show_file_error(f"{name or 'the upload'}: {d}")
+            return self._say(f"✖ Could not open **{esc(name)}**: {esc(d)}")
         left_out = defaulted_fields(content, d)
         note = f" ⚠ {esc(defaults_note(left_out))}." if left_out else ""
         self._replace(d, d.name, f"Opened **{esc(name)}** ({esc(d.name)}).{note}")

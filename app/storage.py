@@ -69,12 +69,21 @@ READ_TIMEOUT_S = 20.0
 
 def parse_working(text: str | None) -> Design | None:
     """The stored working design, or None if there is none or it is not a valid design."""
-    if not text:
-        return None
+    opened = open_untrusted(text) if text else None
+    return opened if isinstance(opened, Design) else None
+
+
+def open_untrusted(text: str | bytes) -> Design | str:
+    """The design in text a browser sent or kept, or why it is not one. Any failure is
+    a why, not a crash: the restore must never die on what a browser holds (a
+    400-digit number had raised OverflowError there, and from then on nothing was
+    kept in that browser, with no message)."""
     try:
         return design_from_json(text)
-    except DesignError:
-        return None
+    except DesignError as exc:
+        return str(exc)
+    except Exception as exc:  # an untrusted text found a parser defect: say so, go on
+        return f"not a design this version can read ({type(exc).__name__})"
 
 
 def unread_entries(text: str | None, saved: dict[str, str]) -> dict:
@@ -128,13 +137,8 @@ def parse_saved(text: str | None) -> dict[str, str]:
 def working_error(text: str | None) -> str | None:
     """Why a stored working design cannot be opened (DesignError's words), None if it
     can or there is none."""
-    if not text:
-        return None
-    try:
-        design_from_json(text)
-    except DesignError as exc:
-        return str(exc)
-    return None
+    opened = open_untrusted(text) if text else None
+    return opened if isinstance(opened, str) else None
 
 
 def parse_setup(text: str | None) -> dict | None:

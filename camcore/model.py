@@ -282,7 +282,7 @@ class Motion(_Part):
             if k.endswith(("_mm", "_deg")) and (
                 isinstance(v, bool) or not isinstance(v, int | float)
             ):
-                raise _type_error(f"{k}: a number is required, got {v!r}")
+                raise _type_error(f"{k}: a number is required, got {printable(repr(v), 60)}")
         rest = {k: v for k, v in data.items() if k not in CLASSIC_KEYS}
         if "segments" in rest:  # edit the classic program the segments hold
             current = classic_of(rest["segments"])
@@ -866,7 +866,9 @@ class Design(_Part):
             return data
         v = data["schema_version"]
         if type(v) is not int:
-            raise ValueError(f"schema_version: must be an integer, the file says {v!r}")
+            raise ValueError(
+                f"schema_version: must be an integer, the file says {printable(repr(v), 60)}"
+            )
         while v < SCHEMA_VERSION and v in MIGRATIONS:
             data = MIGRATIONS[v](dict(data))
             v = data["schema_version"] = v + 1
@@ -1071,6 +1073,8 @@ def _shown_value(x) -> str | None:
     anything else (the app splits the errors at '; ' and the field at ': ')."""
     if isinstance(x, bool):
         return json.dumps(x)
+    if isinstance(x, int) and abs(x) > 1e300:  # (a 400-digit integer: float() fails)
+        return None
     if isinstance(x, int | float):  # (a 50-digit integer as a number, not cut short)
         return json.dumps(x) if len(json.dumps(x)) <= 24 else f"{float(x):.6g}"
     if isinstance(x, str) and re.fullmatch(r"[A-Za-z0-9_. +-]{1,40}", x):

@@ -295,16 +295,21 @@ def test_archard_k_is_entered_in_its_own_scale(tab):
         ("empty.json", b"", "the file is empty"),
         ("future.json", b'{"schema_version": 7}', "written by a newer program"),
         ("list.json", b"[1, 2]", "a design is a JSON object"),
+        ("big.json", b'{"cam": {"width_mm": ' + b"9" * 400 + b"}}", "cam.width_mm"),
+        ("long.json", b'{"motion": {"lift_mm": "' + b"A" * 900_000 + b'"}}', "is required"),
     ],
     # short ids: a 30 MB id went into PYTEST_CURRENT_TEST, and a worker process started
     # under it (the app fixture, when this test runs first) could not be spawned
-    ids=["huge", "deep", "photo", "empty", "future", "list"],
+    ids=["huge", "deep", "photo", "empty", "future", "list", "400 digits", "900 kB value"],
 )
 def test_hostile_uploads_keep_the_design_and_the_server(app, tab, name, content, message):
+    """(400 digits had crashed the upload with OverflowError, and a 900 kB value had
+    come back whole in the status and in Files.)"""
     s = tab
     good = s.design
     fire_upload(s.ui.upload_btn, name, content)
     assert s.design == good and message in s.ui.status.content and name in s.ui.files_md.content
+    assert len(s.ui.status.content) < 3000 and len(s.ui.files_md.content) < 3000
     # the server keeps serving: the same tab still redraws on a control change
     s.ui.controls["motion.lift_mm"].value = 12.0
     assert s.design.motion.lift_mm == 12.0 and s.error is None
@@ -2182,6 +2187,25 @@ def test_tampered_or_newer_storage_loses_nothing(app, monkeypatch):
         assert storage.SAVED_KEY not in writes  # the list it could not read stays
         assert "cannot open" in s.ui.files_md.content and "newer" in s.ui.files_md.content
         s.ui.controls["motion.lift_mm"].value = 17.0  # and the tab keeps its work
+        assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
+
+
+def test_a_number_no_float_holds_does_not_stop_the_tab_keeping_its_work(app, monkeypatch):
+    """A security review: a stored design with a 400-digit width killed the restore
+    thread (OverflowError while quoting the refused value), and from then on nothing was
+    kept in that browser, with no message. It is now set aside like any unreadable
+    design, and the tab keeps saving."""
+    from app import storage
+
+    bad = design_to_json(load_preset("paper_example")).replace(
+        '"width_mm": 15.0', '"width_mm": ' + "9" * 400
+    )
+    assert "9" * 400 in bad
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {storage.WORKING_KEY: bad}, writes) as s:
+        assert s._persist and writes[storage.UNREADABLE_KEY] == bad
+        assert "cam.width\\_mm" in s.ui.files_md.content  # (escaped for Markdown)
+        s.ui.controls["motion.lift_mm"].value = 17.0
         assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 17.0
 
 

@@ -1016,3 +1016,17 @@ def test_a_knife_edge_has_no_contact_half_width():
     assert "| Contact half-width max | – |" in panels.summary_markdown(s)
     roller = summary(analyze(load_preset("paper_example").with_kind("single_roller")))
     assert roller["contact_half_width_max_mm"] > 0
+
+
+def test_an_untrusted_design_that_finds_a_parser_defect_is_refused_not_raised(monkeypatch):
+    """What a browser sent or kept is read by storage.open_untrusted: a parser defect
+    it finds (an OverflowError had killed the restore thread) is a reason, not a crash."""
+    from app import storage
+
+    def defect(text):
+        raise OverflowError("int too large to convert to float")
+
+    monkeypatch.setattr(storage, "design_from_json", defect)
+    assert storage.open_untrusted("{}") == ("not a design this version can read (OverflowError)")
+    assert storage.parse_working("{}") is None
+    assert storage.working_error("{}") == storage.open_untrusted("{}")

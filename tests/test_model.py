@@ -219,3 +219,22 @@ def test_a_file_that_is_no_json_design_says_what_it_is_in_words():
     ):
         with pytest.raises(DesignError, match=said):
             design_from_json(content)
+
+
+@pytest.mark.parametrize(
+    "text, said",
+    [
+        ('{"cam": {"width_mm": ' + "9" * 400 + "}}", "cam.width_mm"),
+        ('{"cam": {"base_radius_mm": -' + "9" * 400 + "}}", "cam.base_radius_mm"),
+        ('{"motion": {"lift_mm": "' + "A" * 900_000 + '"}}', "motion.lift_mm"),
+        ('{"schema_version": "' + "x" * 5000 + '"}', "schema_version"),
+    ],
+    ids=["400 digits", "-400 digits", "900 kB string", "5000-char version"],
+)
+def test_a_refused_value_is_quoted_short_and_never_crashes(text, said):
+    """A security review: a 400-digit number in a field raised OverflowError while
+    the error quoted it (the CLI exited 3, the app's restore died), and a 900 kB
+    string came back whole in the error."""
+    with pytest.raises(DesignError, match=said) as err:
+        design_from_json(text)
+    assert len(str(err.value)) < 200
