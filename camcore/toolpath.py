@@ -148,10 +148,14 @@ def _comments(text: str) -> list[str]:
     """G-code comments of ``text``, parentheses made brackets, anything unusual
     stripped (a design name is user input; in G-code a ')' would end the comment and
     run the rest), wrapped at spaces into lines of at most 80 characters (a review: a
-    note cut at 80 had named a field "cam.fe")."""
+    note cut at 80 had named a field "cam.fe"). A line after the first starts "... ":
+    a controller acts on a comment that starts with a command word (MSG, LOGOPEN,
+    DEBUG, PRINT, even after spaces), and a security review had put one there from a
+    long design name."""
     text = text.translate(str.maketrans("()", "[]"))
     text = re.sub(r"[^A-Za-z0-9 _.,:=+\-/&\[\]]", "_", text)
-    return [f"({line})" for line in textwrap.wrap(text, 78)] or ["()"]
+    lines = textwrap.wrap(text, 78, subsequent_indent="... ")
+    return [f"({line})" for line in lines] or ["()"]
 
 
 def _round_up(x: float, digits: int = 3) -> float:

@@ -457,4 +457,16 @@ def test_a_long_header_note_is_wrapped_not_cut():
     assert max(len(ln) for ln in lines) <= 80
     note = edited_note(d)
     assert len(note) > 80 and "cam.feed_mm_per_min" in note  # (the case cut before)
-    assert note in " ".join(ln[1:-1] for ln in lines)
+    assert note in " ".join(ln[1:-1].removeprefix("... ") for ln in lines)
+
+
+def test_no_header_comment_starts_with_a_name_s_words():
+    """A security review: a long design name, wrapped, put "(LOGOPEN,/path)" and
+    "(MSG,...)" at the start of comment lines, which LinuxCNC acts on (LOGOPEN
+    truncates the file it names). A comment line after the first starts "... "."""
+    evil = "a" * 70 + " LOGOPEN,/home/cnc/mill.hal" + " " * 60 + "  MSG,Z_zero_set:skip_touch_off"
+    d = PAPER.model_copy(update={"name": evil})
+    lines = [ln for ln in toolpath.gcode(analyze(d, verify=False)).splitlines() if ln[:1] == "("]
+    firsts = [ln[1:].lstrip().split(",")[0].split(" ")[0].upper() for ln in lines]
+    assert not {"MSG", "LOGOPEN", "LOG", "DEBUG", "PRINT", "LOGCLOSE", "PROBEOPEN"} & set(firsts)
+    assert any(ln.startswith("(... ") and "LOGOPEN" in ln for ln in lines)  # (wrapped)
