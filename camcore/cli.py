@@ -400,9 +400,9 @@ def _pareto(args) -> int:
         print(f"least {first.label} per follower:")
         for kind, d in f.least.items():
             fields = ", ".join(
-                f"{k} {_cell(v)}" for k, v in d["grid"].items() if k != "follower.kind"
+                f"{_cell(k)} {_cell(v)}" for k, v in d["grid"].items() if k != "follower.kind"
             )
-            print(f"  {kind}: {d['value']:.4g} {first.unit} (row {d['row']}: {fields})")
+            print(f"  {_cell(kind)}: {d['value']:.4g} {first.unit} (row {d['row']}: {fields})")
     again = f" (and {_count(f.repeats, 'repeat')} in a field its follower ignores)"
     print(
         f"Pareto front of {', '.join(FIGURES[n].label for n in names)} over the valid "
@@ -410,7 +410,7 @@ def _pareto(args) -> int:
         + (again if f.repeats else "")
     )
     grid = list(dict.fromkeys(k for d in f.front for k in d["grid"]))
-    head = ["#", *grid, *(f"{FIGURES[n].label} [{FIGURES[n].unit}]" for n in names)]
+    head = ["#", *map(_cell, grid), *(f"{FIGURES[n].label} [{FIGURES[n].unit}]" for n in names)]
     shown = f.front[: args.top]
     table = [
         [
@@ -444,10 +444,14 @@ def _count(n: int, noun: str) -> str:
 
 
 def _cell(value) -> str:
-    """A grid value in the front's table; '-' for a field the follower does not use."""
+    """A grid value (or field name) in the front's table; '-' for a field the follower
+    does not use. Text is printable (a table is a file from anywhere: an ESC in a
+    column name had reached the terminal, a security review)."""
+    from .files import printable
+
     if value is None:
         return "-"
-    return f"{value:g}" if isinstance(value, float) else str(value)
+    return f"{value:g}" if isinstance(value, float) else printable(str(value), 60)
 
 
 def _parser() -> argparse.ArgumentParser:

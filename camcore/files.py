@@ -13,9 +13,10 @@ the user expects a good one.
 from __future__ import annotations
 
 import contextlib
+import errno
 import os
+import secrets
 import stat
-import tempfile
 from pathlib import Path
 
 
@@ -138,12 +139,14 @@ def _restore(done: list[Path], kept: dict[Path, str | None]) -> None:
 
 
 def _stage(path: Path, data: bytes) -> str:
-    """*data* in a flushed temporary file beside *path*; returns its name."""
+    """*data* in a flushed temporary file beside *path*; returns its name. Its mode is
+    the file's it replaces, else what the user's umask gives a new file (a security
+    review: a 0600 file had come back 0644 under umask 077)."""
     directory = path.parent if str(path.parent) else Path(".")
     if path.is_dir():
         raise FileError(f"cannot write {path}: it is a directory")
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+        fd, tmp = _new_file(directory / f".{path.name}")
     except OSError as exc:
         raise FileError(f"cannot write {path}: {exc.strerror}") from None
     try:
@@ -151,12 +154,25 @@ def _stage(path: Path, data: bytes) -> str:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
-        os.chmod(tmp, 0o644)
+        with contextlib.suppress(FileNotFoundError):
+            os.chmod(tmp, stat.S_IMODE(os.stat(path).st_mode))
     except OSError as exc:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise FileError(f"cannot write {path}: {exc.strerror}") from None
     return tmp
+
+
+def _new_file(stem: Path) -> tuple[int, str]:
+    """A new file ``stem.<random>.tmp`` opened for writing, made as ``open`` makes one
+    (mode 0666 less the umask; mkstemp's is 0600)."""
+    for _ in range(100):
+        name = f"{stem}.{secrets.token_hex(6)}.tmp"
+        try:
+            return os.open(name, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), name
+        except FileExistsError:
+            continue
+    raise FileExistsError(errno.EEXIST, "no free temporary name", str(stem))
 
 
 def same_file(a: str | Path, b: str | Path) -> bool:

@@ -65,6 +65,7 @@ from .model import (
 MAX_SPEC_BYTES = 1_000_000
 MAX_DESIGNS = 1_000_000  # designs per sweep
 MAX_VALUES = 100_000  # values per grid axis
+MAX_AXES = 300  # grid fields: more than a design has (63 and 4 a segment, 48 segments)
 DEFAULT_CHUNK = 32
 MAX_CHUNK = 512  # designs per chunk: the batched core holds ~2 MB a design (0.1 deg grid)
 SPEC_METADATA = "camcore.sweep"  # the table's key-value metadata: its SPEC (Spec.document)
@@ -254,6 +255,8 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     grid = data["grid"]
     if not isinstance(grid, dict) or not grid:
         raise DesignError("grid: an object of field paths to values")
+    if len(grid) > MAX_AXES:  # (a review: 12,000 keys took 35 s to be compared pairwise)
+        raise DesignError(f"grid: {len(grid)} fields; at most {MAX_AXES}")
     # the grid's size before its values are made (30 ranges of 100,000 values each had
     # built 3 million floats, 118 MB, before the size was refused: a review)
     size = math.prod(_axis_size(raw) for raw in grid.values())
@@ -874,6 +877,8 @@ def design_of_row(path: str | Path, row: int) -> Design:
     text = meta.get(SPEC_METADATA.encode())
     if text is None:
         raise FileError(f"{path} does not keep its sweep spec (an older camcore wrote it)")
+    if len(text) > MAX_SPEC_BYTES:  # (as a spec file is: a table is a file from anywhere)
+        raise FileError(f"{path}: its sweep spec is {len(text)} bytes; at most {MAX_SPEC_BYTES}")
     spec = parse_spec(text)
     if spec.size != rows or not 0 <= row < rows:
         raise FileError(f"{path}: {rows} rows, its spec {spec.size} designs (row {row})")

@@ -336,3 +336,36 @@ def test_cli_export_extreme_design(tmp_path):
     assert cli.main(["export", str(p), "--stl", str(stl), "--dxf", str(dxf)]) == 1
     assert trimesh.load(stl).is_watertight
     ezdxf.readfile(dxf)
+
+
+def test_a_written_file_keeps_its_mode_or_takes_the_umask_s(tmp_path):
+    """A security review: every written file came out 0644, a private 0600 file (under
+    umask 077) readable by all after an export over it."""
+    import os
+    import stat
+
+    from camcore.files import write_all_atomic, write_atomic
+
+    def mode(p):
+        return stat.S_IMODE(p.stat().st_mode)
+
+    private, shared = tmp_path / "priv.json", tmp_path / "group.json"
+    private.write_bytes(b"old")
+    private.chmod(0o600)
+    shared.write_bytes(b"old")
+    shared.chmod(0o664)
+    old = os.umask(0o077)
+    try:
+        write_all_atomic([(private, b"new"), (shared, b"new"), (tmp_path / "new.csv", b"x")])
+        assert (mode(private), mode(shared), mode(tmp_path / "new.csv")) == (0o600, 0o664, 0o600)
+        os.umask(0o022)
+        write_atomic(tmp_path / "open.csv", b"x")
+        assert mode(tmp_path / "open.csv") == 0o644 and private.read_bytes() == b"new"
+    finally:
+        os.umask(old)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "group.json",
+        "new.csv",
+        "open.csv",
+        "priv.json",
+    ]

@@ -1048,6 +1048,39 @@ def test_pareto_of_odd_tables(pareto_table, tmp_path):
         assert "Traceback" not in bad.stderr
 
 
+def test_pareto_prints_a_table_s_text_printable_and_reads_a_bounded_spec(pareto_table, tmp_path):
+    """A security review: a column name with terminal escapes (a table is a file from
+    anywhere) reached the terminal raw in camcore pareto's table, and a 2 MB spec kept in
+    a table's metadata was read although a spec file is capped at MAX_SPEC_BYTES."""
+    import pyarrow.parquet as pq
+
+    t = pq.read_table(pareto_table)
+    grid = [n for n in t.column_names if n.startswith("grid.")]
+    evil = "grid.\x1b]0;PWNED\x07\x1b[2Jcam"
+    names = [evil if n == grid[0] else n for n in t.column_names]
+    path = tmp_path / "evil.parquet"
+    pq.write_table(t.rename_columns(names), path)
+    run = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "pareto", str(path)], capture_output=True, text=True
+    )
+    assert run.returncode in (0, 1) and "\\u001b]0;PWNED" in run.stdout
+    assert "\x1b" not in run.stdout + run.stderr
+    meta = dict(t.schema.metadata)
+    meta[sweep.SPEC_METADATA.encode()] = b" " * (sweep.MAX_SPEC_BYTES + 1)
+    big = tmp_path / "big.parquet"
+    pq.write_table(t.replace_schema_metadata(meta), big)
+    with pytest.raises(FileError, match="its sweep spec is 1000001 bytes"):
+        sweep.design_of_row(big, 0)
+
+
+def test_a_grid_of_more_fields_than_a_design_has_is_refused_at_once():
+    """A security review: 12,000 grid keys were compared pairwise for 35 s before the
+    first unknown field was named."""
+    grid = {f"cam.x{i}": [1] for i in range(sweep.MAX_AXES + 1)}
+    with pytest.raises(DesignError, match=f"grid: {sweep.MAX_AXES + 1} fields; at most"):
+        sweep.parse_spec(json.dumps({"grid": grid}))
+
+
 def test_a_point_that_changes_the_follower_renames_it():
     """A review: Explore's 'Load this design' brought '... (double concave faces)' with a
     single roller; a grid point of another kind renames the follower the name says."""
