@@ -501,7 +501,7 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     FN = loc.guide.FN.reshape(B, N)
     add((touching & (FN <= 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
     add((~touching).any(axis=1), "contact_lost")
-    add((touching & (loc.guide.mode.reshape(B, N) < 0)).any(axis=1), "guide_jam")
+    add((touching & (loc.guide.mode.reshape(B, N) < 0) & (FN > 0)).any(axis=1), "guide_jam")
     return [row + group[1] for row in codes]  # the elastic train's jump last
 
 

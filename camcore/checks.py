@@ -571,7 +571,9 @@ def _forces(a) -> list[Violation]:
                 float(lost.sum()),
             )
         )
-    bad = touching & (a.guide.mode < 0)
+    # (where F_t < 0 the follower leaves the cam, a jump: no guide to jam; the
+    # unbalanced angles keep the frictionless F_N, of F_t's sign)
+    bad = touching & (a.guide.mode < 0) & (a.guide.FN > 0)
     if bad.any():
         ranges = runs_deg(a.theta, bad)
         out.append(

@@ -14,8 +14,11 @@ and moments taken about the face centre C (through which F_N acts):
 with arm_1 = l1 - r, arm_2 = l1 + l2 - r. Mode (a) of Fig. 6 is (s1, s2) = (+1, -1),
 for which these are Eqs. 33-35 (rise, x_c = e, sv = +1) and Eqs. 39-41 (fall,
 x_c = -e, sv = -1) term by term. Modes are tried in the order (a) (+1,-1),
-(b) (-1,+1), (c) (+1,+1), (d) (-1,-1) until F1, F2 >= 0, as the paper prescribes;
-if none qualifies the guide self-locks (reported as a violation, mode -1).
+(b) (-1,+1), (c) (+1,+1), (d) (-1,-1) until F1, F2 >= 0, as the paper prescribes,
+and F_N has the sign of F_t (our addition: the paper's example never meets a mode
+that balances with F_N against F_t, which is the guide's friction wedging the
+follower, not a balance; a short, wide guide with high friction does); if none
+qualifies the guide self-locks (reported as a violation where F_t > 0, mode -1).
 
 Two contacts (double followers in a dwell): Eqs. 36-38 give F1 = F2 = 0 and
 F_N = F_t / (2 cos psi) at each contact.
@@ -82,7 +85,7 @@ class GuideSolution:
     F1: np.ndarray  # [N], >= 0 in the chosen mode
     F2: np.ndarray  # [N]
     FN: np.ndarray  # [N] contact force per contact
-    mode: np.ndarray  # index into MODES, -1 where no mode has F1, F2 >= 0 (self-locking)
+    mode: np.ndarray  # index into MODES, -1 where no mode balances (self-locking)
     side1: np.ndarray  # s1 of the chosen mode (+1 right wall, -1 left wall, 0 none)
     side2: np.ndarray
 
@@ -118,7 +121,8 @@ def _solve_mode(s1, s2, mu_sv, normal, Ft, x_c, arm1, arm2, d, slide=0.0, moment
 
 
 def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> GuideSolution:
-    """Solve in the modes of Fig. 6 and keep the first with F1, F2 >= 0: each mode is
+    """Solve in the modes of Fig. 6 and keep the first with F1, F2 >= 0 and F_N of F_t's
+    sign (else the guide wedges the follower, F_N growing without F_t): each mode is
     solved only at the angles no earlier mode balanced (one or two modes hold almost
     everywhere: on the paper example's rise it is (b) at every angle, the printed
     Eqs. 33-35 giving F1, F2 < 0; so this is about two solves, not four)."""
@@ -136,7 +140,10 @@ def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> Guid
             at_(x, todo) for x in (mu_sv, normal, Ft, x_c, arm1, arm2, slide, moment, tol)
         )
         F1, F2, FN = _solve_mode(s1, s2, mu, nrm, F, xc, a1, a2, d, sl, mo)
-        ok = np.isfinite(FN) & (F1 >= -tl) & (F2 >= -tl)
+        # F_N against F_t (F1, F2 >= 0 notwithstanding) is the guide's friction wedging
+        # the follower: self-locking, not a balance (a physics review: mode (a) with
+        # F_N = -191 N at F_t = +126 N was taken for a jump, mode (b) balancing there)
+        ok = np.isfinite(FN) & (F1 >= -tl) & (F2 >= -tl) & (FN * np.sign(F) >= -tl)
         if todo is None:  # mode (a) everywhere; replaced below where it does not hold
             out, mode = [F1, F2, FN], np.where(ok, 0, -1).astype(np.int8)
             todo = np.flatnonzero(~ok)

@@ -3,8 +3,8 @@
 All of it follows from the load of Eq. 29, F_t = M (g + A w^2) + k (S + s_p) + F_e (F_e:
 dynamics.external_load_N, beyond the paper, 0 in it), and the guide solve of Eqs.
 33-41. That solve is linear and homogeneous in F_t (forces.py), and in every guide mode
-that does not self-lock F_N has the sign of F_t. So the follower keeps contact (F_N >=
-0) exactly where
+it takes F_N has the sign of F_t (a mode where it does not is a wedge, not a
+balance). So the follower keeps contact (F_N >= 0) exactly where
 
     k (S + s_p) >= -D,   D = M (g + A w^2) + F_e   (the load without the spring)
 

@@ -78,8 +78,8 @@ def test_mode_a_matches_printed_equations(segment):
 
 
 def test_first_valid_mode_is_chosen():
-    """Modes are tried in the order a, b, c, d; the chosen one has F1, F2 >= 0 and no
-    earlier mode does."""
+    """Modes are tried in the order a, b, c, d; the chosen one has F1, F2 >= 0 and F_N
+    of F_t's sign, and no earlier mode does."""
     a = analyze(PAPER, verify=False)
     one = np.flatnonzero((a.n_contacts == 1) & (a.prog.V != 0))[::50]
     seen = set()
@@ -102,7 +102,7 @@ def test_first_valid_mode_is_chosen():
             )
             for s1, s2 in forces.MODES
         ]
-        ok = [s[0, 0] >= 0 and s[1, 0] >= 0 for s in sols]
+        ok = [s[0, 0] >= 0 and s[1, 0] >= 0 and s[2, 0] * a.Ft[k] > 0 for s in sols]
         assert a.guide.mode[k] == ok.index(True)
         seen.add(int(a.guide.mode[k]))
     assert len(seen) >= 2  # the rise and fall load the guide from opposite sides
@@ -153,7 +153,60 @@ def test_equilibrium_about_the_cam_axis(kind, e_s):
         Msum = sum(p[0] * F[1] - p[1] * F[0] for p, F in forces)
         assert np.abs(Fsum).max() < 1e-9 * a.Ft[k]
         assert abs(Msum) < 1e-9 * a.Ft[k]
-        assert g.F1[k] >= 0 and g.F2[k] >= 0
+        assert g.F1[k] >= 0 and g.F2[k] >= 0 and g.FN[k] * a.Ft[k] > 0
+
+
+def test_a_mode_whose_contact_force_opposes_the_load_is_not_a_balance():
+    """A physics review: on a short, wide guide with high friction, mode (a) had
+    F1, F2 >= 0 with F_N = -191 N at F_t = +126 N (theta = 250 deg): the guide's friction
+    wedging the follower. It was taken, and the design read as jumping at 199.6-284.5
+    deg (F_N = -3.6e9 N, F1 = 3.8e9 N) with F_t > 35 N everywhere, while mode (b)
+    balances there with every force positive. A mode must have F_N of F_t's sign."""
+    data = _offset(PAPER.with_kind(FollowerKind.knife_edge), 10.0).model_dump()
+    data["dynamics"].update(
+        guide_friction=0.5, guide_width_mm=38.0, guide_length_mm=17.0, overhang_mm=97.0
+    )
+    a = analyze(Design.model_validate(data), verify=False)
+    touching = a.in_contact.any(axis=0)
+    assert a.Ft.min() > 0 and touching.all()
+    k = int(np.argmin(np.abs(a.theta - math.radians(250.0))))
+    f = 0 if a.in_contact[0, k] else 1
+    wedge = forces._solve_mode(  # mode (a), which the old rule took here
+        1.0,
+        -1.0,
+        0.5 * np.sign(a.prog.V[k : k + 1]),
+        a.normal[f, k : k + 1],
+        a.Ft[k : k + 1],
+        a.geo.faces[f].x_c,
+        97e-3 - a.prog.S[k],  # arm_1 = l1 - r with r = 0 (a knife edge), l1 = l1_0 - S
+        114e-3 - a.prog.S[k],  # arm_2 = l1 + l2 - r
+        38e-3,
+    )
+    assert wedge[0][0] >= 0 and wedge[1][0] >= 0 and wedge[2][0] < 0
+    assert a.guide.mode[k] == 1 and (a.guide.mode >= 0).all()
+    assert (a.guide.FN > 0).all() and a.guide.F1.max() < 1000.0
+    assert not a.violations, [v.code for v in a.violations]
+
+
+def test_where_the_load_pulls_the_follower_off_it_jumps_and_no_guide_jams():
+    """The converse (a physics review): at F_t = -58.8 N a mode with F_N = +18,179 N was
+    taken, so the jump read 57.9-65 deg of F_t's 57.9-89 deg below zero. Where F_t < 0
+    the design jumps; a guide that balances nowhere there is not also said to jam."""
+    data = _offset(PAPER.with_kind(FollowerKind.single_concave), 26.44).model_dump()
+    data["cam"]["speed_rpm"] = 2414.5
+    data["dynamics"].update(
+        guide_friction=0.58, guide_width_mm=33.76, guide_length_mm=26.32, overhang_mm=35.35
+    )
+    a = analyze(Design.model_validate(data), verify=False)
+    touching = a.in_contact.any(axis=0)
+    pulled = touching & (a.Ft < 0)
+    assert pulled.sum() > 100 and (a.guide.FN[pulled] < 0).all()
+    assert (a.guide.FN[touching & (a.Ft > 0)] > 0).all()
+    by = {v.code: v for v in a.violations}
+    jumps = by["jump"].ranges_deg
+    assert any(lo < 60.0 and hi > 88.0 for lo, hi in jumps), jumps
+    jam = by["guide_jam"].ranges_deg
+    assert not any(lo < 88.0 and hi > 58.0 for lo, hi in jam), jam
 
 
 @pytest.mark.parametrize("kind", [FollowerKind.double_concave, FollowerKind.double_roller])
