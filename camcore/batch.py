@@ -351,6 +351,7 @@ def _shaft(bt: Batch, T: np.ndarray, worst: dict) -> list[dict]:
     Tc = np.concatenate([T, T[:, :1]], axis=1)
     steps = 0.5 * (Tc[:, 1:] + Tc[:, :-1]) * np.diff(th, axis=1)
     cum = np.concatenate([np.zeros((T.shape[0], 1)), np.cumsum(steps, axis=1)], axis=1)
+    cum += machine.impulse_work(d0, th)  # (one program for the batch)
     T_mean = cum[:, -1] / (2 * np.pi)
     energy = cum - T_mean[:, None] * (th - th[:, :1])
     delta_E = energy.max(axis=1) - energy.min(axis=1)
@@ -499,9 +500,11 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
         codes[b] += group[0]  # the program's continuity
     touching = loc.in_contact.any(axis=0).reshape(B, N)
     FN = loc.guide.FN.reshape(B, N)
-    add((touching & (FN <= 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
+    add((touching & (FN < 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
     add((~touching).any(axis=1), "contact_lost")
     add((touching & (loc.guide.mode.reshape(B, N) < 0) & (FN > 0)).any(axis=1), "guide_jam")
+    for b, d in enumerate(bt.designs):  # Fig. 5: decided on the design alone
+        codes[b] += [v.code for v in checks.face_in_guide(SimpleNamespace(design=d))]
     return [row + group[1] for row in codes]  # the elastic train's jump last
 
 

@@ -26,7 +26,7 @@ verdict holds for the real cam, not only at the analysed angles:
 * ``velocity_jump``, ``acceleration_jump``  the fundamental law of cam design: V and A
   continuous where segments meet (an infinite acceleration or jerk otherwise); the
   second can be waived (limits.require_continuous_acceleration).
-* ``jump``              Eqs. 29-41: contact force F_N <= 0 means the spring cannot
+* ``jump``              Eqs. 29-41: contact force F_N < 0 means the spring cannot
   keep the follower on the cam.
 * ``jump_speed``        Eq. 29 (camcore.machine): with limits.min_jump_speed_ratio
   set, the speed at which the rigid follower would leave the cam must be at least that
@@ -34,6 +34,10 @@ verdict holds for the real cam, not only at the analysed angles:
   overshoots; not in the paper; the elastic train is judged at the speed itself).
 * ``guide_jam``         Eqs. 33-41: no guide-contact mode of Fig. 6 balances the
   follower with friction (self-locking).
+* ``guide_overhang``    Fig. 5: with the overhang shrinking as the follower rises (l1 =
+  l1_0 - S), l1 must not go below 0: at l1 < 0 the face is inside its guide, and
+  Eqs. 35, 41's arms are not a follower's (not in the paper, whose l1_0 = 30 mm
+  exceeds its h = 15 mm).
 * ``profile_crossing``  the finished profile is not star-shaped about the axis (it
   crosses itself), which a convex cam never does.
 * ``export_tolerance``  the profile cannot be sampled so that every chord stays within
@@ -72,6 +76,7 @@ CODES = (
     "acceleration_jump",
     "jump",
     "guide_jam",
+    "guide_overhang",
     "contact_lost",
     "dynamic_jump",
     "jump_speed",
@@ -467,6 +472,31 @@ def rollers_apart(a) -> list[Violation]:
     ]
 
 
+def face_in_guide(a) -> list[Violation]:
+    """The overhang l1 = l1_0 - S at full lift h must not go below 0 (module docstring;
+    a physics review: l1_0 = 5 mm with h = 15 mm passed, its guide forces computed with
+    l1 down to -10 mm). Decided on h itself, the program's exact peak, not the grid;
+    the ranges are the samples' where l1 <= 0. Needs the design (and a.prog for the
+    ranges, which the batched core leaves empty)."""
+    dyn, h = a.design.dynamics, a.design.motion.lift_mm
+    if not dyn.overhang_shrinks or dyn.overhang_mm >= h:  # (l1 = 0: the face at the
+        return []  # guide's end, not in it)
+    prog = getattr(a, "prog", None)
+    ranges = () if prog is None else runs_deg(a.theta, to_mm(prog.S) > dyn.overhang_mm)
+    return [
+        Violation(
+            "guide_overhang",
+            "Fig. 5, Eqs. 35, 41",
+            f"the follower's face enters its guide: the overhang l1 = l1_0 - S = "
+            f"{dyn.overhang_mm:g} - {h:g} = {dyn.overhang_mm - h:g} mm at full lift, must "
+            f"stay >= 0 (raise the overhang (dynamics.overhang_mm) to the lift or more)"
+            + (f" at {where_text(ranges)}" if ranges else ""),
+            ranges,
+            h - dyn.overhang_mm,
+        )
+    ]
+
+
 def _on_circle_deg(lo: float, hi: float) -> tuple[tuple[float, float], ...]:
     """The range [lo, hi] [deg] within [0, 360]: split in two where it passes 360."""
     if hi <= 360.0:
@@ -543,7 +573,11 @@ def accepted_jumps(design) -> str | None:
 
 def _forces(a) -> list[Violation]:
     out, touching = [], a.in_contact.any(0)
-    bad = touching & (a.guide.FN <= 0)
+    # F_N = 0 is contact kept, as machine.py's spring and jump-speed needs count it (a
+    # dynamics review: a horizontal follower without preload rests on the low dwell at
+    # F_t = 0; it was a jump, while the spring proposed for it, and the jump speed,
+    # said it holds)
+    bad = touching & (a.guide.FN < 0)
     worst = a.worst.get("FN_min")
     extra = worst.beyond(0.0, -1.0) if worst else ()
     if bad.any() or extra:
@@ -553,7 +587,7 @@ def _forces(a) -> list[Violation]:
             Violation(
                 "jump",
                 "Eqs. 29-41",
-                f"follower jump: contact force F_N = {low:.3g} N <= 0 at {where_text(ranges)} "
+                f"follower jump: contact force F_N = {low:.3g} N < 0 at {where_text(ranges)} "
                 f"(raise the spring rate or preload, or lower the speed)",
                 ranges,
                 -low,
@@ -597,6 +631,19 @@ def _train(a) -> list[Violation]:
     r = a.train
     if r is None:
         return []
+    if r.resonance:
+        return [
+            Violation(
+                "dynamic_jump",
+                "Eqs. 29-41, elastic train",
+                f"the undamped elastic train resonates: its natural frequency "
+                f"{r.natural_frequency / (2 * math.pi):.4g} Hz is harmonic {r.resonance} of "
+                "the cam speed, so its vibration grows without bound and leaves the cam "
+                "(add damping (dynamics.damping_ratio), or change the train stiffness)",
+                ((0.0, 360.0),),
+                1.0,  # (no finite "by how much": a flag, as profile_crossing's)
+            )
+        ]
     theta, Fc = contact_force_fine(r)  # between the samples too
     bad = Fc <= 0
     if not bad.any():
@@ -799,6 +846,7 @@ def run_all(a, lift_error: float | None) -> list[Violation]:
         + rollers_apart(a)
         + _continuity(a)
         + _forces(a)
+        + face_in_guide(a)
         + _train(a)
         + _jump_speed(a)
     )

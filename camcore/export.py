@@ -593,7 +593,7 @@ def series_columns(a) -> dict[str, np.ndarray]:
         cols[f"sliding_m_per_s_{f + 1}"] = slide[f]
         cols[f"wear_um_per_Mcycle_{f + 1}"] = to_um_per_mcycle(wear[f])
     cols["cam_torque_Nm"] = a.torque.sum(axis=0)
-    if a.train is not None:  # the elastic follower train (camcore.train)
+    if a.train is not None and not a.train.resonance:  # the elastic train (camcore.train)
         cols["Fc_train_N"] = on_grid(a.train, a.theta, a.train.contact_force)
         cols["x_train_mm"] = to_mm(on_grid(a.train, a.theta, a.train.x))
     return cols

@@ -282,10 +282,23 @@ def _train(a: Analysis) -> dict | None:
     if r is None:
         return None
     w = omega_rad_s(a.design)
-    theta, Fc = train.contact_force_fine(r)  # between the samples too
-    return {
+    head = {
         "natural_frequency_Hz": r.natural_frequency / (2 * math.pi),
         "frequency_ratio": r.natural_frequency / w,
+        "resonant_harmonic": r.resonance or None,
+    }
+    if r.resonance:  # no steady state: no figures of one (never nan in the JSON)
+        return {
+            **head,
+            "contact_force_min_N": None,
+            "contact_force_max_N": None,
+            "error_max_mm": None,
+            "residual_vibration": [],
+            "dynamic_jump_deg": [[0.0, 360.0]],
+        }
+    theta, Fc = train.contact_force_fine(r)  # between the samples too
+    return {
+        **head,
         "contact_force_min_N": float(Fc.min()),
         "contact_force_max_N": float(Fc.max()),
         "error_max_mm": float(np.abs(r.x - r.s).max()) * 1e3,
@@ -402,6 +415,11 @@ def _train_text(t: dict | None) -> str:
     """The elastic train's row of ``machine_rows``."""
     if t is None:
         return "rigid (dynamics.train_stiffness_N_per_m not set)"
+    if t["resonant_harmonic"]:
+        return (
+            f"f_n = {t['natural_frequency_Hz']:.4g} Hz = harmonic {t['resonant_harmonic']} "
+            "of the cam speed, undamped: resonant, no steady state"
+        )
     residual = ", ".join(f"{v['amplitude_mm']:.3g}" for v in t["residual_vibration"])
     return (
         f"f_n = {t['natural_frequency_Hz']:.4g} Hz ({t['frequency_ratio']:.3g} x cam speed), "

@@ -52,6 +52,9 @@ class Response:
     natural_frequency: float  # omega_n [rad/s]
     mass: float  # m [kg]
     contact_force_spectrum: np.ndarray  # rfft of contact_force: F_c between the samples
+    # the harmonic of the cam speed at which an undamped train resonates exactly
+    # (K = m h^2): it has no steady state, and x, F_c are nan; 0 for none
+    resonance: int = 0
 
 
 def contact_force_fine(resp: Response, factor: int = 8) -> tuple[np.ndarray, np.ndarray]:
@@ -91,6 +94,12 @@ def respond(design: Design) -> Response | None:
     S = np.fft.rfft(s)
     h = np.arange(S.size) * w  # harmonic frequencies [rad/s]
     denom = K - m * h**2 + 1j * h * c
+    if not denom.all():  # undamped, omega_n on a harmonic to the last digit (a review:
+        # x, F_c came out nan, and the design passed, nan <= 0 being false)
+        nan = np.full(n, np.nan)
+        spectrum = np.full(S.size, complex(np.nan, np.nan))
+        resonance = int(np.flatnonzero(denom == 0)[0])
+        return Response(theta, s, nan, nan.copy(), wn, m, spectrum, resonance)
     F0 = k2 * d.preload_mm * MM + m * d.gravity_m_s2 + d.external_load_N  # (F_e: as g)
     X = (k1 + 1j * h * c) * S / denom
     X[0] -= F0 * n / denom[0]  # rfft scaling: the mean is S_0 / n

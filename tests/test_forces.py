@@ -459,3 +459,30 @@ def test_no_guide_friction_where_a_law_ends_at_rest(law):
         k = int(np.argmin(np.abs(a.theta - np.radians(deg))))
         assert abs(a.prog.V[k]) < 1e-12 and abs(a.prog.A[k]) < 1e-9
         assert a.guide.FN[k] == pytest.approx(a.guide.FN[k + 1], rel=1e-9)
+
+
+def test_the_follower_s_face_stays_out_of_its_guide():
+    """A physics review: an overhang l1_0 = 5 mm under a 15 mm lift was a valid design,
+    its guide forces computed with l1 = l1_0 - S down to -10 mm (the face inside the
+    guide). With the overhang shrinking, l1 must not go below 0: a violation where it
+    does, by how much, at the angles where S > l1_0; the batched core says the same."""
+    from camcore import batch
+    from camcore.report import summary
+
+    def design(overhang, shrinks=True):
+        data = PAPER.with_kind(FollowerKind.single_roller).model_dump()
+        data["dynamics"].update(overhang_mm=overhang, overhang_shrinks=shrinks)
+        return Design.model_validate(data)
+
+    a = analyze(design(5.0), verify=False)
+    [v] = [v for v in a.violations if v.code == "guide_overhang"]
+    assert v.amount == pytest.approx(10.0) and "-10 mm at full lift" in v.message
+    inside = np.degrees(a.theta[a.prog.S * 1e3 > 5.0])
+    assert v.ranges_deg[0][0] == pytest.approx(inside.min(), abs=0.2)
+    assert v.ranges_deg[-1][1] == pytest.approx(inside.max(), abs=0.2)
+    for d, broken in [(design(14.99), True), (design(15.0), False), (design(5.0, False), False)]:
+        codes = [v.code for v in analyze(d, verify=False).violations]
+        assert ("guide_overhang" in codes) is broken, (d.dynamics, codes)
+        row = batch.summaries([d])[0]
+        assert ("guide_overhang" in [v["code"] for v in row["violations"]]) is broken
+    assert summary(analyze(design(5.0, False), verify=False))["valid"]

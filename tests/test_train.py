@@ -85,6 +85,41 @@ def test_resonance_shows_when_a_harmonic_meets_the_natural_frequency():
     assert error(1.0) > 10 * error(3.0)
 
 
+def test_an_undamped_train_at_exact_resonance_jumps_and_reports_no_nan():
+    """A dynamics review: with zeta = 0 and omega_n exactly on harmonic 10 of the cam
+    speed, x and F_c were nan, the JSON held the bare token NaN, and the design passed
+    (nan <= 0 is false); a k_1 one part in 10^9 away gave F_c = -5.8e6 N and a jump.
+    An undamped train on a harmonic has no steady state: a dynamic jump, no figures."""
+    import json
+
+    from camcore.export import series_csv_text
+    from camcore.forces import moving_mass
+    from camcore.model import omega_rad_s
+    from camcore.report import report_text, summary
+
+    m = moving_mass(PAPER)
+    k1 = m * (10 * omega_rad_s(PAPER)) ** 2 - PAPER.dynamics.spring_rate_N_per_m
+    d = PAPER.model_copy(
+        update={
+            "dynamics": PAPER.dynamics.model_copy(
+                update={"train_stiffness_N_per_m": k1, "damping_ratio": 0.0}
+            )
+        }
+    )
+    r = train.respond(d)
+    assert r.resonance == 10
+    a = analyze(d, verify=False)
+    s = summary(a)
+    assert not s["valid"] and "dynamic_jump" in [v["code"] for v in s["violations"]]
+    assert s["train"]["resonant_harmonic"] == 10 and s["train"]["contact_force_min_N"] is None
+    json.dumps(s, allow_nan=False)  # (raises on a nan or an infinity anywhere)
+    assert "resonant, no steady state" in report_text(s, d)
+    assert "Fc_train_N" not in series_csv_text(a).splitlines()[0]
+    near = d.model_copy(update={"dynamics": d.dynamics.model_copy(update={"damping_ratio": 1e-3})})
+    assert train.respond(near).resonance == 0
+    assert "dynamic_jump" in [v.code for v in analyze(near, verify=False).violations]
+
+
 def test_dynamic_jump_and_report():
     """A soft train at the paper's speed: the summary gives the natural frequency, the
     error, the residual vibration after each rise and fall, and the dynamic jump."""
