@@ -234,9 +234,11 @@ def _quantities(bt: Batch) -> dict:
     """The quantities of extremes.QUANTITIES the verdict and figures of this kind need."""
     names = ["pressure_angle_max", "FN_min", "FN_max", "F1_max", "F2_max"]
     names += ["torque_max", "torque_min"]
-    if bt.r[0] > 0 and not bt.flat:
+    if bt.flat:
+        names.append("pitch_radius_min")
+    elif bt.r[0] > 0:
         names.append("kappa_pitch_max")
-    elif bt.r[0] < 0 or bt.flat:
+    elif bt.r[0] < 0:
         names.append("kappa_pitch_min")
     if bt.r[0] != 0.0:
         names.append("stress_max")
@@ -461,7 +463,7 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     r = bt.r[:, None]  # (B, 1)
     if bt.flat:
         add(
-            grid_any(on3 & (k <= 0)) | cand_any("kappa_pitch_min", lambda v: v <= 0),
+            grid_any(on3 & (k <= 0)) | cand_any("pitch_radius_min", lambda v: v <= 0),
             "curvature_convex",
         )
     elif bt.r[0] > 0:

@@ -231,13 +231,13 @@ def _curvature_rules(a) -> list[Violation]:
     if a.geo.r == 0.0:  # knife edge: the pitch curve is the profile, concave flanks are fine
         return out
     if a.geo.flat:  # flat face: rho = r_b + S + S'' > 0, kappa_p its reciprocal
-        worst = a.worst.get("kappa_pitch_min")
+        worst = a.worst.get("pitch_radius_min")
         cands = worst.others if worst else ()
         bad = on & (k <= 0)
         extra = tuple((lo, hi) for v, lo, hi in cands if v <= 0)
         if bad.any() or extra:
             rho = [float(np.min(a.rho[bad]))] if bad.any() else []
-            rho += [1.0 / v for v, _, _ in cands if v < 0]
+            rho += [v for v, _, _ in cands if v <= 0]
             ranges = runs_deg(a.theta, bad.any(0), extra)
             low = min(rho) if rho else 0.0
             out.append(
@@ -472,23 +472,45 @@ def rollers_apart(a) -> list[Violation]:
     ]
 
 
+def lift_peak_mm(design, prog=None) -> float:
+    """The program's largest S [mm], between the samples too: its lifts' sum h, or more
+    where a law overshoots the segment's end (an adversarial review: a polynomial
+    blend into a fall reached 23.373 mm of a 23 mm program, and the guide check read
+    h). ``prog``: the program on the analysis grid, if at hand (else the design's grid
+    is evaluated); only its largest samples are searched between."""
+    from .motion import program, segments, theta_grid
+
+    segs = segments(design)
+    if prog is None:
+        prog = program(design, theta_grid(design), segs)
+    [(top, _)] = extremes.refine_maxes(
+        lambda x: program(design, x, segs).S[None], prog.theta, [prog.S]
+    )
+    return max(design.motion.lift_mm, to_mm(top))
+
+
 def face_in_guide(a) -> list[Violation]:
     """The overhang l1 = l1_0 - S at full lift h must not go below 0 (module docstring;
     a physics review: l1_0 = 5 mm with h = 15 mm passed, its guide forces computed with
     l1 down to -10 mm). Decided on h itself, the program's exact peak, not the grid;
     the ranges are the samples' where l1 <= 0. Needs the design (and a.prog for the
     ranges, which the batched core leaves empty)."""
-    dyn, h = a.design.dynamics, a.design.motion.lift_mm
-    if not dyn.overhang_shrinks or dyn.overhang_mm >= h:  # (l1 = 0: the face at the
-        return []  # guide's end, not in it)
+    dyn = a.design.dynamics
+    if not dyn.overhang_shrinks:
+        return []
     prog = getattr(a, "prog", None)
-    ranges = () if prog is None else runs_deg(a.theta, to_mm(prog.S) > dyn.overhang_mm)
+    h = lift_peak_mm(a.design, prog)
+    if dyn.overhang_mm >= h - ROUND_OFF_MM:  # (l1 = 0: the face at the guide's end)
+        return []
+    ranges = (
+        () if prog is None else runs_deg(a.theta, to_mm(prog.S) > dyn.overhang_mm + ROUND_OFF_MM)
+    )
     return [
         Violation(
             "guide_overhang",
             "Fig. 5, Eqs. 35, 41",
             f"the follower's face enters its guide: the overhang l1 = l1_0 - S = "
-            f"{dyn.overhang_mm:g} - {h:g} = {dyn.overhang_mm - h:g} mm at full lift, must "
+            f"{dyn.overhang_mm:g} - {h:.4g} = {dyn.overhang_mm - h:.4g} mm at full lift, must "
             f"stay >= 0 (raise the overhang (dynamics.overhang_mm) to the lift or more)"
             + (f" at {where_text(ranges)}" if ranges else ""),
             ranges,

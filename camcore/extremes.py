@@ -31,6 +31,11 @@ QUANTITIES = {
     "pressure_angle_max": (lambda loc: np.abs(loc.pressure_angle), 1.0),  # [rad]
     "kappa_pitch_max": (lambda loc: loc.kappa_pitch, 1.0),  # [1/m]
     "kappa_pitch_min": (lambda loc: loc.kappa_pitch, -1.0),
+    # the flat face's rho = r_b + S + S'' (1 / kappa_p): smooth where kappa_p is not, so a
+    # dip of rho just below 0 between two samples is a minimum here, where in kappa_p
+    # it was a maximum and went unsearched (an adversarial review: a cusp passed at 0.1
+    # deg, rho -0.00055 mm over 0.03 deg)
+    "pitch_radius_min": (lambda loc: 1.0 / loc.kappa_pitch, -1.0),  # [m]
     "FN_min": (lambda loc: loc.FN, -1.0),  # [N]
     "FN_max": (lambda loc: loc.FN, 1.0),
     "F1_max": (lambda loc: np.broadcast_to(loc.guide.F1, loc.FN.shape), 1.0),  # [N], guide

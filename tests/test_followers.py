@@ -399,3 +399,28 @@ def test_the_shared_load_stress_is_eq42_by_hand():
     p = math.sqrt(FN / 15e-3 * curv / (math.pi * compliance))
     assert s["contact_stress_max_MPa"]["high_dwell_two_contact"] == pytest.approx(p / 1e6, rel=1e-6)
     assert p / 1e6 == pytest.approx(32.96, abs=0.01)
+
+
+def test_a_flat_face_cusp_between_two_samples_is_found():
+    """An adversarial review: rho = r_b + S + S'' dipped to -0.00055 mm over 0.03 deg
+    between two samples (a cusp), and the design passed at 0.1 deg: the search looked
+    for the least kappa_p = 1 / rho, where a dip of rho through 0 is a maximum. It
+    searches rho itself now, at any resolution, in the batched core too."""
+    from camcore import batch
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["follower"]["kind"] = "flat_face"
+    data["motion"]["segments"][0]["angle_deg"] = 40.0
+    data["motion"]["segments"][1]["angle_deg"] = 130.0
+    data["cam"].update(base_radius_mm=179.7503, speed_rpm=1.0, width_mm=1000.0)
+    data["dynamics"].update(mass_g=0.001, spring_rate_N_per_m=0.0, preload_mm=0.0)
+    for res in (0.1, 5.0):
+        data["limits"]["resolution_deg"] = res
+        d = Design.model_validate(data)
+        a = analyze(d, verify=False)
+        on = a.on_curve.any(axis=0)
+        assert (a.rho[0][on] > 0).all()  # no sample sees it
+        [v] = [v for v in a.violations if v.code == "curvature_convex"]
+        assert -1e-3 < -v.amount < 0 and v.ranges_deg[0][0] <= 29.92 <= v.ranges_deg[0][1]
+        row = batch.summaries([d])[0]
+        assert "curvature_convex" in [v["code"] for v in row["violations"]]

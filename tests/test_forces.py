@@ -486,3 +486,30 @@ def test_the_follower_s_face_stays_out_of_its_guide():
         row = batch.summaries([d])[0]
         assert ("guide_overhang" in [v["code"] for v in row["violations"]]) is broken
     assert summary(analyze(design(5.0, False), verify=False))["valid"]
+
+
+def test_the_guide_check_sees_a_law_that_overshoots_the_lift():
+    """An adversarial review: a polynomial blend into a fall reaches S = 23.373 mm of a
+    program whose lifts sum to 23 mm; with l1_0 = 23.2 mm the face entered the guide
+    (l1 = -0.173 mm) and the check, reading the lifts' sum, passed it at any resolution."""
+    from camcore import batch
+
+    data = PAPER.with_kind(FollowerKind.single_roller).model_dump(mode="json")
+    data["cam"].update(speed_rpm=100.0, base_radius_mm=150.0)
+    data["dynamics"]["overhang_mm"] = 23.2
+    data["motion"] = {
+        "segments": [
+            {"kind": "rise", "angle_deg": 40, "lift_mm": 3, "law": "polynomial"},
+            {"kind": "rise", "angle_deg": 100, "lift_mm": 20, "law": "constant_velocity"},
+            {"kind": "fall", "angle_deg": 30, "lift_mm": 23, "law": "polynomial"},
+            {"kind": "dwell", "angle_deg": 190},
+        ]
+    }
+    for res in (0.1, 5.0):
+        data["limits"]["resolution_deg"] = res
+        d = Design.model_validate(data)
+        a = analyze(d, verify=False)
+        [v] = [v for v in a.violations if v.code == "guide_overhang"]
+        assert v.amount == pytest.approx(a.prog.S.max() * 1e3 - 23.2, abs=2e-3)
+        assert v.amount > 0.17
+        assert "guide_overhang" in [v["code"] for v in batch.summaries([d])[0]["violations"]]

@@ -175,3 +175,24 @@ def test_contact_force_between_the_samples_is_the_harmonic_sum():
         h / 2 * np.sin(theta) + (h / 2) * np.real(1j * G * np.exp(1j * theta))
     )
     np.testing.assert_allclose(Fc, ref, atol=1e-6 * np.abs(ref).max())
+
+
+def test_a_harmonic_the_cam_does_not_excite_is_no_resonance():
+    """An adversarial review: the double-indexing program repeats every half turn, so
+    it has no odd harmonics; an undamped train on harmonic 41 was a "resonance" over the
+    whole turn (round-off's |S_41| / |S_2| = 4e-18), and one ulp off it F_c fell to
+    -78.5 N. The response there is the lightly damped one's (F_c 24.6 .. 102.6 N)."""
+    d = load_preset("double_index")
+    k1 = 709950.2759235882  # omega_n = 41 x the cam speed, to the last digit
+    assert round(train.natural_frequency(_train(d, k1, 0.0)) / machine.omega_rad_s(d), 9) == 41
+    damped = train.respond(_train(d, k1, 1e-6))
+    for k in (k1, np.nextafter(k1, 1e9)):
+        r = train.respond(_train(d, k, 0.0))
+        assert r.resonance == 0
+        assert r.contact_force.min() == pytest.approx(damped.contact_force.min(), rel=1e-4)
+        assert r.contact_force.max() == pytest.approx(damped.contact_force.max(), rel=1e-4)
+
+
+def _train(design: Design, k1: float, zeta: float) -> Design:
+    dyn = design.dynamics.model_copy(update={"train_stiffness_N_per_m": k1, "damping_ratio": zeta})
+    return design.model_copy(update={"dynamics": dyn})
