@@ -505,8 +505,10 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     add((touching & (FN < 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
     add((~touching).any(axis=1), "contact_lost")
     add((touching & (loc.guide.mode.reshape(B, N) < 0) & (FN > 0)).any(axis=1), "guide_jam")
-    for b, d in enumerate(bt.designs):  # Fig. 5: decided on the design alone
-        codes[b] += [v.code for v in checks.face_in_guide(SimpleNamespace(design=d))]
+    if d0.dynamics.overhang_shrinks:  # Fig. 5: one program, so one peak, for the batch
+        peak = checks.lift_peak_mm(d0)
+        for b, d in enumerate(bt.designs):
+            codes[b] += [v.code for v in checks.face_in_guide(SimpleNamespace(design=d), peak)]
     return [row + group[1] for row in codes]  # the elastic train's jump last
 
 
