@@ -278,6 +278,7 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     getters = list(qs.values())
     sense = np.array([s for _, s in getters])[q]
     codes = np.array([g.code for g in bt.segs], dtype=np.int8)
+    jammed = np.zeros(B, bool)  # designs whose guide the search met jammed
 
     def fz(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
         keyed = np.concatenate([des[:, None], x.reshape(q.size, -1)], axis=1)
@@ -286,7 +287,10 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
         at = local(bt, rows[:, 1:].ravel(), np.repeat(rows[:, 0].astype(int), per))
         vals = np.stack([get(at) for get, _ in getters])
         vals = vals.reshape(vals.shape[0], vals.shape[1], rows.shape[0], per)
-        on_at = extremes.on_curve(at, codes).reshape(F, rows.shape[0], per)
+        on = extremes.on_curve(at, codes)
+        jams = extremes.jams(at, on).reshape(rows.shape[0], per).any(axis=1)
+        jammed[rows[jams, 0].astype(int)] = True
+        on_at = on.reshape(F, rows.shape[0], per)
         out = np.where(on_at[face, inv], sense[:, None] * vals[q, face, inv], -np.inf)
         return out.ravel()
 
@@ -305,6 +309,7 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     for i, name in enumerate(qs):
         m = q == i
         out[name][des[m], slot[m]] = sense[m] * best[m]
+    out["guide_jam"] = np.where(jammed, 1.0, np.nan)[:, None]  # (extremes.jam_worst)
     return out
 
 
@@ -504,7 +509,8 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     FN = loc.guide.FN.reshape(B, N)
     add((touching & (FN < 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
     add((~touching).any(axis=1), "contact_lost")
-    add((touching & (loc.guide.mode.reshape(B, N) < 0) & (FN > 0)).any(axis=1), "guide_jam")
+    jam = (touching & (loc.guide.mode.reshape(B, N) < 0) & (FN > 0)).any(axis=1)
+    add(jam | cand_any("guide_jam", lambda v: v > 0), "guide_jam")
     if d0.dynamics.overhang_shrinks:  # Fig. 5: one program, so one peak, for the batch
         peak = checks.lift_peak_mm(d0)
         for b, d in enumerate(bt.designs):

@@ -638,8 +638,10 @@ def _forces(a) -> list[Violation]:
     # (where F_t < 0 the follower leaves the cam, a jump: no guide to jam; the
     # unbalanced angles keep the frictionless F_N, of F_t's sign)
     bad = touching & (a.guide.mode < 0) & (a.guide.FN > 0)
-    if bad.any():
-        ranges = runs_deg(a.theta, bad)
+    found = a.worst.get("guide_jam")  # between the samples (extremes.jam_worst)
+    extra = found.beyond(0.0, 1.0) if found else ()
+    if bad.any() or extra:
+        ranges = runs_deg(a.theta, bad, extra)
         out.append(
             Violation(
                 "guide_jam",
@@ -647,7 +649,7 @@ def _forces(a) -> list[Violation]:
                 f"no guide-contact mode of Fig. 6 balances the follower with friction "
                 f"mu = {a.design.dynamics.guide_friction:g} (self-locking) at {where_text(ranges)}",
                 ranges,
-                float(bad.sum()),
+                float(max(bad.sum(), 1)),  # (samples jammed; 1 for one found between)
             )
         )
     return out

@@ -182,6 +182,30 @@ def zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return best, at
 
 
+def jams(loc, on: np.ndarray) -> np.ndarray:
+    """(M,) where the guide of ``loc`` jams on a rise or fall: no guide mode balances
+    (forces.GuideSolution.mode < 0) and F_t > 0 (the frictionless F_N kept there has
+    F_t's sign; where F_t < 0 the follower jumps instead): checks._forces's rule."""
+    return on.any(axis=0) & (loc.guide.mode < 0) & (loc.guide.FN > 0)
+
+
+def jam_worst(angles: np.ndarray) -> Worst | None:
+    """The angles [rad] between the samples where the search found the guide jammed,
+    as a Worst of value 1 whose brackets are those angles (None for none). Toward a
+    jam the forces grow without bound, so the searches of F_N, F1 and F2 zoom in on its
+    edge and meet the jam itself (an adversarial review: a jam 0.016 deg wide between
+    two samples had passed at 0.1 deg, its 9.6e10 N printed as a figure)."""
+    if not angles.size:
+        return None
+    at = np.unique(np.mod(angles, 2 * np.pi))
+    cut = np.flatnonzero(np.diff(at) > JAM_GAP) + 1  # (points of one jam: one bracket)
+    runs = [(float(r[0]), float(r[-1])) for r in np.split(at, cut)]
+    return Worst(1.0, runs[0][0], 0, tuple((1.0, lo, hi) for lo, hi in runs))
+
+
+JAM_GAP = np.radians(0.01)  # jammed angles the search met this close: one jam
+
+
 def worst_values(a) -> dict[str, Worst | None]:
     """Worst value of each quantity in QUANTITIES over the rise and fall curves of
     ``a`` (a camcore.analysis.Analysis), between the grid samples too; None where no
@@ -202,6 +226,7 @@ def worst_values(a) -> dict[str, Worst | None]:
         sense = np.array([s for _, s in getters])[q]
 
         codes = np.array([g.code for g in a.segments], dtype=np.int8)
+        jammed: list[np.ndarray] = []  # angles the search met where the guide jams
 
         def f(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
             per = x.size // q.size
@@ -216,12 +241,14 @@ def worst_values(a) -> dict[str, Worst | None]:
             fc = np.repeat(face, per)
             col = (inv.reshape(-1)[:, None] * per + np.arange(per)).ravel()
             out = np.repeat(sense, per) * vals[np.repeat(q, per), fc, col]
-            return np.where(on_curve(loc, codes)[fc, col], out, -np.inf)
+            on = on_curve(loc, codes)
+            jammed.append(rows[first].ravel()[jams(loc, on)])
+            return np.where(on[fc, col], out, -np.inf)
 
         best, at = zoom(f, lo, hi)
         better = np.nan_to_num(best, nan=-np.inf) > grid
         best, at = np.where(better, best, grid), np.where(better, at, th[k])
-    out: dict[str, Worst | None] = {}
+    out: dict[str, Worst | None] = {"guide_jam": jam_worst(np.concatenate(jammed))}
     for j, name in enumerate(QUANTITIES):
         m = np.flatnonzero(q == j)
         if m.size == 0:

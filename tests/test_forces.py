@@ -513,3 +513,32 @@ def test_the_guide_check_sees_a_law_that_overshoots_the_lift():
         assert v.amount == pytest.approx(a.prog.S.max() * 1e3 - 23.2, abs=2e-3)
         assert v.amount > 0.17
         assert "guide_overhang" in [v["code"] for v in batch.summaries([d])[0]["violations"]]
+
+
+def test_a_guide_that_jams_between_two_samples_is_found():
+    """An adversarial review: a knife edge's guide jammed over 22.179-22.195 deg, between
+    the samples at 22.1 and 22.2, and the design passed at 0.1 deg and at 5 deg with a
+    contact force of 9.6e10 N printed as a figure. Toward a jam the forces grow without
+    bound, so the searches of F_N, F1 and F2 zoom in on it and meet the jam itself."""
+    from camcore import batch
+    from camcore.report import summary
+
+    data = PAPER.with_kind(FollowerKind.knife_edge).model_dump(mode="json")
+    data["dynamics"].update(guide_length_mm=20.0, overhang_mm=60.0, guide_friction=0.2077103)
+    data["cam"].update(base_radius_mm=38.0, speed_rpm=100.0)
+    data["motion"]["segments"][0]["angle_deg"] = 50.0
+    data["motion"]["segments"][1]["angle_deg"] = 120.0
+    data["limits"]["max_pressure_angle_deg"] = 89.0
+    for res in (0.1, 5.0):
+        data["limits"]["resolution_deg"] = res
+        d = Design.model_validate(data)
+        a = analyze(d, verify=False)
+        assert not (a.guide.mode < 0).any()  # no sample sees it
+        [jam] = [v for v in a.violations if v.code == "guide_jam"]
+        ((lo, hi),) = jam.ranges_deg
+        assert 22.17 < lo < hi < 22.2
+        assert "force" in summary(a)["unbounded"]  # the figure is the samples' largest
+        other = d.model_copy(update={"cam": d.cam.model_copy(update={"base_radius_mm": 60.0})})
+        rows = batch.summaries([d, other])
+        assert [v["code"] for v in rows[0]["violations"]] == ["guide_jam"]
+        assert "guide_jam" not in [v["code"] for v in rows[1]["violations"]]
