@@ -62,10 +62,12 @@ class Worst:
 
 
 def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(row, grid index) of the CANDIDATES largest local maxima of each row of
-    ``values`` (R, N) among the samples in ``mask``, row by row, the larger first and,
-    between equal ones, the earlier. A plateau (a dwell) is a run of maxima: the
-    C-th largest value is found by partition, then the earliest of its ties fill up."""
+    """(row, grid index) of the CANDIDATES highest local maxima of each row of
+    ``values`` (R, N) among the samples in ``mask``, row by row, the higher first and,
+    between equal ones, the earlier; a maximum's height is what it may reach between
+    its neighbours (_between), not its sample's. A plateau (a dwell) is a run of
+    maxima: the C-th largest value is found by partition, then the earliest of its ties
+    fill up."""
     C = CANDIDATES
     # not below either neighbour in the mask (none beyond the ends); boolean temporaries
     # only (a float one the size of a batch is a fresh mmap, page faults and all)
@@ -76,18 +78,42 @@ def top_peaks(values: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndar
     if many:  # (a dwell's plateau, mostly: its samples past the first C go first)
         peak = _first_of_ties(values, peak, C)
         many = np.count_nonzero(peak) > 4 * C * values.shape[0]
-    if many and values.shape[1] > C:  # plateaus: keep only the C largest of each row first
-        pv = np.where(peak, values, -np.inf)
-        kth = np.partition(pv, pv.shape[1] - C, axis=1)[:, -C][:, None]  # C-th largest
+    row, k = np.nonzero(peak)
+    rank = _between(values, mask, row, k)
+    if many and values.shape[1] > C:  # many peaks: keep only the C highest of each row first
+        pv = np.full(values.shape, -np.inf)
+        pv[row, k] = rank
+        kth = np.partition(pv, values.shape[1] - C, axis=1)[:, -C][:, None]  # C-th largest
         above = peak & (pv > kth)
         tie = peak & (pv == kth)
         room = C - above.sum(axis=1, keepdims=True)
-        peak = above | (tie & (np.cumsum(tie, axis=1) <= room))
-    row, k = np.nonzero(peak)
-    order = np.lexsort((k, -values[row, k], row))  # by row, then value down, then index
+        keep = (above | (tie & (np.cumsum(tie, axis=1) <= room)))[row, k]
+        row, k, rank = row[keep], k[keep], rank[keep]
+    order = np.lexsort((k, -rank, row))  # by row, then the peak between down, then index
     row, k = row[order], k[order]
     keep = np.arange(row.size) - np.searchsorted(row, row, side="left") < C
     return row[keep], k[keep]
+
+
+def _between(values: np.ndarray, mask: np.ndarray, row: np.ndarray, k: np.ndarray):
+    """The peak each local maximum k of ``values`` may reach between its neighbours: the
+    vertex of the parabola through the three samples where k is above both, raised by
+    at most what the lower neighbour lies below it (a parabola's vertex within half a
+    step cannot pass that); the sample itself where it ties a neighbour.
+    Peaks are ranked by it, not by the sample: five peaks alike to 1e-5 deg had the
+    true worst in the fifth bracket, unsearched, and the verdict changed with the
+    resolution (an adversarial review)."""
+    n = values.shape[1]
+    v0 = values[row, k]
+    left, right = np.maximum(k - 1, 0), np.minimum(k + 1, n - 1)
+    vl = np.where((k > 0) & mask[row, left], values[row, left], v0)
+    vr = np.where((k < n - 1) & mask[row, right], values[row, right], v0)
+    vl, vr = np.where(np.isfinite(vl), vl, v0), np.where(np.isfinite(vr), vr, v0)
+    bend = 2.0 * v0 - vl - vr
+    strict = (v0 > vl) & (v0 > vr)  # (a plateau's sample, a dwell's, stays as it is)
+    with np.errstate(all="ignore"):
+        rise = np.where(strict, (vr - vl) ** 2 / (8.0 * bend), 0.0)
+    return v0 + np.clip(rise, 0.0, v0 - np.minimum(vl, vr))
 
 
 def _first_of_ties(values: np.ndarray, peak: np.ndarray, c: int) -> np.ndarray:

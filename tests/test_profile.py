@@ -651,8 +651,21 @@ def _top_peaks_by_hand(values, mask, c):
             and (k == 0 or not m[k - 1] or v[k] >= v[k - 1])
             and (k == n - 1 or not m[k + 1] or v[k] >= v[k + 1])
         ]
-        out += [(i, k) for k in sorted(peaks, key=lambda k: (-v[k], k))[:c]]
+        out += [(i, k) for k in sorted(peaks, key=lambda k: (-_height(v, m, k), k))[:c]]
     return out
+
+
+def _height(v, m, k) -> float:
+    """What the local maximum k may reach between its neighbours, by hand: the vertex of
+    the parabola through the three samples where k is above both (a missing or
+    non-finite neighbour is the sample itself), at most the drop to the lower
+    neighbour above the sample."""
+    n = v.size
+    left = v[k - 1] if k > 0 and m[k - 1] and np.isfinite(v[k - 1]) else v[k]
+    right = v[k + 1] if k < n - 1 and m[k + 1] and np.isfinite(v[k + 1]) else v[k]
+    strict = v[k] > left and v[k] > right  # (a plateau's sample stays as it is)
+    rise = (right - left) ** 2 / (8 * (2 * v[k] - left - right)) if strict else 0.0
+    return v[k] + min(max(rise, 0.0), v[k] - min(left, right))
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -660,7 +673,8 @@ def test_top_peaks_takes_the_largest_local_maxima_the_earlier_of_ties(seed):
     """extremes.top_peaks against its definition on rows with plateaus (a dwell), ties
     between plateaus, masked stretches, NaN and -inf: the plateau's samples past the
     first CANDIDATES are dropped before the sort (a sweep's spring needs spent a tenth
-    of the run sorting dwells), and nothing else changes."""
+    of the run sorting dwells), and nothing else changes; maxima ranked by the height
+    they may reach between their neighbours."""
     from camcore import extremes
 
     rng = np.random.default_rng(seed)

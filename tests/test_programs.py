@@ -685,3 +685,31 @@ def test_a_rise_into_a_rise_is_no_station_where_nothing_changes():
     events = [st["event"] for st in summary(analyze(Design.model_validate(data)))["stations"]]
     assert "station 1: one rise ends and the next begins" in events
     assert not any("nothing changes" in e for e in events)
+
+
+def test_the_worst_of_many_alike_peaks_is_searched_whatever_the_resolution():
+    """An adversarial review: five rises whose pressure-angle peaks agree to 1e-5 deg;
+    the true worst (27.66595 deg, at 302.66 deg) lay in the fifth bracket, whose sample
+    was lower, and only four are searched: the design passed at 5 and 0.1 deg and broke
+    its 27.6657976 deg limit at 0.01 deg. Peaks are ranked by the parabola through
+    their samples now, and the verdict holds at every resolution."""
+    segs: list[dict] = []
+    for _ in range(4):
+        segs += [
+            {"kind": "rise", "angle_deg": 30, "lift_mm": 10, "law": "cycloidal"},
+            {"kind": "fall", "angle_deg": 42, "lift_mm": 10, "law": "cycloidal"},
+        ]
+    segs += [
+        {"kind": "rise", "angle_deg": 30, "lift_mm": 9.088993, "law": "poly_4567"},
+        {"kind": "fall", "angle_deg": 42, "lift_mm": 9.088993, "law": "cycloidal"},
+    ]
+    for res in (5.0, 0.1, 0.01):
+        d = with_program(segs, kind="single_roller")
+        data = d.model_dump(mode="json")
+        data["cam"]["base_radius_mm"] = 60.0
+        data["limits"].update(max_pressure_angle_deg=27.6657976, resolution_deg=res)
+        a = analyze(Design.model_validate(data), verify=False)
+        w = a.worst["pressure_angle_max"]
+        assert math.degrees(w.value) == pytest.approx(27.665947, abs=1e-6)
+        assert abs(math.degrees(w.theta) - 302.657) < 0.01
+        assert "pressure_angle" in [v.code for v in a.violations]
