@@ -155,13 +155,23 @@ def broken_bore_xyb(cam) -> list[tuple[float, float, float]]:
 
 
 def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
+    """The bore's outline, refused where it reaches the profile polygon ``p`` [mm]: its
+    chords, not only its vertices (an adversarial review: a 159.9 mm bore passed the
+    80 mm vertices and crossed the chords at 79.44 mm, a self-overlapping solid)."""
     hole = bore_outline(a.design.cam, a.design.limits.export_tolerance_mm)
-    if hole is not None and np.hypot(*hole.T).max() >= np.hypot(p[:, 0], p[:, 1]).min():
+    if hole is not None and np.hypot(*hole.T).max() >= _nearest_mm(p):
         raise ExportError(
             f"the bore (and its keyway) reach {np.hypot(*hole.T).max():g} mm from "
-            "the axis and cut through the profile"
+            f"the axis and cut through the profile (its chords come to {_nearest_mm(p):g} mm)"
         )
     return hole
+
+
+def _nearest_mm(p: np.ndarray) -> float:
+    """How close the closed polygon p (n, 2) comes to the axis: its nearest edge point."""
+    d = np.roll(p, -1, axis=0) - p
+    t = np.clip(-np.sum(p * d, axis=1) / np.maximum(np.sum(d * d, axis=1), 1e-300), 0.0, 1.0)
+    return float(np.hypot(*(p + t[:, None] * d).T).min())
 
 
 def extrude(p: np.ndarray, width: float, hole: np.ndarray | None = None):
@@ -275,33 +285,46 @@ def file_label(a, edited: bool = True) -> str:
     )
 
 
-def stl_label(a) -> str:
+def stl_label(a, rounding_mm: float = 0.0) -> str:
     """file_label in the STL header's 80 bytes: "within", and an edited preset as
     "edited KEY" (its fields are in the other files: a user's review found the
-    key cut to "paper_exa" and the name gone)."""
+    key cut to "paper_exa" and the name gone). ``rounding_mm``: what STL's 32-bit
+    floats moved the vertices, added to the tolerance it states (an adversarial
+    review: a 400 mm cam at 1e-5 mm was stored 2.1e-5 mm off, under "within 1e-05")."""
     edits = preset_edits(a.design)
     return (
-        _label_head(a, "within")
+        _label_head(a, "within", rounding_mm)
         + (f"edited {edits[0]}: " if edits else "cam ")
         + plain(a.design.name, NAME_MAX)
     )
 
 
-def _label_head(a, within: str) -> str:
-    """The fixed start of file_label and stl_label: program, version, unit, tolerance."""
+def _label_head(a, within: str, rounding_mm: float = 0.0) -> str:
+    """The fixed start of file_label and stl_label: program, version, unit, tolerance
+    (with ``rounding_mm`` added, to 2 digits rounded up, where it is not negligible)."""
     from . import package_version
 
     tol = a.design.limits.export_tolerance_mm
+    if rounding_mm > 0.01 * tol:
+        tol = _up2(tol + rounding_mm)
     return f"camdesigner {package_version()}, mm, {within} {tol:g} mm: "
+
+
+def _up2(x: float) -> float:
+    """x > 0 rounded up to 2 significant digits (a bound must not shrink)."""
+    scale = 10.0 ** (1 - math.floor(math.log10(x)))
+    return math.ceil(x * scale * (1 - 1e-12)) / scale
 
 
 def stl_bytes(a) -> bytes:
     """Binary STL of the cam solid [mm], built from the float32-welded profile; its
     80-byte header says what it is (stl_label; never "solid...", which some readers
     take for an ASCII STL)."""
-    p = weld_float32(_profile_mm(a))
+    exact = _profile_mm(a)
+    p = weld_float32(exact)
     blob = extrude(p, a.design.cam.width_mm, _checked_bore(a, p)).export(file_type="stl")
-    header = stl_label(a).encode("ascii")[:80].ljust(80, b" ")
+    rounding = float(np.abs(exact.astype(np.float32).astype(np.float64) - exact).max())
+    header = stl_label(a, math.hypot(rounding, rounding)).encode("ascii")[:80].ljust(80, b" ")
     return header + blob[80:]
 
 

@@ -424,3 +424,28 @@ def test_a_flat_face_cusp_between_two_samples_is_found():
         assert -1e-3 < -v.amount < 0 and v.ranges_deg[0][0] <= 29.92 <= v.ranges_deg[0][1]
         row = batch.summaries([d])[0]
         assert "curvature_convex" in [v["code"] for v in row["violations"]]
+
+
+def test_a_high_dwell_of_exactly_4_psi_is_not_said_to_be_shorter():
+    """An adversarial review: beta_h = 4 psi_h exactly (Eq. 28 met) put station 3
+    1e-14 rad before station 2 and the valid design's stations read "(station 3 before
+    2: the dwell between them is shorter than 4 psi, Eq. 28)"."""
+    from camcore.report import report_text
+
+    psi = summary(analyze(PAPER, verify=False))["psi_h_deg"]
+    data = PAPER.model_dump(mode="json")
+    segs = data["motion"]["segments"]  # rise, high dwell, fall, low dwell
+
+    def high_dwell(deg: float) -> None:
+        segs[3]["angle_deg"] += segs[1]["angle_deg"] - deg  # (the low dwell makes up)
+        segs[1]["angle_deg"] = deg
+
+    high_dwell(4 * psi)
+    d = Design.model_validate(data)
+    a = analyze(d, verify=False)
+    s = summary(a)
+    assert s["valid"] and "high_dwell_arc" not in [v["code"] for v in s["violations"]]
+    assert "shorter than 4 psi" not in report_text(s, d)
+    high_dwell(4 * psi * 0.99)
+    short = summary(analyze(Design.model_validate(data), verify=False))
+    assert "shorter than 4 psi" in report_text(short, d)
