@@ -655,8 +655,15 @@ def test_a_bore_that_crosses_the_profile_s_chords_is_refused():
     data["limits"]["export_tolerance_mm"] = 1.0
     data["cam"]["bore_diameter_mm"] = 159.9
     a = analyze(Design.model_validate(data), verify=False)
-    with pytest.raises(export.ExportError, match=r"its chords come to 79\.45"):
+    radii = np.hypot(*a.profile.points.T) * 1e3
+    assert radii.min() > 159.9 / 2  # every vertex clears the bore: only a chord cuts it
+    with pytest.raises(export.ExportError, match=r"its chords come to ([0-9.]+) mm") as err:
         export.stl_bytes(a)
+    chords = float(re.search(r"its chords come to ([0-9.]+) mm", str(err.value))[1])
+    q = a.profile.points * 1e3  # a convex cam: each chord's nearest point is its line's
+    d = np.roll(q, -1, axis=0) - q
+    lines = np.abs(q[:, 0] * d[:, 1] - q[:, 1] * d[:, 0]) / np.hypot(*d.T)
+    assert chords == pytest.approx(lines.min(), abs=1e-4) and chords < 159.9 / 2
 
 
 def test_the_stl_states_what_its_32_bit_floats_add_to_the_tolerance():
