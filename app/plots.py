@@ -478,7 +478,7 @@ def curve_specs(a) -> list[dict]:
                 {"label": "F1 [N]", "scale": "N", "stroke": COLORS[1], "fn": lambda a: a.guide.F1},
                 {"label": "F2 [N]", "scale": "N", "stroke": COLORS[2], "fn": lambda a: a.guide.F2},
             ],
-            codes={"jump", "guide_jam", "contact_lost"},
+            codes={"jump", "guide_jam", "guide_overhang", "contact_lost"},
             shared=True,
         ),
         _spec(

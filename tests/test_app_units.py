@@ -1030,3 +1030,21 @@ def test_an_untrusted_design_that_finds_a_parser_defect_is_refused_not_raised(mo
     assert storage.open_untrusted("{}") == ("not a design this version can read (OverflowError)")
     assert storage.parse_working("{}") is None
     assert storage.working_error("{}") == storage.open_untrusted("{}")
+
+
+def test_the_force_curve_shades_where_the_face_is_inside_its_guide():
+    """guide_overhang (l1 = l1_0 - S < 0) is a limit of the guide forces' arms: the
+    force curve shades it, over the angles where S passes the overhang."""
+    from app import plots
+    from camcore.analysis import analyze
+    from camcore.model import Design, load_preset
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["dynamics"]["overhang_mm"] = 10.0  # under the 15 mm lift
+    a = analyze(Design.model_validate(data), verify=False)
+    c = plots.curve_data(a)
+    titles = [s["title"] for s in plots.curve_specs(a)]
+    forces = titles.index("Contact force F_N and guide forces F1, F2")
+    inside = np.interp(c.x, np.degrees(a.theta), a.prog.S * 1e3) > 10.0 + 1e-6
+    assert inside.any() and (c.shades[forces][inside] == 1.0).all()
+    assert not c.shades[forces][~inside].any()
