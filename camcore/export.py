@@ -157,7 +157,7 @@ def broken_bore_xyb(cam) -> list[tuple[float, float, float]]:
 def _checked_bore(a, p: np.ndarray) -> np.ndarray | None:
     """The bore's outline, refused where it reaches the profile polygon ``p`` [mm]: its
     chords, not only its vertices (an adversarial review: a 159.9 mm bore passed the
-    80 mm vertices and crossed the chords at 79.44 mm, a self-overlapping solid)."""
+    80 mm vertices and crossed the chords at 79.45 mm, a self-overlapping solid)."""
     hole = bore_outline(a.design.cam, a.design.limits.export_tolerance_mm)
     if hole is not None and np.hypot(*hole.T).max() >= _nearest_mm(p):
         raise ExportError(
