@@ -509,7 +509,7 @@ def _verdicts(bt: Batch, loc, on: np.ndarray, worst: dict, group: tuple) -> list
     FN = loc.guide.FN.reshape(B, N)
     add((touching & (FN < 0)).any(axis=1) | cand_any("FN_min", lambda v: v < 0), "jump")
     add((~touching).any(axis=1), "contact_lost")
-    jam = (touching & (loc.guide.mode.reshape(B, N) < 0) & (FN > 0)).any(axis=1)
+    jam = (touching & forces.jammed(loc.guide).reshape(B, N)).any(axis=1)
     add(jam | cand_any("guide_jam", lambda v: v > 0), "guide_jam")
     if d0.dynamics.overhang_shrinks:  # Fig. 5: one program, so one peak, for the batch
         peak = checks.lift_peak_mm(d0)

@@ -58,7 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import extremes
+from . import extremes, forces
 from .model import FollowerKind
 from .units import MM, to_deg, to_mm
 
@@ -635,9 +635,7 @@ def _forces(a) -> list[Violation]:
                 float(lost.sum()),
             )
         )
-    # (where F_t < 0 the follower leaves the cam, a jump: no guide to jam; the
-    # unbalanced angles keep the frictionless F_N, of F_t's sign)
-    bad = touching & (a.guide.mode < 0) & (a.guide.FN > 0)
+    bad = touching & forces.jammed(a.guide)
     found = a.worst.get("guide_jam")  # between the samples (extremes.jam_worst)
     extra = found.beyond(0.0, 1.0) if found else ()
     if bad.any() or extra:

@@ -306,14 +306,16 @@ def _label_head(a, within: str, rounding_mm: float = 0.0) -> str:
 
     tol = a.design.limits.export_tolerance_mm
     if rounding_mm > 0.01 * tol:
-        tol = _up2(tol + rounding_mm)
+        tol = round_up(tol + rounding_mm, 2)
     return f"camdesigner {package_version()}, mm, {within} {tol:g} mm: "
 
 
-def _up2(x: float) -> float:
-    """x > 0 rounded up to 2 significant digits (a bound must not shrink)."""
-    scale = 10.0 ** (1 - math.floor(math.log10(x)))
-    return math.ceil(x * scale * (1 - 1e-12)) / scale
+def round_up(x: float, digits: int = 3) -> float:
+    """x rounded up to ``digits`` significant digits (a bound must not shrink)."""
+    if x <= 0:
+        return x
+    scale = 10.0 ** (digits - 1 - math.floor(math.log10(x)))
+    return math.ceil(x * scale) / scale
 
 
 def stl_bytes(a) -> bytes:

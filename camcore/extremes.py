@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .forces import jammed
 from .motion import MOTIONS
 
 ROUNDS = 3  # zoom rounds: each samples POINTS per bracket in one evaluation
@@ -209,10 +210,8 @@ def zoom(f, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def jams(loc, on: np.ndarray) -> np.ndarray:
-    """(M,) where the guide of ``loc`` jams on a rise or fall: no guide mode balances
-    (forces.GuideSolution.mode < 0) and F_t > 0 (the frictionless F_N kept there has
-    F_t's sign; where F_t < 0 the follower jumps instead): checks._forces's rule."""
-    return on.any(axis=0) & (loc.guide.mode < 0) & (loc.guide.FN > 0)
+    """(M,) where the guide of ``loc`` jams (forces.jammed) on a rise or fall."""
+    return on.any(axis=0) & jammed(loc.guide)
 
 
 def jam_worst(angles: np.ndarray) -> Worst | None:

@@ -169,6 +169,13 @@ def _first_mode(design: Design, Ft, normal, x_c, r, S, V, slide, moment) -> Guid
     )
 
 
+def jammed(g: GuideSolution) -> np.ndarray:
+    """Where the guide jams: no mode balances (mode -1) and F_t > 0 (the frictionless
+    F_N kept there has F_t's sign; where F_t < 0 the follower jumps instead). The one
+    rule of checks, the batched core and the search between the samples."""
+    return (g.mode < 0) & (g.FN > 0)
+
+
 def at_(x, idx):
     """x at the angles ``idx`` if x is per angle (None: all angles; a scalar stays)."""
     return x if idx is None or np.ndim(x) == 0 else x[idx]

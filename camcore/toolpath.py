@@ -31,7 +31,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from . import profile
-from .export import ExportError, require_star_shaped, warning
+from .export import ExportError, require_star_shaped, round_up, warning
 from .model import edited_note
 from .units import MM, to_deg, to_mm
 
@@ -156,14 +156,6 @@ def _comments(text: str) -> list[str]:
     text = re.sub(r"[^A-Za-z0-9 _.,:=+\-/&\[\]]", "_", text)
     lines = textwrap.wrap(text, 78, subsequent_indent="... ")
     return [f"({line})" for line in lines] or ["()"]
-
-
-def _round_up(x: float, digits: int = 3) -> float:
-    """x rounded up to ``digits`` significant digits (a bound must not shrink)."""
-    if x <= 0:
-        return x
-    scale = 10.0 ** (digits - 1 - math.floor(math.log10(x)))
-    return math.ceil(x * scale) / scale
 
 
 MAX_PASSES = 100  # of one file: it grows with them
@@ -300,7 +292,7 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     path, bound = cutter_path(a, D)
     check_size(cam, path.shape[0] + 2)
-    stated = _round_up(to_mm(bound) + ROUNDING_MM)
+    stated = round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
     cam_r = to_mm(np.hypot(*a.profile.points.T))[::-1]  # the cam's radius at each vertex
     # start at the path's outermost point and plunge D further out along its ray: the
