@@ -411,9 +411,10 @@ def dxf_bytes(a, reference: bool = True) -> bytes:
     doc.header.custom_vars.append("camdesigner", file_label(a))  # (a drawing property)
     doc.layers.add("PROFILE", color=7)
     msp = doc.modelspace()
-    msp.add_lwpolyline(profile_xyb(p), format="xyb", close=True, dxfattribs={"layer": "PROFILE"})
+    xyb = profile_xyb(p)
+    msp.add_lwpolyline(xyb, format="xyb", close=True, dxfattribs={"layer": "PROFILE"})
     if reference:
-        _reference_layers(doc, a, p)
+        _reference_layers(doc, a, p, xyb)
     hole = bore_outline(cam, a.design.limits.export_tolerance_mm)
     if hole is not None:
         doc.layers.add("BORE", color=3)
@@ -468,7 +469,25 @@ def profile_xyb(p: np.ndarray) -> list[tuple[float, float, float]]:
     return out
 
 
-def _reference_layers(doc, a, p: np.ndarray) -> None:
+def _on_plus_y(xyb: list[tuple[float, float, float]]) -> float:
+    """Where the closed outline ``xyb`` (profile_xyb's vertices and bulges [mm]) crosses
+    the +Y ray from the axis, on its chords or on a dwell's true arc (a circle about the
+    axis), so that the datum line ends on the outline as cut (the nearest vertex had
+    left it a chord's sag short: 0.14 mm at a 1 mm tolerance)."""
+    v = np.array(xyb)
+    p, q, bulge = v[:, :2], np.roll(v[:, :2], -1, axis=0), v[:, 2]
+    arc = bulge != 0.0
+    swept = 4.0 * np.arctan(bulge)  # counter-clockwise from p to q
+    to_y = (np.pi / 2 - np.arctan2(p[:, 1], p[:, 0])) % (2 * np.pi)
+    on_arc = arc & (to_y <= swept)
+    crosses = ~arc & ((np.sign(p[:, 0]) != np.sign(q[:, 0])) | (p[:, 0] == 0.0))
+    with np.errstate(all="ignore"):
+        t = np.where(p[:, 0] != q[:, 0], p[:, 0] / (p[:, 0] - q[:, 0]), 0.0)
+    y = np.where(on_arc, np.hypot(p[:, 0], p[:, 1]), p[:, 1] + t * (q[:, 1] - p[:, 1]))
+    return float(np.max(y[(on_arc | crosses) & (y > 0)]))
+
+
+def _reference_layers(doc, a, p: np.ndarray, xyb: list[tuple[float, float, float]]) -> None:
     """dxf_bytes' CENTERLINES and DATUM layers, set not to plot: the centre cross, the
     theta = 0 ray with its note, and what the file is."""
     for name, color, ltype in (("CENTERLINES", 8, "CENTER"), ("DATUM", 1, "DASHED")):
@@ -479,7 +498,7 @@ def _reference_layers(doc, a, p: np.ndarray) -> None:
     c = 0.15 * r_min
     msp.add_line((-c, 0.0), (c, 0.0), dxfattribs={"layer": "CENTERLINES"})
     msp.add_line((0.0, -c), (0.0, c), dxfattribs={"layer": "CENTERLINES"})
-    top = float(p[np.argmin(np.abs(np.arctan2(p[:, 0], p[:, 1]))), 1])  # profile on +Y
+    top = _on_plus_y(xyb)
     msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
     notes = (datum_note(a), file_label(a, edited=False), edited_note(a.design))
     for text, y in zip(filter(None, notes), (0.35, 0.29, 0.23), strict=False):

@@ -685,3 +685,39 @@ def test_the_stl_states_what_its_32_bit_floats_add_to_the_tolerance():
     assert rounding > 1e-5 and stated >= 1e-5 + rounding
     paper = export.stl_bytes(analyze(load_preset("paper_example"), verify=False))
     assert b"within 0.001 mm" in paper[:80]
+
+
+@pytest.mark.parametrize(
+    "program",
+    [
+        None,  # the paper's: theta = 0 on the low dwell's true arc
+        [  # no dwell, an offset roller: +Y crosses a chord
+            {"kind": "rise", "angle_deg": 180.0, "lift_mm": 20.0, "law": "cycloidal"},
+            {"kind": "fall", "angle_deg": 180.0, "lift_mm": 20.0, "law": "cycloidal"},
+        ],
+    ],
+)
+def test_the_datum_line_ends_on_the_outline_as_cut(program):
+    """The DATUM line runs out to the PROFILE polyline where it crosses the +Y ray, on a
+    chord or on a dwell's true arc, also at a coarse tolerance (it ended at the nearest
+    vertex: 0.14 mm short at 1 mm)."""
+    d = load_preset("paper_example").model_copy(deep=True)
+    d.limits.export_tolerance_mm = 1.0
+    if program is not None:
+        d = d.with_kind(FollowerKind.single_roller)
+        d.follower.single_offset_mm = 5.0  # (theta = 0's contact off the +Y ray)
+        d = Design.model_validate({**d.model_dump(), "motion": {"segments": program}})
+    doc = ezdxf.read(io.StringIO(export.dxf_bytes(analyze(d, verify=False)).decode()))
+    msp = doc.modelspace()
+    datum = [e for e in msp if e.dxf.layer == "DATUM" and e.dxftype() == "LINE"][0]
+    (profile,) = [e for e in msp if e.dxf.layer == "PROFILE"]
+    tops = []  # where ezdxf's own lines and arcs of the outline cross the +Y ray
+    for e in profile.virtual_entities():
+        if e.dxftype() == "ARC":
+            if (90.0 - e.dxf.start_angle) % 360 <= (e.dxf.end_angle - e.dxf.start_angle) % 360:
+                tops.append(e.dxf.radius)
+        elif (e.dxf.start[0] >= 0) != (e.dxf.end[0] >= 0):
+            (x0, y0, _), (x1, y1, _) = e.dxf.start, e.dxf.end
+            tops.append(y0 + (y1 - y0) * x0 / (x0 - x1))
+    top = max(tops)
+    assert datum.dxf.end[1] == pytest.approx(top, abs=1e-5)
