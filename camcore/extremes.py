@@ -148,7 +148,7 @@ def brackets(theta: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     neighbour is on another segment or contact window: the search then counts only the
     angles where the face still drives a curve (``on_curve``). So the interval between
     a rise's last sample and its end is searched: a supremum can be there only (F_N,
-    where guide friction acts until the follower stops at the end of a rise: 0.25 %
+    where guide friction acts until the follower stops at the end of a rise: 0.24 %
     above the last sample's for the paper's double rollers)."""
     n, two_pi = theta.size, 2 * np.pi
     first, last = theta[np.maximum(k - 1, 0)], theta[np.minimum(k + 1, n - 1)]

@@ -1168,9 +1168,9 @@ def defaulted_fields(
     analysed at 80 mm, and the CLI and the app say so (a review: ``{}`` reported the
     paper example, "valid yes", without a word). ``design``: the design analysed.
     Not listed: the name, fields whose default is "unset" (None), follower fields the
-    design's kind does not use (FollowerKind.uses), and the motion's own fields (its
-    forms, classic or segments, have their own rules: only a motion left out is
-    named). ``kinds``: the followers analysed, if more than the design's own (compare:
+    design's kind does not use (FollowerKind.uses), and a program of segments, which is
+    whole or refused (a classic motion's keys left out are listed, _defaulted_classic).
+    ``kinds``: the followers analysed, if more than the design's own (compare:
     a concave face's radius left out is its default there too, a designer's review)."""
     kinds = kinds or (design.follower.kind,)
     data = json.loads(text)
@@ -1182,7 +1182,10 @@ def defaulted_fields(
         if group not in data:
             out.append(f"{group} (the whole group)")
             continue
-        if group == "motion" or not isinstance(data[group], dict):
+        if group == "motion":
+            out += _defaulted_classic(data[group], design)
+            continue
+        if not isinstance(data[group], dict):
             continue
         for name, field in type(part).model_fields.items():
             if name in data[group] or field.default is None:
@@ -1191,6 +1194,21 @@ def defaulted_fields(
                 continue
             value = getattr(part, name)
             out.append(f"{group}.{name} = {value.value if isinstance(value, Enum) else value}")
+    return out
+
+
+def _defaulted_classic(motion, design: Design) -> list[str]:
+    """defaulted_fields of a motion written in the classic form (no segments): the
+    keys of the rise-dwell-fall-dwell it leaves out, as "motion.rise_deg = 100.0" (a
+    review: ``{"motion": {"lift_mm": 16}}`` ran the paper's angles and laws unsaid)."""
+    classic = design.motion.classic
+    if not isinstance(motion, dict) or "segments" in motion or classic is None:
+        return []
+    out = []
+    for name in ClassicMotion.model_fields:
+        if name not in motion:
+            value = getattr(classic, name)
+            out.append(f"motion.{name} = {value.value if isinstance(value, Enum) else value}")
     return out
 
 

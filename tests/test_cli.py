@@ -111,6 +111,17 @@ def test_a_file_leaving_inputs_out_says_which_took_defaults(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "dynamics (the whole group)" not in err and "dynamics.mass_g" not in err
     assert "dynamics.spring_rate_N_per_m = 6772.5" in err
+    # a classic motion given in part (a file, or --set on a file without one): the
+    # angles and laws it left out are named too (a README review)
+    path.write_text(json.dumps({"motion": {"lift_mm": 16, "rise_deg": 90}}))
+    assert main(["report", str(path)]) == 0
+    err = capsys.readouterr().err
+    assert "motion.fall_deg = 130.0" in err and "motion.rise_law = cycloidal" in err
+    assert "motion.rise_deg" not in err and "motion.lift_mm" not in err
+    path.write_text("{}")
+    assert main(["report", str(path), "--set", "motion.lift_mm=16"]) == 0
+    err = capsys.readouterr().err
+    assert "motion.high_dwell_deg = 70.0" in err and "motion.lift_mm" not in err
 
 
 def test_violations_are_reported_with_equation(capsys):
