@@ -391,10 +391,17 @@ class ExplorePanel:
         # the boxes show what runs (a box left empty sends nothing: a review ran the
         # last range while the box stood blank)
         self.x_range.value, self.y_range.value = (x0, x1), (y0, y1)
+        if x0 == x1 or y0 == y1:
+            self.progress.content = "✖ Each range needs two different numbers."
+            return None
         balance = balance_for(design, [px, py])  # (a segment's angle: a dwell's to give)
         grid = sweep_grid((px, x0, x1), (py, y0, y1), int(steps), kinds)
         base = design.model_dump(mode="json")
-        points = grid_points(grid, base, balance)
+        try:
+            points = grid_points(grid, base, balance)
+        except DesignError as exc:  # (a range too narrow for its steps' distinct values)
+            self.progress.content = f"✖ {esc(str(exc))}"
+            return None
         return base, points, grid, (px, self.x.value), (py, self.y.value), names, balance
 
     def _balance(self, design: Design) -> str | None:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
@@ -274,6 +275,16 @@ def _need_pyarrow(what: str) -> None:
         raise DesignError(f"{what}: pip install 'camdesigner[sweep]'") from None
 
 
+WORKERS_PER_CORE = 4  # --workers beyond this many per core only share the cores
+
+
+def _cores() -> int:
+    """The cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
 def _sweep(args) -> int:
     _need_pyarrow("camcore sweep writes Parquet")
     from . import sweep
@@ -286,8 +297,12 @@ def _sweep(args) -> int:
         base = printable(spec.base_file.name, 80) if spec.base_file is not None else "base"
         note = defaults_note(left_out, len(left_out), f"its base design file {base}")
         print(f"note: {printable(args.spec, 200)}: {note}", file=sys.stderr)
-    if args.workers is not None and args.workers < 1:
-        raise DesignError("--workers: at least 1")
+    most = WORKERS_PER_CORE * _cores()
+    if args.workers is not None and not 1 <= args.workers <= most:
+        raise DesignError(  # (a review: --workers 5000 started 5000 processes on 2 cores)
+            f"--workers {args.workers}: from 1 to {most} ({WORKERS_PER_CORE} for each of "
+            f"this machine's {_cores()} cores; more machines: --scheduler ADDRESS)"
+        )
     if not 1 <= args.chunk <= sweep.MAX_CHUNK:  # (memory: ~2 MB a design at 0.1 deg)
         raise DesignError(f"--chunk: from 1 to {sweep.MAX_CHUNK} designs")
     if args.workers is not None and args.scheduler is not None:

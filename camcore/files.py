@@ -98,7 +98,8 @@ def write_all_atomic(files: list[tuple[str | Path, bytes]]) -> None:
     done: list[Path] = []
     try:
         for path, data in files:
-            staged.append((_stage(Path(path), data), Path(path)))
+            target = _target(Path(path))
+            staged.append((_stage(target, data), target))
         for tmp, path in staged:
             kept[path] = _keep(path, tmp)
         for tmp, path in staged:
@@ -112,6 +113,26 @@ def write_all_atomic(files: list[tuple[str | Path, bytes]]) -> None:
         for name in [tmp for tmp, _ in staged] + [k for k in kept.values() if k]:
             if os.path.lexists(name):
                 os.unlink(name)
+
+
+def _target(path: Path) -> Path:
+    """The file a write to *path* replaces: a link's target (the link stays a link, as
+    a shell's ``>`` keeps it), which must be a regular file or none. A FIFO, a device
+    or a socket is refused: a rename would have put a plain file in its place (a
+    review: ``--out`` on a FIFO replaced it)."""
+    if path.is_symlink():
+        path = Path(os.path.realpath(path))
+    try:
+        mode = os.stat(path).st_mode
+    except FileNotFoundError:
+        return path
+    except OSError as exc:
+        raise FileError(f"cannot write {path}: {exc.strerror}") from None
+    if stat.S_ISDIR(mode):
+        raise FileError(f"cannot write {path}: it is a directory")
+    if not stat.S_ISREG(mode):
+        raise FileError(f"cannot write {path}: not a regular file (a FIFO, device or socket)")
+    return path
 
 
 def _keep(path: Path, tmp: str) -> str | None:

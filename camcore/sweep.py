@@ -33,7 +33,6 @@ import itertools
 import json
 import math
 import re
-import shutil
 import sys
 import time
 from collections.abc import Callable, Iterable
@@ -43,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 from . import code_fingerprint, package_version
-from .files import FileError, read_capped, write_atomic
+from .files import FileError, printable, read_capped, write_atomic
 from .model import (
     PROGRAM_CLASH,
     Design,
@@ -158,10 +157,29 @@ def axis_values(path: str, raw) -> tuple:
             raise DesignError(f"grid.{path}: from and to span more than a float holds")
         if not isinstance(num, int) or isinstance(num, bool) or not 1 <= num <= MAX_VALUES:
             raise DesignError(f"grid.{path}.num: an integer from 1 to {MAX_VALUES}")
-        return tuple(float(x) for x in np.linspace(lo, hi, num))
+        if num == 1 and lo != hi:  # (linspace gives "from" alone: "to" dropped unsaid)
+            raise DesignError(
+                f"grid.{path}: num 1 gives only from = {lo:g}, not to = {hi:g}; a range "
+                f"needs num >= 2 (one value: a list [{lo:g}])"
+            )
+        values = tuple(float(x) for x in np.linspace(lo, hi, num))
+        return _distinct(path, values, "; a range's from and to must differ")
     if not isinstance(raw, list) or not raw or len(raw) > MAX_VALUES:
         raise DesignError(f"grid.{path}: a list of 1 to {MAX_VALUES} values, or a range")
-    return _one_type(path, tuple(raw))
+    return _distinct(path, _one_type(path, tuple(raw)))
+
+
+def _distinct(path: str, values: tuple, hint: str = "") -> tuple:
+    """``values`` unless one repeats: each would be a design computed and listed twice
+    (a review: from = to with num 3, or a list [60, 60], ran identical rows unsaid)."""
+    seen: set = set()
+    for v in values:
+        key = json.dumps(v, sort_keys=True) if isinstance(v, list | dict) else v
+        if key in seen:
+            shown = printable(repr(v), 60)
+            raise DesignError(f"grid.{path}: the value {shown} comes twice; each value once{hint}")
+        seen.add(key)
+    return values
 
 
 def _defaulted(text, design: Design, axes) -> tuple[str, ...]:
@@ -615,16 +633,33 @@ def _duration(seconds: float) -> str:
     return f"{seconds / 3600:.1f} h"
 
 
+PART_METADATA = "camcore.sweep.part"  # a kept chunk's stamp: its run's, and its number
+PART_NAME = re.compile(r"chunk-\d{6}\.parquet|sweep\.json|\..+\.tmp(\.old)?")  # ours
+
+
 def _parts_dir(out: Path, stamp: dict) -> Path:
     """``OUT.parts/``, holding the finished chunks of this very run: same spec, mode,
     chunk size, camcore version and code (its ``stamp``). Parts of another run are refused
-    with what differs; a parts directory with no chunk in it yet is taken over."""
+    with what differs; a parts directory with no chunk in it yet is taken over. A folder
+    of that name holding anything but a sweep's own files, or a link, is refused: the
+    run deletes the folder when it is done (a review: a user's notes kept there went
+    with it)."""
     if out.is_dir():
         raise FileError(f"--out {out}: that is a directory; give a file name")
     if not out.parent.is_dir():
         raise FileError(f"--out {out}: no directory {out.parent}")
     parts = out.with_name(out.name + ".parts")
     label = parts / "sweep.json"
+    if parts.is_symlink() or (parts.exists() and not parts.is_dir()):
+        raise FileError(f"{parts}: not a folder of this sweep's (a link or a file); move it away")
+    if parts.exists():
+        other = sorted(f.name for f in parts.iterdir() if not PART_NAME.fullmatch(f.name))
+        if other:
+            raise FileError(
+                f"{parts} holds files that are not a sweep's ({', '.join(other[:3])}"
+                f"{', ...' if len(other) > 3 else ''}); the sweep keeps its chunks there and "
+                "removes the folder when done: move them away or choose another --out"
+            )
     if parts.exists() and any(parts.glob("chunk-*.parquet")):
         try:
             theirs = json.loads(label.read_text())
@@ -646,6 +681,16 @@ def _parts_dir(out: Path, stamp: dict) -> Path:
         raise FileError(f"cannot write {parts}: {exc.strerror}") from None
     write_atomic(label, json.dumps(stamp).encode())
     return parts
+
+
+def _remove_parts(parts: Path) -> None:
+    """Remove the parts folder: only its own files (PART_NAME), then the folder if
+    that empties it."""
+    for f in parts.iterdir():
+        if PART_NAME.fullmatch(f.name) and f.is_file() and not f.is_symlink():
+            f.unlink()
+    with contextlib.suppress(OSError):
+        parts.rmdir()
 
 
 def run(
@@ -682,16 +727,22 @@ def run(
     total = spec.size
     n_chunks = -(-total // chunk)
     parts = _parts_dir(out, stamp)  # a bad output fails before any work or cluster
-    todo = [i for i in range(n_chunks) if not _kept(parts / f"chunk-{i:06d}.parquet")]
+    size = [min((i + 1) * chunk, total) - i * chunk for i in range(n_chunks)]
+    todo = [i for i in range(n_chunks) if _kept(parts, i, stamp, size[i]) is None]
     try:
-        _compute(spec, chunk, todo, (verify, fast), (workers, scheduler), parts, progress)
+        _compute(spec, chunk, todo, (verify, fast), (workers, scheduler), (parts, stamp), progress)
     except BaseException:  # a bad scheduler, Ctrl-C before a chunk was kept: no litter
         if not any(parts.glob("chunk-*.parquet")):
-            shutil.rmtree(parts, ignore_errors=True)
+            _remove_parts(parts)
         raise
     if progress:
         sys.stderr.write("\n")
-    tables = [pq.read_table(parts / f"chunk-{i:06d}.parquet") for i in range(n_chunks)]
+    tables = [_kept(parts, i, stamp, size[i]) for i in range(n_chunks)]
+    lost = [i for i, t in enumerate(tables) if t is None]
+    if lost:  # (damaged since it was written, or removed meanwhile)
+        raise FileError(
+            f"{parts}: chunk {lost[0]} no longer reads back; the same command computes it again"
+        )
     table = pa.concat_tables(tables, promote_options="permissive")  # e.g. int with float
     table = table.replace_schema_metadata(
         {
@@ -703,7 +754,7 @@ def run(
     buf = pa.BufferOutputStream()
     pq.write_table(table, buf)
     write_atomic(out, buf.getvalue().to_pybytes())
-    shutil.rmtree(parts)
+    _remove_parts(parts)
     return table.num_rows
 
 
@@ -713,13 +764,14 @@ def _compute(
     todo: list[int],
     how: tuple[bool, bool],
     where: tuple[int | None, str | None],
-    parts: Path,
+    into: tuple[Path, dict],
     progress: Callable[[int, int, float], None] | None,
 ) -> None:
-    """Compute the chunks ``todo`` into ``parts``, with ``how`` = (verify, fast), in
-    this process or on the cluster ``where`` = (workers, scheduler), each kept as soon
-    as it is done. On Ctrl-C the terminal hears how much is kept and that the same
-    command resumes."""
+    """Compute the chunks ``todo`` into ``into`` = (the parts folder, the run's stamp),
+    with ``how`` = (verify, fast), in this process or on the cluster ``where`` =
+    (workers, scheduler), each kept as soon as it is done, stamped with the run's stamp
+    and its number (``_kept``). On Ctrl-C the terminal hears how much is kept and that
+    the same command resumes."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
@@ -727,13 +779,17 @@ def _compute(
     found = total - sum(min((i + 1) * chunk, total) - i * chunk for i in todo)
     done = found
     workers, scheduler = where
+    parts, stamp = into
     with _cluster(workers if todo else None, scheduler if todo else None) as client:
         t0 = time.perf_counter()  # the rate: of this run's work, from when it can start
 
         def keep(i: int, rows: list[dict]) -> None:
             nonlocal done
             buf = pa.BufferOutputStream()
-            pq.write_table(_table(rows), buf)
+            mark = {PART_METADATA: json.dumps({**stamp, "part": i})}
+            pq.write_table(
+                _table(rows).replace_schema_metadata(mark), buf, write_page_checksum=True
+            )
             write_atomic(parts / f"chunk-{i:06d}.parquet", buf.getvalue().to_pybytes())
             done += len(rows)
             if progress:
@@ -757,17 +813,24 @@ def _compute(
             raise
 
 
-def _kept(part: Path) -> bool:
-    """A finished chunk's file that reads back as a table (one damaged outside this
-    program, e.g. a disk that filled, is computed again, not met at the very end)."""
+def _kept(parts: Path, i: int, stamp: dict, rows: int):
+    """Chunk ``i`` as kept in ``parts`` (a pyarrow Table), or None where it must be
+    computed (again): missing, not reading back whole with its pages' checksums
+    (damaged outside this program, e.g. a disk that filled), not stamped by this very
+    run as chunk ``i``, or not of its ``rows`` rows. A review: another sweep's chunk
+    put there was joined in, and a damaged one whose footer still read failed the join
+    on every run."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     try:
-        pq.read_metadata(part)
-    except (OSError, pa.ArrowException):
-        return False
-    return True
+        table = pq.read_table(parts / f"chunk-{i:06d}.parquet", page_checksum_verification=True)
+        mark = json.loads((table.schema.metadata or {}).get(PART_METADATA.encode(), b"{}"))
+    except (OSError, ValueError, pa.ArrowException):
+        return None
+    if mark != {**stamp, "part": i} or table.num_rows != rows:
+        return None
+    return table.replace_schema_metadata(None)
 
 
 @contextlib.contextmanager
@@ -782,9 +845,10 @@ def _cluster(workers: int | None, scheduler: str | None):
 
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(
-            n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-        )
+        with _sigint_ignored():
+            cluster = LocalCluster(
+                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
+            )
         client = Client(cluster)
         client.run(_quiet_cancellations)
     else:
@@ -798,6 +862,27 @@ def _cluster(workers: int | None, scheduler: str | None):
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+@contextlib.contextmanager
+def _sigint_ignored():
+    """SIGINT ignored while our LocalCluster starts its worker processes: they inherit
+    the ignore (it survives their exec), so Ctrl-C at the terminal (sent to the whole
+    process group) reaches this process alone, which cancels the chunks and closes the
+    cluster. Otherwise each worker printed a KeyboardInterrupt traceback after the clean
+    "interrupted" line (a review). A Ctrl-C in the second or two of the start is lost:
+    press it again."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield  # (only the main thread may set a handler; the app's runs are not ours)
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
 
 
 def _quiet_cancellations() -> None:
@@ -882,7 +967,18 @@ def design_of_row(path: str | Path, row: int) -> Design:
     spec = parse_spec(text)
     if spec.size != rows or not 0 <= row < rows:
         raise FileError(f"{path}: {rows} rows, its spec {spec.size} designs (row {row})")
-    return design_at(spec.base, spec.point(row))
+    point = spec.point(row)
+    want = _grid_values(point)
+    try:
+        got = pq.read_table(path, columns=list(want)).slice(row, 1).to_pylist()[0]
+    except (OSError, KeyError, pa.ArrowException) as exc:
+        raise FileError(f"{path}: its grid columns do not read ({exc})") from None
+    if got != want:  # a table whose rows are not its spec's points, in order
+        raise FileError(
+            f"{path}: row {row} holds {printable(repr(got), 200)}, its spec's point "
+            f"{printable(repr(want), 200)}: the rows are not the spec's"
+        )
+    return design_at(spec.base, point)
 
 
 def tally(path: str | Path) -> str:

@@ -1715,6 +1715,13 @@ def test_explore_refuses_hostile_ranges(tab):
         e.x_range._impl.value = span
         e.run_btn.value = True
         assert "two finite numbers within ±1e+09" in e.progress.content, span
+    # one number twice, or two its steps cannot tell apart: said, not a dead sweep (a
+    # sweep's grid now refuses repeated values)
+    for span, says in (((70.0, 70.0), "two different numbers"), ((70.0, 70.0 + 1e-14), "twice")):
+        e.progress.content = ""
+        e.x_range._impl.value = span
+        e.run_btn.value = True
+        assert says in e.progress.content, span
 
 
 def test_hostile_animation_speed_is_ignored(tab):

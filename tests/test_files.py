@@ -369,3 +369,45 @@ def test_a_written_file_keeps_its_mode_or_takes_the_umask_s(tmp_path):
         "open.csv",
         "priv.json",
     ]
+
+
+def test_a_write_keeps_a_link_and_refuses_a_fifo(tmp_path):
+    """A review: ``--out`` on a FIFO or a symbolic link replaced it with a plain file
+    (as root, ``--out /dev/stdout`` would have replaced that link). A link's target is
+    written, the link kept (as a shell's ``>`` does); a FIFO or a device is refused and
+    left as it was, and nothing of a write refused is left behind."""
+    import os
+
+    from camcore.files import FileError, write_all_atomic, write_atomic
+
+    target = tmp_path / "real.csv"
+    target.write_bytes(b"old")
+    link = tmp_path / "latest.csv"
+    link.symlink_to(target.name)
+    write_atomic(link, b"new")
+    assert link.is_symlink() and target.read_bytes() == b"new"
+    dangling = tmp_path / "next.csv"
+    dangling.symlink_to("made.csv")
+    write_atomic(dangling, b"made")
+    assert dangling.is_symlink() and (tmp_path / "made.csv").read_bytes() == b"made"
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)
+    with pytest.raises(FileError, match="not a regular file"):
+        write_all_atomic([(tmp_path / "first.csv", b"x"), (fifo, b"y")])
+    with pytest.raises(FileError, match="not a regular file"):
+        write_atomic(_link_to_null(tmp_path), b"x")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "latest.csv",
+        "made.csv",
+        "next.csv",
+        "null",
+        "pipe",
+        "real.csv",
+    ]
+
+
+def _link_to_null(folder):
+    """A link to /dev/null (a device: never replaced, whoever runs the test)."""
+    link = folder / "null"
+    link.symlink_to("/dev/null")
+    return link

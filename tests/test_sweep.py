@@ -180,6 +180,83 @@ def test_parts_of_another_sweep_are_not_mixed_in(tmp_path, monkeypatch):
     assert sweep.run(other, tmp_path / "e.parquet", verify=False, progress=None) == 2
 
 
+def test_a_kept_chunk_must_be_this_runs_own_and_whole(tmp_path, monkeypatch):
+    """A review: a chunk of another sweep put among a run's parts was joined in (its
+    rows then named other designs than the spec's, and ``pareto --design`` printed a
+    cam other than the row listed), one of too few rows shifted every later row, and a
+    damaged chunk whose footer still read failed the join on every run (exit 3). Each
+    chunk now carries its run's stamp and number, and reads back whole, or is redone."""
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    other = sweep.parse_spec(json.dumps({"grid": {"cam.base_radius_mm": [40, 50, 60, 65]}}))
+    out, theirs = tmp_path / "r.parquet", tmp_path / "o.parquet"
+    _interrupted(other, theirs, 2, verify=False)
+    _interrupted(spec, out, 2, verify=False)
+    parts = tmp_path / "r.parquet.parts"
+    foreign = (tmp_path / "o.parquet.parts" / "chunk-000001.parquet").read_bytes()
+    (parts / "chunk-000002.parquet").write_bytes(foreign)  # of the same size, not ours
+    good = (parts / "chunk-000000.parquet").read_bytes()
+    (parts / "chunk-000001.parquet").write_bytes(good)  # ours, but chunk 0's
+    calls = []
+    real = sweep.run_chunk
+    monkeypatch.setattr(sweep, "run_chunk", lambda *a: calls.append(a[1]) or real(*a))
+    assert sweep.run(spec, out, chunk=2, verify=False, progress=None) == spec.size
+    assert calls == [spec.chunk(1, 2), spec.chunk(2, 2)]
+    grid = [(r["grid.cam.base_radius_mm"], r["grid.follower.kind"]) for r in rows_of(out)]
+    assert grid == [tuple(p.values()) for p in spec.points()]
+    # a chunk whose footer reads but whose data does not (a byte flipped mid-file)
+    _interrupted(spec, out, 2, verify=False)
+    first = parts / "chunk-000000.parquet"
+    data = bytearray(first.read_bytes())
+    middle = len(data) // 3
+    data[middle : middle + 64] = bytes(64)
+    first.write_bytes(bytes(data))
+    calls.clear()
+    assert sweep.run(spec, out, chunk=2, verify=False, progress=None) == spec.size
+    assert spec.chunk(0, 2) in calls
+
+
+def test_a_table_whose_rows_are_not_its_specs_names_no_design(tmp_path):
+    """design_of_row checks the row's grid values against its spec's point: a table
+    whose rows were reordered or mixed gives no design rather than another one."""
+    import pyarrow as pa
+
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    out = tmp_path / "r.parquet"
+    sweep.run(spec, out, verify=False, progress=None)
+    assert sweep.design_of_row(out, 3).cam.base_radius_mm == 80.0
+    table = pq.read_table(out)
+    swapped = pa.concat_tables([table.slice(3, 1), table.slice(0, 3), table.slice(4)])
+    pq.write_table(swapped.replace_schema_metadata(table.schema.metadata), out)
+    with pytest.raises(FileError, match="row 3 holds .* the rows are not the spec's"):
+        sweep.design_of_row(out, 3)
+
+
+def test_the_parts_folder_holds_only_the_sweeps_own_files(tmp_path):
+    """A review: an existing OUT.parts/ was taken over and removed with everything in
+    it (a user's notes and the spec itself), and a linked one failed after the table was
+    written (exit 3). A folder of other files, or a link, is refused before any work;
+    the run removes only its own files."""
+    spec = sweep.parse_spec(json.dumps(SPEC))
+    out = tmp_path / "r.parquet"
+    parts = tmp_path / "r.parquet.parts"
+    parts.mkdir()
+    (parts / "notes.txt").write_text("mine")
+    with pytest.raises(FileError, match=r"holds files that are not a sweep's \(notes.txt\)"):
+        sweep.run(spec, out, verify=False, progress=None)
+    assert (parts / "notes.txt").read_text() == "mine"
+    (parts / "notes.txt").unlink()
+    parts.rmdir()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    parts.symlink_to(elsewhere)
+    with pytest.raises(FileError, match="a link or a file"):
+        sweep.run(spec, out, verify=False, progress=None)
+    assert not out.exists() and list(elsewhere.iterdir()) == []
+    parts.unlink()
+    assert sweep.run(spec, out, verify=False, progress=None) == spec.size
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["elsewhere", "r.parquet"]
+
+
 def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
     spec = sweep.parse_spec(json.dumps(SPEC))
     monkeypatch.setattr(sweep, "run_chunk", lambda *a: pytest.fail("computed"))
@@ -240,6 +317,17 @@ def test_a_bad_output_fails_before_any_work(tmp_path, monkeypatch):
         ),
         # an inline base's keys are the base's
         ({"base": {"preset": "paper_example", "x": 1}, "grid": {"cam.width_mm": [9]}}, "^base: "),
+        # a value twice, or a range that drops its end (a review: both ran unsaid)
+        (
+            {"grid": {"cam.base_radius_mm": {"from": 60, "to": 110, "num": 1}}},
+            r"num 1 gives only from = 60, not to = 110",
+        ),
+        (
+            {"grid": {"cam.base_radius_mm": {"from": 60, "to": 60, "num": 3}}},
+            "the value 60.0 comes twice; each value once; a range's from and to must differ",
+        ),
+        ({"grid": {"cam.base_radius_mm": [60, 70, 60.0]}}, "the value 60.0 comes twice"),
+        ({"grid": {"follower.kind": ["knife_edge", "knife_edge"]}}, "'knife_edge' comes twice"),
         (
             {
                 "grid": {
@@ -311,6 +399,8 @@ def test_cli_sweep_and_its_exit_codes(tmp_path):
         ([str(spec), "--out", str(tmp_path)], "is a directory"),
         ([str(spec), "--out", str(out), "--scheduler", "nonsense"], "--scheduler nonsense"),
         ([str(spec), "--out", str(out), "--scheduler", "x", "--workers", "2"], "give one"),
+        ([str(spec), "--out", str(out), "--workers", "0"], "--workers 0: from 1 to"),
+        ([str(spec), "--out", str(out), "--workers", "5000"], "--workers 5000: from 1 to"),
     ]:
         bad = subprocess.run(
             [sys.executable, "-m", "camcore.cli", "sweep", *args], capture_output=True, text=True
@@ -1600,3 +1690,35 @@ def test_our_local_cluster_does_not_log_the_chunks_ctrl_c_cancels():
 
     with sweep._cluster(1, None) as client:
         assert set(client.run(level).values()) == {logging.ERROR}
+
+
+def test_ctrl_c_at_the_terminal_reaches_the_sweep_alone(tmp_path):
+    """Ctrl-C at a terminal is SIGINT to the whole process group: each worker of a
+    --workers run printed a KeyboardInterrupt traceback after the clean 'interrupted'
+    line (a review). Our workers start with SIGINT ignored; the command alone hears it,
+    says what it keeps, and exits 130."""
+    pytest.importorskip("dask.distributed")
+    import os
+    import signal
+    import time
+
+    grid = {"cam.base_radius_mm": {"from": 60, "to": 110, "num": 400}}
+    (tmp_path / "spec.json").write_text(json.dumps({"grid": grid}))
+    cmd = [sys.executable, "-m", "camcore", "sweep", "spec.json", "--out", "r.parquet"]
+    run = subprocess.Popen(
+        [*cmd, "--workers", "1", "--chunk", "2", "--no-verify"],
+        cwd=tmp_path,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,  # its own process group, as a terminal's job
+    )
+    assert run.stderr is not None
+    seen = ""
+    deadline = time.monotonic() + 120
+    while "designs" not in seen and time.monotonic() < deadline:  # a chunk is done
+        seen += os.read(run.stderr.fileno(), 4096).decode()
+    os.killpg(run.pid, signal.SIGINT)
+    err = seen + run.stderr.read()
+    assert run.wait(60) == 130, err
+    assert "the same command resumes" in err
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
