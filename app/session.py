@@ -73,7 +73,6 @@ from .scene import (
     SceneView,
     camera_for,
     closeup_extent,
-    geometry_key,
     label_height,
 )
 from .ticker import Debouncer, Ticker
@@ -147,7 +146,7 @@ class Session:
         self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
         self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
         self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
-        self._diagram_of = ""  # geometry_key of the stations diagram on screen
+        self._diagram_of = ""  # _diagram_key of the stations diagram on screen
         self._held = 0.0  # seconds the animation still stays at a station
         self._resumed = False  # the stop at a station has just ended
         self._seen: tuple | None = None  # the last camera message: (pose, width, height)
@@ -248,7 +247,7 @@ class Session:
             if self._syncing or self.closed.is_set() or self._superseded("controls", mine):
                 return  # (a newer change came while this one waited its turn)
             self._widen_sliders()
-            values = self._values()
+            values = self._greyed_back(self._values())
             # an unfinished program in the table stays (with this edit) until it is valid
             design, err = controls.try_design(self.base, values, self._typed_program)
             if design is None:
@@ -344,6 +343,25 @@ class Session:
         """Whether a newer action of ``kind`` came while ticket ``mine`` waited."""
         with self._ticket_lock:
             return self._tickets[kind] != mine
+
+    def _greyed_back(self, values: dict[str, object]) -> dict[str, object]:
+        """``values`` with each greyed control's as the design on screen has it, and
+        that control shown so: a greyed slider takes no edit, but viser leaves its
+        number box enabled (a review typed a lift of 40 beside an unfinished program:
+        nothing changed on screen, and a reload brought back a folded cam never
+        shown). Lock held."""
+        back = {}
+        for spec in controls.SPECS:
+            h = self.ui.controls[spec.path]
+            if h.disabled:
+                v = controls.control_value(self.design, spec)
+                if v is not None and values[spec.path] != v:
+                    back[spec.path] = v
+        if back:
+            with self._quiet():
+                for path, v in back.items():
+                    self.ui.controls[path].value = v
+        return {**values, **back}
 
     def _keep_edit_beside_program(self, values: dict[str, object]) -> None:
         """An edit of another control while the table's program is unfinished: the
@@ -521,8 +539,8 @@ class Session:
             self._enable_for_kind(design)
             ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
-            if ui.stations_img is not None and geometry_key(design) != self._diagram_of:
-                ui.stations_img.remove()  # of another geometry: the button draws it again
+            if ui.stations_img is not None and _diagram_key(design) != self._diagram_of:
+                ui.stations_img.remove()  # of another design: the button draws it again
                 ui.stations_img = None
                 ui.stations_fig_md.content = ""
             ui.low_dwell_md.content = low_dwell_text(self._values(), design)
@@ -1182,14 +1200,16 @@ class Session:
     def show_stations_diagram(self) -> None:
         """The mechanism at every station side by side (camcore.document), under the
         button; drawn from the design on screen, replaced on each click, and taken
-        away when the geometry changes (_redraw: a diagram of another follower beside
-        the 3D view had misled; a new speed or material leaves it)."""
+        away when the design changes (_redraw: a diagram of another follower beside
+        the 3D view had misled, and its captions' F_N and sigma_H follow the speed, the
+        spring and the material too: a teacher's review saw 136.8 N under a design of
+        161.4 N)."""
         say = self.ui.stations_fig_md
         if not self._drawing.acquire(blocking=False):
             return  # one at a time (a review's 60 clicks drew 60 diagrams at once)
         try:
             with self.lock:
-                a, key = self.analysis, geometry_key(self.design)
+                a, key = self.analysis, _diagram_key(self.design)
             # a user saw nothing happen for 18 s (the picture came in below the fold)
             say.content = "… Drawing the stations diagram: it appears below this line."
             try:
@@ -1199,7 +1219,7 @@ class Session:
                 say.content = "✖ The diagram could not be drawn (in the server's log)."
                 return
             with self.lock:
-                if geometry_key(self.design) != key:  # the geometry changed meanwhile
+                if _diagram_key(self.design) != key:  # the design changed meanwhile
                     say.content = "The design changed while drawing: click again."
                     return
                 self._diagram_of = key
@@ -1364,3 +1384,9 @@ def _nothing_to(label: str, counts: str) -> str:
     else:
         why = "Nothing to redo: Redo steps forward again after an Undo."
     return f"{why} {counts}." if counts else why
+
+
+def _diagram_key(design: Design) -> str:
+    """Everything the stations diagram shows depends on: the whole design (its
+    geometry, and the loads and stresses its captions print)."""
+    return design.model_dump_json()

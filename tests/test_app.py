@@ -1116,8 +1116,13 @@ def test_stations_diagram_in_the_view_tab(tab):
     assert img.image.std() > 10  # something is drawn
     s.ui.stations_fig_btn.value = True
     assert s.ui.stations_img is img  # the same element, a new picture
-    s.ui.controls["cam.speed_rpm"].value = 600.0  # the same geometry: the diagram stays
-    assert s.design.cam.speed_rpm == 600.0 and s.ui.stations_img is img
+    # the same geometry at another speed: its captions' F_N and sigma_H would be stale
+    # (a teacher's review saw 136.8 N printed under a design of 161.4 N)
+    s.ui.controls["cam.speed_rpm"].value = 1500.0
+    assert s.design.cam.speed_rpm == 1500.0 and s.ui.stations_img is None
+    assert s.ui.stations_fig_md.content == ""
+    s.ui.stations_fig_btn.value = True
+    img = s.ui.stations_img
     s.ui.controls["follower.kind"].value = "single roller"  # the diagram would be stale
     assert s.design.follower.kind.value == "single_roller" and s.ui.stations_img is None
     assert s.ui.stations_fig_md.content == ""
@@ -2381,6 +2386,33 @@ def test_an_unfinished_program_survives_a_reload(app, monkeypatch):
     for bad in ('[{"kind": "rise", "angle_deg": NaN}]', "[]", "{}", "x" * 5000):
         with restored_tab(app, monkeypatch, {**stored, storage.PROGRAM_KEY: bad}) as s:
             assert s.error is None and s.ui.segments.rows[1]["angle"].value == 70.0
+
+
+def test_a_greyed_control_takes_no_typing(app, monkeypatch):
+    """A review: beside an unfinished program the classic sliders are greyed, but viser
+    leaves a slider's number box enabled: a lift of 40 typed there changed nothing on
+    screen, was kept as the working design, and a reload brought back a folded cam
+    never shown. A greyed control's value stays the design's, and its box shows it;
+    so for a field the follower does not use."""
+    from app import storage
+
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {}, writes) as s:
+        s.ui.segments.rows[1]["angle"].value = 60.0  # 350 deg: unfinished
+        lift = s.ui.controls["motion.lift_mm"]
+        assert lift.disabled and s.error is not None
+        lift.value = 40.0  # typed into the greyed slider's box
+        assert lift.value == 15.0 and s.design.motion.lift_mm == 15.0
+        assert storage.parse_working(writes[storage.WORKING_KEY]).motion.lift_mm == 15.0
+        s.ui.controls["cam.speed_rpm"].value = 900.0  # another edit: kept, with 15 mm
+        kept = storage.parse_working(writes[storage.WORKING_KEY])
+        assert (kept.motion.lift_mm, kept.cam.speed_rpm) == (15.0, 900.0)
+        s.ui.segments.rows[1]["angle"].value = 70.0  # finished
+        assert s.error is None and s.design.motion.lift_mm == 15.0
+        roller = s.ui.controls["follower.roller_radius_mm"]  # a concave face has none
+        assert roller.disabled
+        roller.value = 3.0
+        assert roller.value == s.design.follower.roller_radius_mm != 3.0
 
 
 def _left_unfinished(app, monkeypatch, edit=None) -> dict[str, str]:
