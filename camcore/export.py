@@ -514,7 +514,8 @@ def follower_dxf_bytes(a) -> bytes:
     """DXF (R2010, mm) of the follower's working faces, to build its body around: on
     layer FACE each concave face's arc (radius |r_f|, a true ARC) or the flat face's
     line, over the stretch the contact runs (report's face_contact_x_mm) and
-    FACE_MARGIN_MM beyond it each way; on CENTERLINES (not plotted) the follower's axis
+    FACE_MARGIN_MM beyond it each way (no farther than the face's circle reaches
+    across); on CENTERLINES (not plotted) the follower's axis
     and each face's centre; on NOTES (not plotted) what it is. The follower stands at
     zero lift: X from its axis, Y from the cam's axis, the cam below. A roller is a
     bearing and a knife edge its tip: ExportError says so (a maker's review: nothing
@@ -558,6 +559,8 @@ def follower_dxf_bytes(a) -> bytes:
             top = max(top, y0)
             continue
         R, cx = -to_mm(face.r), to_mm(face.x_c) - sx  # the face's centre, below the cam
+        # (the margin ends where the circle turns down: a 2.5 mm face had failed acos)
+        lo, hi = max(lo, cx - R), min(hi, cx + R)
         a0, a1 = (math.degrees(math.acos((x - cx) / R)) for x in (hi, lo))  # from +X
         msp.add_arc((cx, y0), R, a0, a1, dxfattribs={"layer": "FACE"})
         msp.add_line((cx, y0 - 0.05 * R), (cx, y0 + 0.05 * R), dxfattribs={"layer": "CENTERLINES"})

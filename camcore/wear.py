@@ -65,9 +65,12 @@ def depth_per_pass(a) -> np.ndarray:
 
 
 def sliding_speed(a) -> np.ndarray:
-    """v_s [m/s] per face (F, N) at the design speed."""
+    """v_s [m/s] per face (F, N) at the design speed; 0 where the face does not touch
+    (a review: the idle face of a double follower had its geometry's sliding speed,
+    up to 11.937 m/s in the paper's series and its report's maximum, where the contacts
+    reach 11.9345)."""
     u = contact_travel(a, a.geo) * omega_rad_s(a.design)
-    return np.nan_to_num(sliding_ratio(a) * u)
+    return np.where(a.in_contact, np.nan_to_num(sliding_ratio(a) * u), 0.0)
 
 
 def pitting_life_cycles(a) -> float:

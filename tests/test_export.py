@@ -523,6 +523,28 @@ def test_the_follower_dxf_draws_faces_that_cover_every_contact(kind):
         assert ends[1] - export.FACE_MARGIN_MM - 1e-9 <= p[:, 0].max() <= ends[1]
 
 
+def test_a_small_concave_face_is_drawn_within_its_circle():
+    """A review: a valid cam with a 2.5 mm concave face failed the follower DXF with a
+    math domain error (exit 3): its 2 mm margins reached past the face's circle. The
+    arc now ends where the circle turns, and still covers every contact."""
+    d = load_preset("paper_example").with_kind(FollowerKind.single_concave)
+    data = d.model_dump()
+    data["cam"].update(base_radius_mm=1.0, speed_rpm=100.0)
+    data["follower"]["face_radius_mm"] = -2.5
+    data["motion"] = {"lift_mm": 0.6, "rise_deg": 150.0, "fall_deg": 150.0, "high_dwell_deg": 40.0}
+    a = analyze(Design.model_validate(data), verify=False)
+    assert a.valid
+    doc = ezdxf.read(io.StringIO(export.follower_dxf_bytes(a).decode()))
+    (arc,) = [e for e in doc.modelspace() if e.dxf.layer == "FACE"]
+    assert arc.dxf.radius == pytest.approx(2.5)
+    cx = arc.dxf.center[0]
+    ends = sorted((arc.start_point.x, arc.end_point.x))
+    assert cx - 2.5 - 1e-9 <= ends[0] and ends[1] <= cx + 2.5 + 1e-9
+    on = a.in_contact[0]
+    x = a.point_world[0, on, 0] * 1e3 - a.geo.stem_x * 1e3
+    assert ends[0] <= x.min() and x.max() <= ends[1]
+
+
 def test_the_follower_dxf_draws_each_face_at_its_own_contact():
     """A double follower whose first face never touched: only the second face is drawn,
     over the second face's own stretch (a review: the spans were matched to the faces

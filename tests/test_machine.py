@@ -646,3 +646,19 @@ def test_a_contact_force_of_exactly_zero_is_contact_kept_by_every_figure():
     proposed = tweak(d, dynamics__spring_rate_N_per_m=s["spring_proposal"]["spring_rate_N_per_m"])
     assert analyze(proposed, verify=False).valid
     assert jumps(tweak(d, dynamics__spring_rate_N_per_m=s["spring_rate_min_N_per_m"] * 0.98))
+
+
+def test_an_idle_face_does_not_slide():
+    """A review: the idle face of the paper's double concave follower had its
+    geometry's sliding speed in the series CSV, and the report's maximum took it (a
+    little above any real contact's). A face slides only where it touches."""
+    from camcore import wear
+    from camcore.report import summary
+
+    a = analyze(PAPER, verify=False)
+    v = wear.sliding_speed(a)
+    idle = ~a.in_contact
+    assert idle.any() and np.all(v[idle] == 0.0)
+    touching = wear.sliding_ratio(a) * wear.contact_travel(a, a.geo) * PAPER.cam.speed_rpm * RPM
+    assert np.allclose(v[a.in_contact], touching[a.in_contact], rtol=1e-12)
+    assert summary(a)["sliding_speed_max_m_per_s"] == float(v[a.in_contact].max())
