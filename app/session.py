@@ -986,6 +986,20 @@ class Session:
         if self.ui.saved_dd.value not in names:
             self.ui.saved_dd.value = names[0]
 
+    def _reread_saved(self) -> bool:
+        """Show the browser's saved list as it is now, before a save or a delete writes
+        it whole: another tab of this browser may have saved or deleted meanwhile (a
+        review: one tab's save erased what the other had saved). False, and nothing to
+        write, if the browser did not answer. Lock held."""
+        answered, text = self.store.fresh(storage.SAVED_KEY)
+        if not answered:
+            self._say("✖ Not done: this browser's storage did not answer. Try again.")
+            return False
+        saved = storage.parse_saved(text)
+        self._unread = storage.unread_entries(text, saved)
+        self._show_saved(saved)
+        return True
+
     def save_named(self, name: str) -> None:
         with self.lock:
             if not self._persist and not self.store.silent:  # (the first read waits 20 s)
@@ -999,6 +1013,8 @@ class Session:
                     "✖ Not saved: this browser's storage did not answer when the tab "
                     "opened. Reload the page, or download the design."
                 )
+            if not self._reread_saved():
+                return
             self._file_error_seen()
             name = str(name).strip()
             # another design under that name (one this version cannot open counts too):
@@ -1034,7 +1050,11 @@ class Session:
 
     def delete_saved(self, name: str) -> None:
         with self.lock:
-            if not isinstance(name, str) or name not in self.saved:
+            if not isinstance(name, str) or name not in self.saved or not self._persist:
+                return self._say("✖ Choose a saved design first.")
+            if not self._reread_saved():  # (then nothing is written over it)
+                return
+            if name not in self.saved:  # (another tab deleted it meanwhile)
                 return self._say("✖ Choose a saved design first.")
             self._show_saved({k: v for k, v in self.saved.items() if k != name}, write=True)
             self._say(f"Deleted **{esc(name)}** from this browser.")

@@ -310,6 +310,15 @@ class BrowserStore:
             return None
         return value if isinstance(value, str) else None
 
+    def fresh(self, key: str) -> tuple[bool, str | None]:
+        """(answered, value): ``read`` now, for a write that must not replace what
+        another tab of this browser wrote meanwhile; a browser that does not answer this
+        time leaves ``silent`` as it was."""
+        was, self.silent = self.silent, False
+        value = self.read(key)
+        answered, self.silent = not self.silent, was
+        return answered, value
+
     def read_all(self, keys: tuple[str, ...]) -> dict[str, str | None]:
         """``read`` of every key, all asked at once: a busy browser answers them
         together. (Read one after another, the third of six had waited past its 5 s

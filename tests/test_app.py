@@ -2327,6 +2327,41 @@ def test_a_silent_browser_storage_is_never_written_over(app, monkeypatch):
         assert writes == {} and "Not saved" in s.ui.files_md.content
 
 
+def test_two_tabs_of_one_browser_keep_each_others_saves(app, monkeypatch):
+    """A review: each tab read the saved list once, at its restore, and wrote its copy
+    back whole: a save or a delete in one tab erased what the other had saved
+    meanwhile. A save or a delete reads the list first; one the browser does not
+    answer then writes nothing."""
+    import json
+
+    from app import storage
+
+    shared: dict[str, str] = {}  # one browser's storage, both tabs reading and writing
+    with restored_tab(app, monkeypatch, shared, shared) as a:
+        a.save_named("old")
+    with restored_tab(app, monkeypatch, shared, shared) as a:
+        with restored_tab(app, monkeypatch, shared, shared) as b:
+            b.save_named("from B")
+            a.ui.controls["cam.base_radius_mm"].value = 90.0
+            a.save_named("from A")
+            assert set(json.loads(shared[storage.SAVED_KEY])) == {"old", "from B", "from A"}
+            assert set(a.ui.saved_dd.options) == {"old", "from B", "from A"}
+            b.delete_saved("old")
+            a.delete_saved("from B")
+            assert set(json.loads(shared[storage.SAVED_KEY])) == {"from A"}
+            before = shared[storage.SAVED_KEY]
+
+            def silent(self, key):
+                self.silent = True
+                return None
+
+            monkeypatch.setattr(storage.BrowserStore, "read", silent)
+            a.save_named("not now")
+            assert shared[storage.SAVED_KEY] == before
+            assert "did not answer" in a.ui.files_md.content
+            assert not a.store.silent  # (the tab keeps what it does as before)
+
+
 def test_saving_keeps_the_entries_this_version_cannot_read(app, monkeypatch):
     """A saved list with an entry this version leaves out (a later version's, a name
     too long) keeps it when a design is saved (it had been dropped)."""
