@@ -339,6 +339,12 @@ class Session:
             self._tickets[kind] += 1
             return self._tickets[kind]
 
+    def _edits(self) -> int:
+        """How many design-changing actions the user has begun in this tab (tickets of
+        every kind, taken before the lock is waited for), valid or not."""
+        with self._ticket_lock:
+            return sum(self._tickets.values())
+
     def _superseded(self, kind: str, mine: int) -> bool:
         """Whether a newer action of ``kind`` came while ticket ``mine`` waited."""
         with self._ticket_lock:
@@ -766,7 +772,7 @@ class Session:
         """Read this browser's working design and saved list (a reload, or a server
         restart, brings the user back to them). Until the read returns nothing is
         written, so the default design never overwrites what the browser kept."""
-        gen0 = self.gen
+        gen0, edits0 = self.gen, self._edits()
         stored = self.store.read_all(storage.KEYS)
         raw = stored[storage.WORKING_KEY]
         working = storage.parse_working(raw)
@@ -797,7 +803,11 @@ class Session:
                 self.ui.aside_btn.visible = True
         with self.lock:
             self._show_saved(saved)
-            mine = working is not None and self.gen == gen0  # (no edit of the user's yet)
+            # no edit of the user's yet: no new design, and no edit begun, valid or not
+            # (a review: a value typed invalid, or an unfinished table, while the browser
+            # took its time, was wiped by the kept design; so was a slider edit waiting on
+            # this lock)
+            mine = working is not None and self.gen == gen0 and self._edits() == edits0
             restore = mine and working != self.design
             self._persist = True
             if not restore:
@@ -805,18 +815,20 @@ class Session:
                     self._restore_steps(steps)
                 self._steps_read = True
                 self._save_working()
-        if working is not None and restore:
-            self.set_design(working, save_as=working.name)
-            with self.lock:  # the default it replaced was no step of the user's
-                self._restore_steps(steps)
+            elif working is not None:  # (in the same hold of the lock: no edit between)
+                self.set_design(working, save_as=working.name)
+                self._restore_steps(steps)  # the default it replaced was no step of the user's
                 self._steps_read = True
                 self._save_history()
+        if working is not None and restore:
             note = f"Restored the design last edited in this browser: *{esc(working.name)}*"
             # where the user looks (above the tabs, short: a teacher's review at 1280x720)
             # and in Files, with why
             self._say(f"{note} (its tabs share one working design: the browser keeps it per site).")
             self._say_quick(f"{note}.")
-        self._restore_program(typed_text, typed if working is not None else None, gen0 + restore)
+        self._restore_program(
+            typed_text, typed if working is not None else None, (gen0 + restore, edits0)
+        )
         try:  # a view the browser kept must never cost the rest of the restore
             self._restore_view(view)
         except Exception:
@@ -845,10 +857,13 @@ class Session:
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
         )
 
-    def _restore_program(self, text: str | None, typed: list[dict] | None, gen: int) -> None:
+    def _restore_program(
+        self, text: str | None, typed: list[dict] | None, before: tuple[int, int]
+    ) -> None:
         """Bring back the table's unfinished program the browser kept (``text``, read as
-        ``typed``) if this tab has not been edited meanwhile (``gen``); the browser then
-        holds this tab's own (none, once the program makes a valid design, or when it
+        ``typed``) if this tab has not been edited meanwhile (``before``: the design
+        generation and the count of edits begun, as the restore left them); the browser
+        then holds this tab's own (none, once the program makes a valid design, or when it
         is not restored). Only from here does the tab empty the browser's copy: the
         working design's restore before it must not (a reload between the two had lost
         the program). A program the user typed meanwhile wins over the kept one, even
@@ -857,7 +872,7 @@ class Session:
             if self._kept_program == _UNREAD:  # (else this tab has written its own)
                 self._kept_program = text or None
             mine = self._typed_program is not None
-            if typed is not None and self.gen == gen and not mine:
+            if typed is not None and (self.gen, self._edits()) == before and not mine:
                 try:  # what the browser kept must never cost the tab its restore
                     self._segments(typed)
                 except Exception:  # the tab goes on with its design's own program

@@ -2755,8 +2755,8 @@ def test_saving_over_another_kept_design_asks_first(app, monkeypatch):
 
     from app import storage
 
-    writes: dict[str, str] = {}
-    with restored_tab(app, monkeypatch, {}, writes) as s:
+    writes: dict[str, str] = {}  # (the browser: what is written is read back)
+    with restored_tab(app, monkeypatch, writes, writes) as s:
         s.save_named("mine")
         first = json.loads(writes[storage.SAVED_KEY])["mine"]
         s.save_named("mine")  # the same design: nothing to lose
@@ -2992,6 +2992,86 @@ def test_a_table_edit_waiting_on_the_restore_still_wins(tab):
     t.join(10)
     assert s._typed_program is None and s.error is None
     assert s.design.motion.segments[0].lift_mm == 12.0
+
+
+def _slow_browser(app, monkeypatch, stored: dict, writes: dict):
+    """A new tab whose browser answers its storage reads only when the returned event
+    is set (a busy browser can take up to 20 s): (session, event, fake tab)."""
+    from app import storage
+
+    answer = threading.Event()
+    monkeypatch.setattr(
+        storage.BrowserStore, "read", lambda self, key: (answer.wait(30), stored.get(key))[1]
+    )
+    monkeypatch.setattr(storage.BrowserStore, "write", lambda self, k, v: writes.__setitem__(k, v))
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    assert wait_for(lambda: set(app.sessions) - before)
+    (s,) = [app.sessions[c] for c in set(app.sessions) - before]
+    return s, answer, t
+
+
+@pytest.mark.parametrize("edit", ["unfinished table", "invalid value", "valid value"])
+def test_an_edit_made_while_the_browser_reads_is_not_wiped(app, monkeypatch, edit):
+    """A review: the restore took "no design made yet" for "no edit yet", so an edit
+    that left the input invalid (an unfinished program in the table, a lift of 0)
+    while the browser took its time was wiped by the kept design, the error with it.
+    Any edit begun, valid or not, keeps the tab's own work."""
+    from app import storage
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 70.0
+    kept = design_to_json(Design.model_validate(data))
+    writes: dict[str, str] = {}
+    s, answer, t = _slow_browser(app, monkeypatch, {storage.WORKING_KEY: kept}, writes)
+    try:
+        if edit == "unfinished table":
+            s.ui.segments.rows[1]["angle"].value = 50.0  # 340 deg
+        elif edit == "invalid value":
+            s.ui.controls["motion.lift_mm"].value = 0.0
+        else:
+            s.ui.controls["cam.base_radius_mm"].value = 95.0
+        answer.set()
+        s._restorer.join(10)
+        assert s.design.cam.base_radius_mm == (95.0 if edit == "valid value" else 80.0)
+        if edit == "unfinished table":
+            assert s.ui.segments.rows[1]["angle"].value == 50.0 and s._typed_program
+        if edit == "invalid value":
+            assert s.ui.controls["motion.lift_mm"].value == 0.0 and s.error is not None
+    finally:
+        t.close()
+
+
+def test_a_slider_edit_waiting_on_the_restore_wins(app, monkeypatch):
+    """A review: the restore decided that the user had not edited yet while a slider
+    edit waited on its lock, then set the kept design after letting go of the lock:
+    the edit read the kept design's values back and the user's 95 mm was gone."""
+    from app import storage
+    from app.session import Session
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 70.0
+    kept = design_to_json(Design.model_validate(data))
+    user: list[threading.Thread] = []
+    real = Session._show_saved
+
+    def user_edits_now(self, saved, write=False):  # (the restore holds the lock here)
+        if threading.current_thread() is self._restorer and not user:
+            before = self._tickets["controls"]
+            box = self.ui.controls["cam.base_radius_mm"]
+            user.append(threading.Thread(target=lambda: setattr(box, "value", 95.0)))
+            user[0].start()
+            assert wait_for(lambda: self._tickets["controls"] > before)  # on the lock
+        return real(self, saved, write)
+
+    monkeypatch.setattr(Session, "_show_saved", user_edits_now)
+    writes: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, {storage.WORKING_KEY: kept}, writes, join=False) as s:
+        s._restorer.join(10)
+        user[0].join(10)
+        assert s.design.cam.base_radius_mm == 95.0
+        assert s.ui.controls["cam.base_radius_mm"].value == 95.0
+        assert storage.parse_working(writes[storage.WORKING_KEY]).cam.base_radius_mm == 95.0
 
 
 def test_a_preset_clicked_after_an_edit_is_the_design_shown(tab):
