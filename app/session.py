@@ -813,6 +813,8 @@ class Session:
             if not restore:
                 if mine:  # the kept steps lead to the design on screen
                     self._restore_steps(steps)
+                elif working is not None and working != self.design:
+                    self._keep_last_visit(working)  # (the user's edit came first)
                 self._steps_read = True
                 self._save_working()
             elif working is not None:  # (in the same hold of the lock: no edit between)
@@ -855,6 +857,33 @@ class Session:
             logging.getLogger(__name__).exception("a kept Explore setup failed; ignored")
         self.ui.explore.keep_setup_with(
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
+        )
+
+    def _keep_last_visit(self, working: Design) -> None:
+        """The design this browser kept from the last visit, when an edit of the user's
+        came before the browser answered (the edit stands, and the next valid change
+        replaces the browser's working design): kept among the saved designs as "last
+        visit: NAME", and said, so that nothing the user made is lost. Lock held."""
+        base = storage.proposed_name(f"last visit: {working.name}")
+        name = base
+        for i in range(2, storage.MAX_SAVED + 2):  # (never over another design)
+            old = self.saved.get(name)
+            if old is None or storage.parse_working(old) == working:
+                break
+            name = storage.proposed_name(f"{base} ({i})")
+        try:
+            saved = storage.with_saved(self.saved, name, working)
+        except ValueError as exc:
+            return self._say(
+                f"⚠ You edited before this browser's storage answered, so your edit "
+                f"stands; the design kept at your last visit (*{esc(working.name)}*) could "
+                f"not be saved beside it ({esc(exc)}), and your next change replaces it."
+            )
+        self._show_saved(saved, write=True)
+        self._say(
+            f"You edited before this browser's storage answered, so your edit stands; "
+            f"the design kept at your last visit is saved as **{esc(name)}** (*Kept in "
+            "this browser*)."
         )
 
     def _restore_program(

@@ -3016,7 +3016,8 @@ def test_an_edit_made_while_the_browser_reads_is_not_wiped(app, monkeypatch, edi
     """A review: the restore took "no design made yet" for "no edit yet", so an edit
     that left the input invalid (an unfinished program in the table, a lift of 0)
     while the browser took its time was wiped by the kept design, the error with it.
-    Any edit begun, valid or not, keeps the tab's own work."""
+    Any edit begun, valid or not, keeps the tab's own work, and the design the browser
+    kept is saved beside it (the next valid change replaces the working design)."""
     from app import storage
 
     data = load_preset("paper_example").model_dump()
@@ -3038,6 +3039,14 @@ def test_an_edit_made_while_the_browser_reads_is_not_wiped(app, monkeypatch, edi
             assert s.ui.segments.rows[1]["angle"].value == 50.0 and s._typed_program
         if edit == "invalid value":
             assert s.ui.controls["motion.lift_mm"].value == 0.0 and s.error is not None
+        # what the browser kept is not lost: saved beside the user's work, and said
+        from app.panels import esc
+
+        name = storage.proposed_name(f"last visit: {storage.parse_working(kept).name}")
+        saved = storage.parse_saved(writes[storage.SAVED_KEY])
+        assert storage.parse_working(saved[name]).cam.base_radius_mm == 70.0
+        said = s.ui.files_md.content
+        assert "your edit stands" in said and esc(name) in said
     finally:
         t.close()
 
