@@ -1,8 +1,9 @@
 """The motion program as a table of segments (issue 10): one row per segment (kind,
 angle, lift, law, and ↑ ↓ ✕), an add button and the two sums a program must meet.
 
-The table holds only its widgets. It reports every user edit as the whole list of
-segments (dicts as in a design file) to ``on_change``; the session decides whether
+The table holds only its widgets. It reports every user edit to ``on_change``: the
+whole list of segments (dicts as in a design file), or None for "read the table
+(``current``) when the edit's turn comes"; the session decides whether
 that makes a valid design. Values the session writes in (``show``) fire no edit.
 """
 
@@ -74,7 +75,7 @@ def moved(segs: list[dict], i: int, action: str) -> list[dict] | None:
 class SegmentTable:
     """The rows live in ``folder`` (a viser GUI folder of ``gui``)."""
 
-    def __init__(self, gui, folder, on_change: Callable[[list[dict]], None]):
+    def __init__(self, gui, folder, on_change: Callable[[list[dict] | None], None]):
         self.gui, self.folder, self.on_change = gui, folder, on_change
         self.rows: list[dict] = []  # widget handles by key, one dict per segment
         self._extra: list = []
@@ -136,16 +137,22 @@ class SegmentTable:
             self._writer = None
 
     def _edited(self, widget, value) -> None:
-        """A widget's new ``value``: the whole table goes to on_change, read when no
-        redraw is half done; an edit the redraw wrote over meanwhile is dropped (the
-        table shows what holds)."""
+        """A widget's new ``value``: on_change(None), and the session reads the whole
+        table (``current``) when this edit's turn comes, not before it has taken its
+        turn (a review: an edit that read the table first but took its turn second
+        undid the edit after it); an edit a redraw wrote over meanwhile is dropped
+        (the table shows what holds)."""
         if self._writer == threading.get_ident():
             return  # the session's own write
         with self._rows_lock:
             if not (widget.value is value or widget.value == value):  # (NaN is itself)
                 return
-            segs = self.as_dicts()
-        self.on_change(segs)
+        self.on_change(None)
+
+    def current(self) -> list[dict]:
+        """The table's segments, read when no redraw is half done."""
+        with self._rows_lock:
+            return self.as_dicts()
 
     def act(self, i: int, action: str) -> None:
         """A row's button (or the add button, i = len(rows), action "+"). The rows are

@@ -391,18 +391,19 @@ class Session:
                 self.ui.controls["name"].value = renamed.name
         return renamed
 
-    def on_segments(self, segs: list[dict]) -> None:
-        """The program table changed: the program is its segments, every other control
-        as it is. Invalid input keeps the last valid design and shows the user's edit.
-        The newest edit of a burst is the one made (each carries the whole table: a
-        review's 40 law changes had cost 37 analyses, and another tab its connection)."""
+    def on_segments(self, segs: list[dict] | None) -> None:
+        """The program table changed: the program is its segments (None: the table as
+        it stands when this edit's turn comes, read after its ticket), every other
+        control as it is. Invalid input keeps the last valid design and shows the
+        user's edit. The newest edit of a burst is the one made (a review's 40 law
+        changes had cost 37 analyses, and another tab its connection)."""
         if self._syncing and self._syncer == threading.get_ident():
             return
         mine = self._take_ticket("segments")
         with self.lock:
             if self._syncing or self.closed.is_set() or self._superseded("segments", mine):
                 return
-            self._segments(segs)
+            self._segments(self.ui.segments.current() if segs is None else segs)
 
     def _segments(self, segs: list[dict]) -> None:
         """on_segments' work, lock held and no ticket taken (the restore's kept program
@@ -655,31 +656,36 @@ class Session:
         # name is looked up (camcore.model.load_preset never joins it onto a path)
         if name not in preset_names():
             return self._say(f"✖ No preset {esc(str(name)[:60])}.")
+        mine = self._take_ticket("replace")
         try:
             d = load_preset_design(name)
         except DesignError as exc:
             with self.lock:
                 return self._show_file_error(f"preset {name}: {exc}")
-        self._replace(d, d.name, f"Loaded the preset *{esc(d.name)}* ({esc(name)}).")
+        self._replace(d, d.name, f"Loaded the preset *{esc(d.name)}* ({esc(name)}).", mine)
 
     def upload(self, name: str, content: bytes) -> None:
+        mine = self._take_ticket("replace")  # (before the parse: see _replace)
         name = _short(name)  # (a client's file name: shown, so bounded)
         d = storage.open_untrusted(content)
         if isinstance(d, str):
             with self.lock:
+                if self._superseded("replace", mine):
+                    return  # (a file opened after this one is on screen)
                 self._show_file_error(f"{name or 'the upload'}: {d}")
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(d)}")
         left_out = defaulted_fields(content, d)
         note = f" ⚠ {esc(defaults_note(left_out))}." if left_out else ""
-        self._replace(d, d.name, f"Opened **{esc(name)}** ({esc(d.name)}).{note}")
+        self._replace(d, d.name, f"Opened **{esc(name)}** ({esc(d.name)}).{note}", mine)
 
-    def _replace(self, design: Design, save_as: str, said: str) -> None:
+    def _replace(self, design: Design, save_as: str, said: str, mine: int) -> None:
         """Replace the whole design from a button (a preset, a file, a saved design) and
-        say ``said``. The newest of a burst is the one made, and the design on screen
-        is not analysed again (set_design; viser runs a button's callback at every
-        message: a review's 30 clicks had cost 30 analyses, and another tab its
-        connection)."""
-        mine = self._take_ticket("replace")
+        say ``said``; ``mine``: the "replace" ticket the action took when it began,
+        before it read its file (a review: a slow parse of an earlier file took the
+        newer ticket and replaced the file opened after it). The newest of a burst is
+        the one made, and the design on screen is not analysed again (set_design;
+        viser runs a button's callback at every message: a review's 30 clicks had cost
+        30 analyses, and another tab its connection)."""
         with self.lock:
             if self.closed.is_set() or self._superseded("replace", mine):
                 return
@@ -1083,6 +1089,7 @@ class Session:
             self._say(f"Saved **{esc(name)}** in this browser{replaced_note}.")
 
     def open_saved(self, name: str) -> None:
+        mine = self._take_ticket("replace")
         text = self.saved.get(name) if isinstance(name, str) else None
         design = storage.parse_working(text)
         if design is None and text is None:
@@ -1090,7 +1097,7 @@ class Session:
         if design is None:  # kept, but not a design this version opens: say why
             why = storage.working_error(text) or "not a design"
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(_short(why))}.")
-        self._replace(design, name, f"Opened **{esc(name)}** from this browser.")
+        self._replace(design, name, f"Opened **{esc(name)}** from this browser.", mine)
 
     def delete_saved(self, name: str) -> None:
         with self.lock:

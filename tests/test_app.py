@@ -872,7 +872,9 @@ def test_a_table_edit_made_while_the_table_is_redrawn_counts(tab):
     shows what holds and the edit is dropped."""
     table = tab.ui.segments
     got: list[list[dict]] = []
-    table.on_change = got.append  # (the session's handler is not what is tested here)
+    # (the session's handler is not what is tested here; it reads the table when the
+    # edit's turn comes: here at once)
+    table.on_change = lambda segs: got.append(table.current() if segs is None else segs)
     before = [g.model_dump(mode="json", exclude_none=True) for g in tab.design.motion.segments]
     shown = [dict(g) for g in before]
     shown[0]["angle_deg"], shown[1]["angle_deg"] = 90.0, 80.0  # written in place
@@ -3081,6 +3083,57 @@ def test_a_slider_edit_waiting_on_the_restore_wins(app, monkeypatch):
         assert s.design.cam.base_radius_mm == 95.0
         assert s.ui.controls["cam.base_radius_mm"].value == 95.0
         assert storage.parse_working(writes[storage.WORKING_KEY]).cam.base_radius_mm == 95.0
+
+
+def test_a_table_edit_takes_its_turn_before_it_reads_the_table(tab):
+    """A review: a table edit read the rows, then took its turn; one preempted between
+    the two took a turn newer than the edit after it and made its older rows the
+    program, undoing that edit in the design and the table. The rows are read when
+    the edit's turn comes."""
+    s, table = tab, tab.ui.segments
+    real = s.on_segments
+    first = threading.Event()
+
+    def preempted(segs):  # the first edit stops before its turn until the second took one
+        if not first.is_set():
+            first.set()
+            before = s._tickets["segments"]
+            assert wait_for(lambda: s._tickets["segments"] > before)
+        real(segs)
+
+    table.on_change = preempted
+    t = threading.Thread(target=setattr, args=(table.rows[0]["law"], "value", "3-4-5 polynomial"))
+    t.start()
+    assert first.wait(5)
+    table.rows[2]["law"].value = "modified sine"  # the second edit
+    t.join(10)
+    laws = [g.law.value if g.law else None for g in s.design.motion.segments]
+    assert laws[0] == "poly_345" and laws[2] == "modified_sine"
+    assert table.rows[2]["law"].value == "modified sine"
+
+
+def test_the_file_opened_last_is_the_design_shown(tab, monkeypatch):
+    """A review: a file's turn was taken after its parse, so an earlier file whose parse
+    took longer replaced the one opened after it. The turn is taken first."""
+    import time
+
+    from app import session as sm
+
+    real = sm.storage.open_untrusted
+    first = design_to_json(load_preset("valve_lift_roller")).encode()
+
+    def parse(content):
+        if content == first:  # (a larger file, or a preempted thread)
+            time.sleep(0.2)
+        return real(content)
+
+    monkeypatch.setattr(sm.storage, "open_untrusted", parse)
+    t = threading.Thread(target=tab.upload, args=("first.json", first))
+    t.start()
+    time.sleep(0.05)
+    tab.upload("second.json", design_to_json(load_preset("double_index")).encode())
+    t.join(10)
+    assert tab.design == load_preset("double_index") and "second.json" in tab.ui.files_md.content
 
 
 def test_a_preset_clicked_after_an_edit_is_the_design_shown(tab):
