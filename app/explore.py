@@ -178,6 +178,7 @@ class ExplorePanel:
         self._design: Callable[[], Design] | None = None
         self._load: Callable[[Design], None] | None = None
         self._lock = threading.Lock()
+        self._closed = threading.Event()  # the tab is gone (close)
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
         self._offers: dict[str, dict] = {}  # dropdown label -> grid point
@@ -286,11 +287,13 @@ class ExplorePanel:
         fields = fields_of(design)
         if fields == self._fields:
             return
-        self._fields = fields
-        with self._lock:
+        with self._lock:  # (with _show's check and publish: one or the other first)
+            self._fields = fields
             running = self._thread is not None and self._thread.is_alive()
-        if not running:  # a sweep of another program's fields: gone (a user's review
-            self._clear()  # loaded another preset and still had its map, loadable)
+            shown = self._ran is not None and fields_of(Design.model_validate(self._ran.base))
+        if not running or shown != fields:  # a sweep of another program's fields: gone
+            self._clear()  # (a user's review loaded another preset and still had its
+        if not running:  # map, loadable; a review found one published meanwhile)
             self.progress.content = ""
         labels = tuple(fields)
         for dd, other in ((self.x, self.y), (self.y, self.x)):
@@ -442,14 +445,15 @@ class ExplorePanel:
             span = [[p[path] for p in points] for path in (x[0], y[0])]  # the asked ranges
             limits = ((min(span[0]), max(span[0])), (min(span[1]), max(span[1])))
             ran = Ran(base, grid, rows, batched, len(points), balance)
-            self._show(ran, x, y, names, limits)
+            if not self._closed.is_set():  # (no map for a tab that is gone: a review)
+                self._show(ran, x, y, names, limits)
         except Exception as exc:  # a worker lost: say so, keep the tab
             self.progress.content = f"✖ The sweep stopped: {esc(exc)}"
         finally:
             self.run_btn.disabled, self.cancel_btn.disabled = False, True
 
     def _show(self, ran: Ran, x, y, names, limits) -> None:
-        base, rows, total = ran.base, ran.rows, ran.total
+        base, rows = ran.base, ran.rows
         if not rows:
             self._clear()  # (a review: the last sweep's map stayed, loadable, unmarked)
             self.progress.content = "Cancelled before the first designs."
@@ -472,29 +476,37 @@ class ExplorePanel:
                     for m, v in zip(names, values[i], strict=True)
                 )
                 offers[f"{n}. {shown} → {figs}"] = point
-            if fields_of(Design.model_validate(base)) != self._fields:  # (a review: they
-                self._clear()  # came back, loadable, after another program's load)
+            with self._lock:  # (the check and the publish in one hold: offer_fields)
+                stale = fields_of(Design.model_validate(base)) != self._fields
+                if not stale:
+                    self._publish(ran, offers, png, (rows, x, y, names, front, limits, px))
+            if stale:  # (a review: they came back, loadable, after another program's load)
+                self._clear()
                 self.progress.content = (
                     "The design on screen is another kind of program now: the sweep of "
                     "the earlier one is dropped. Run it again for this one."
                 )
-                return
-            with self._lock:
-                self._base, self._offers, self._armed = base, offers, None
-                self._ran, self.files_md.content = ran, ""
-                self.csv_btn.disabled = self.spec_btn.disabled = False
-                self._drawn = (rows, x, y, names, front, limits, px)
-                self.front_dd.options = tuple(offers) or ("–",)
-                self.front_dd.value = self.front_dd.options[0]
-                self.load_btn.disabled = not offers
-                self._put_image(png)
-                self.progress.content = (
-                    _summary(rows, total, front, names, limits, len(offers))
-                    + _balanced_text(ran)
-                    + _outside_text(Design.model_validate(base), (x, y), limits)
-                )
         finally:
             self._redraw()  # for a width the panel took meanwhile; frees the map
+
+    def _publish(self, ran: Ran, offers: dict, png: bytes, drawn: tuple) -> None:
+        """Show a finished sweep: its offers, map, downloads and summary (under
+        self._lock)."""
+        rows, x, y, names, front, limits, _ = drawn
+        base, total = ran.base, ran.total
+        self._base, self._offers, self._armed = base, offers, None
+        self._ran, self.files_md.content = ran, ""
+        self.csv_btn.disabled = self.spec_btn.disabled = False
+        self._drawn = drawn
+        self.front_dd.options = tuple(offers) or ("–",)
+        self.front_dd.value = self.front_dd.options[0]
+        self.load_btn.disabled = not offers
+        self._put_image(png)
+        self.progress.content = (
+            _summary(rows, total, front, names, limits, len(offers))
+            + _balanced_text(ran)
+            + _outside_text(Design.model_validate(base), (x, y), limits)
+        )
 
     def _put_image(self, png: bytes) -> None:
         """Show ``png`` as the map (under self._lock)."""
@@ -630,6 +642,8 @@ class ExplorePanel:
                 self.progress.content = "Cancelling after the current designs…"
 
     def close(self) -> None:
+        """The tab is gone: the sweep stops after its chunk, and draws nothing."""
+        self._closed.set()
         self._cancel.set()
 
 

@@ -1709,6 +1709,72 @@ def test_wide_panel_toggle(tab, monkeypatch):
     assert [wide_panel_px(w) for w in (0, 600, 1000, 1920)] == [793, 384, 620, 1000]
 
 
+def test_explore_drops_a_sweep_of_another_program_published_meanwhile(tab, monkeypatch):
+    """A review: the sweep checked that the design on screen was still the same kind of
+    program, then published; a preset of another kind loaded in between found the sweep
+    still running and left its results, so the old program's designs stayed offered,
+    loadable, with their map. The check and the publish are one step, and a change of
+    fields drops the results of other fields already published."""
+    s, e = tab, tab.ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (70.0, 90.0), (25.0, 35.0)
+    e.steps.value, e.all_kinds.value = 2, False
+    old_fields = dict(e._fields)
+    real = type(e)._put_image
+    loader: list[threading.Thread] = []
+
+    def publish_while_a_preset_loads(self, png):
+        if not loader:  # the user loads an indexer (a program of segments) right now
+            loader.append(threading.Thread(target=s.load_preset, args=("double_index",)))
+            loader[0].start()
+            # its fields offered meanwhile (the old code: at once; now that waits for
+            # this publish to end, and then drops what was published)
+            wait_for(lambda: e._fields != old_fields, 2)
+        return real(self, png)
+
+    monkeypatch.setattr(type(e), "_put_image", publish_while_a_preset_loads)
+    e.run_btn.value = True
+    assert wait_for(lambda: bool(loader), 120)
+    loader[0].join(30)
+    assert wait_for(lambda: not e._thread.is_alive(), 30)
+    assert s.design.motion.classic is None  # the indexer on screen
+    assert e.load_btn.disabled and e.image is None and e.front_dd.options == ("–",)
+
+
+def test_a_closed_tab_s_sweep_draws_no_map(app):
+    """A review: a tab closed mid-sweep still had its Pareto front and map computed, in
+    the background worker all tabs share."""
+    before = set(app.sessions)
+    t = FakeTab(app.port)
+    assert wait_for(lambda: set(app.sessions) - before)
+    (cid,) = set(app.sessions) - before
+    e = app.sessions[cid].ui.explore
+    e.x.value, e.y.value = "Base radius r_b [mm]", "Offset e (double) [mm]"
+    e.x_range.value, e.y_range.value = (60.0, 100.0), (20.0, 40.0)
+    e.steps.value, e.all_kinds.value = 6, True
+    calls: list[str] = []
+    real_png, real_chunk = e._analyst.explore_png, e._analyst.sweep_chunk
+
+    class Spy:  # this tab's view of the shared analyst
+        same_designs = app.analyst.same_designs
+
+        def sweep_chunk(self, *a):
+            calls.append("chunk")
+            return real_chunk(*a)
+
+        def explore_png(self, *a):
+            calls.append("png")
+            return real_png(*a)
+
+    e._analyst = Spy()
+    e.run_btn.value = True
+    assert wait_for(lambda: "chunk" in calls, 60)
+    t.close()  # the user closes the browser tab mid-sweep
+    assert wait_for(lambda: cid not in app.sessions, 10)
+    e._thread.join(60)
+    assert "png" not in calls and not e._thread.is_alive()
+
+
 def test_explore_refuses_hostile_ranges(tab):
     e = tab.ui.explore
     e.x_range._impl.value = ("a", 3)  # what a hostile client could send
