@@ -179,6 +179,8 @@ class ExplorePanel:
         self._load: Callable[[Design], None] | None = None
         self._lock = threading.Lock()
         self._closed = threading.Event()  # the tab is gone (close)
+        # (the sweep on show, the design on screen that load took from it) or None
+        self._loaded: tuple[Ran | None, Design] | None = None
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
         self._offers: dict[str, dict] = {}  # dropdown label -> grid point
@@ -570,6 +572,7 @@ class ExplorePanel:
         would change, a second click on the same design loads it."""
         with self._lock:
             point, base = self._offers.get(label) if isinstance(label, str) else None, self._base
+            ran, loaded = self._ran, self._loaded
         if self._load is None or self._design is None:
             return
         if point is None:  # not an offer of this sweep (a stale or forged value)
@@ -580,7 +583,13 @@ class ExplorePanel:
         except DesignError as exc:
             self.progress.content = f"✖ {esc(exc)}"
             return
-        edits = edited_since(Design.model_validate(base), self._design(), point)
+        # edits since the sweep's own design on screen: the one loaded from this sweep
+        # last, or else the design it ran on (a review: loading a second design of one
+        # front warned of "edits", the first's swept values and its follower's name)
+        if loaded is not None and loaded[0] is ran:
+            edits = edited_since(loaded[1], self._design(), {})
+        else:
+            edits = edited_since(Design.model_validate(base), self._design(), point)
         if edits and self._armed != label:
             self._armed = label
             self.progress.content = (
@@ -591,6 +600,8 @@ class ExplorePanel:
             return
         self._armed = None
         self._load(design)
+        with self._lock:
+            self._loaded = (ran, self._design())  # (as the tab took it)
         number = label.split(" ", 1)[0].rstrip(".")
         self.progress.content = f"Loaded design {esc(number)} of the Pareto front."
 

@@ -22,6 +22,7 @@ from viser._gui_handles import GuiEvent, UploadedFile
 
 from app import panels, scene
 from app.controls import LABEL_OF_LAW
+from camcore import sweep
 from camcore.model import Design, design_to_json, load_preset
 from camcore.report import summary
 
@@ -1203,6 +1204,14 @@ def test_explore_tab_sweeps_maps_and_loads_a_pareto_design(tab):
     e.load_btn.value = True
     assert wait_for(lambda: s.design.cam.base_radius_mm in (70.0, 90.0), 10.0)
     assert "Loaded design" in e.progress.content
+    # another design of the same front, of another follower, loads at the first click (a
+    # review: the first load's swept values and its follower's name read as "edits")
+    kind = offers[-1].split(". ", 1)[1].split(",")[0]
+    other = next(o for o in offers if o.split(". ", 1)[1].split(",")[0] != kind)
+    e.front_dd.value = other
+    e.load_btn.value = True
+    assert "Loaded design" in e.progress.content, e.progress.content
+    assert s.design == sweep.design_at(e._ran.base, e._offers[other])
     # an edit after the sweep: loading would undo it, so the first click says so
     s.ui.controls["motion.lift_mm"].value = 25.0
     e.front_dd.value = offers[0]
