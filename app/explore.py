@@ -601,7 +601,7 @@ class ExplorePanel:
         self._armed = None
         self._load(design)
         with self._lock:
-            self._loaded = (ran, self._design())  # (as the tab took it)
+            self._loaded = (ran, design)  # (an edit made after it is an edit: a review)
         number = label.split(" ", 1)[0].rstrip(".")
         self.progress.content = f"Loaded design {esc(number)} of the Pareto front."
 

@@ -340,10 +340,12 @@ class Session:
             return self._tickets[kind]
 
     def _edits(self) -> int:
-        """How many design-changing actions the user has begun in this tab (tickets of
-        every kind, taken before the lock is waited for), valid or not."""
+        """How many edits of the controls or the program table the user has begun in
+        this tab (their tickets, taken before the lock is waited for), valid or not. A
+        file, preset or saved design counts only once it replaces the design (``gen``):
+        a click that opened nothing is no edit (a review: it had cancelled the restore)."""
         with self._ticket_lock:
-            return sum(self._tickets.values())
+            return self._tickets["controls"] + self._tickets["segments"]
 
     def _superseded(self, kind: str, mine: int) -> bool:
         """Whether a newer action of ``kind`` came while ticket ``mine`` waited."""
@@ -820,7 +822,7 @@ class Session:
                 if mine:  # the kept steps lead to the design on screen
                     self._restore_steps(steps)
                 elif working is not None and working != self.design:
-                    self._keep_last_visit(working)  # (the user's edit came first)
+                    self._keep_last_visit(working, typed is not None)  # (the user's came first)
                 self._steps_read = True
                 self._save_working()
             elif working is not None:  # (in the same hold of the lock: no edit between)
@@ -865,31 +867,33 @@ class Session:
             lambda data: self.store.write(storage.EXPLORE_KEY, json.dumps(data))
         )
 
-    def _keep_last_visit(self, working: Design) -> None:
+    def _keep_last_visit(self, working: Design, unfinished: bool) -> None:
         """The design this browser kept from the last visit, when an edit of the user's
         came before the browser answered (the edit stands, and the next valid change
         replaces the browser's working design): kept among the saved designs as "last
-        visit: NAME", and said, so that nothing the user made is lost. Lock held."""
-        base = storage.proposed_name(f"last visit: {working.name}")
-        name = base
-        for i in range(2, storage.MAX_SAVED + 2):  # (never over another design)
-            old = self.saved.get(name)
-            if old is None or storage.parse_working(old) == working:
-                break
-            name = storage.proposed_name(f"{base} ({i})")
+        visit: NAME", and said, so that nothing the user made is lost without a word
+        (``unfinished``: the last visit also left the table's program unfinished, which
+        makes no design to keep: said). Lock held."""
+        name = _free_name(self.saved, f"last visit: {working.name}", working)
+        lost = (
+            " (the unfinished program in its segment table is not kept: it makes no design)"
+            if unfinished
+            else ""
+        )
         try:
             saved = storage.with_saved(self.saved, name, working)
         except ValueError as exc:
             return self._say(
                 f"⚠ You edited before this browser's storage answered, so your edit "
                 f"stands; the design kept at your last visit (*{esc(working.name)}*) could "
-                f"not be saved beside it ({esc(exc)}), and your next change replaces it."
+                f"not be saved beside it ({esc(exc)}), and your next change replaces it"
+                f"{lost}."
             )
         self._show_saved(saved, write=True)
         self._say(
             f"You edited before this browser's storage answered, so your edit stands; "
             f"the design kept at your last visit is saved as **{esc(name)}** (*Kept in "
-            "this browser*)."
+            f"this browser*){lost}."
         )
 
     def _restore_program(
@@ -1461,3 +1465,19 @@ def _diagram_key(design: Design) -> str:
     """Everything the stations diagram shows depends on: the whole design (its
     geometry, and the loads and stresses its captions print)."""
     return design.model_dump_json()
+
+
+def _free_name(saved: dict[str, str], wanted: str, design: Design) -> str:
+    """A name of at most storage.MAX_NAME characters to keep ``design`` under in
+    ``saved``: ``wanted`` (shortened), or with " (2)", " (3)", ... where another design
+    holds it (the number fits inside the limit: a long name had been cut back to the
+    taken one, and saved over it, a review); the name the design is kept under already,
+    if it is."""
+    base = storage.proposed_name(wanted)
+    for i in range(1, storage.MAX_SAVED + 2):
+        suffix = "" if i == 1 else f" ({i})"
+        name = base[: storage.MAX_NAME - len(suffix)].rstrip() + suffix
+        old = saved.get(name)
+        if old is None or storage.parse_working(old) == design:
+            return name
+    return name  # (more than MAX_SAVED taken: with_saved refuses a full list anyway)

@@ -634,7 +634,10 @@ def _duration(seconds: float) -> str:
 
 
 PART_METADATA = "camcore.sweep.part"  # a kept chunk's stamp: its run's, and its number
-PART_NAME = re.compile(r"chunk-\d{6}\.parquet|sweep\.json|\..+\.tmp(\.old)?")  # ours
+# the sweep's own files: its chunks, its label, and write_atomic's temporary files of them
+PART_NAME = re.compile(
+    r"(chunk-\d{6}\.parquet|sweep\.json)|\.(chunk-\d{6}\.parquet|sweep\.json)\.[0-9a-f]{12}\.tmp(\.old)?"
+)
 
 
 def _parts_dir(out: Path, stamp: dict) -> Path:
@@ -652,8 +655,12 @@ def _parts_dir(out: Path, stamp: dict) -> Path:
     label = parts / "sweep.json"
     if parts.is_symlink() or (parts.exists() and not parts.is_dir()):
         raise FileError(f"{parts}: not a folder of this sweep's (a link or a file); move it away")
-    if parts.exists():
-        other = sorted(f.name for f in parts.iterdir() if not PART_NAME.fullmatch(f.name))
+    if parts.exists():  # (a link in it, even of our name, would be written through)
+        other = sorted(
+            f.name
+            for f in parts.iterdir()
+            if not PART_NAME.fullmatch(f.name) or f.is_symlink() or not f.is_file()
+        )
         if other:
             raise FileError(
                 f"{parts} holds files that are not a sweep's ({', '.join(other[:3])}"

@@ -3128,6 +3128,76 @@ def test_an_edit_made_while_the_browser_reads_is_not_wiped(app, monkeypatch, edi
         t.close()
 
 
+@pytest.mark.parametrize("click", ["open saved", "unreadable upload"])
+def test_a_click_that_opens_nothing_does_not_cancel_the_restore(app, monkeypatch, click):
+    """A review: Open, clicked before the browser had answered (the saved list still
+    "–"), opened nothing but counted as an edit: the kept design was not restored and
+    the tab said "your edit stands". Only an edit of the controls or the table, or a
+    design opened, counts."""
+    from app import storage
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 70.0
+    kept = design_to_json(Design.model_validate(data))
+    writes: dict[str, str] = {}
+    s, answer, t = _slow_browser(app, monkeypatch, {storage.WORKING_KEY: kept}, writes)
+    try:
+        if click == "open saved":
+            s.open_saved("–")
+        else:
+            s.upload("x.json", b"not a design")
+        answer.set()
+        s._restorer.join(10)
+        assert s.design.cam.base_radius_mm == 70.0  # restored
+        assert storage.SAVED_KEY not in writes  # (no "last visit" kept: no edit)
+    finally:
+        t.close()
+
+
+def test_an_invalid_edit_before_the_restore_says_the_kept_program_goes(app, monkeypatch):
+    """A review: the last visit's unfinished program went without a word when the user
+    typed an invalid value before the browser answered (the design it was typed on is
+    kept as "last visit"; a program that makes no design cannot be)."""
+    from app import storage
+
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 70.0
+    kept = design_to_json(Design.model_validate(data))
+    program = [
+        g.model_dump(mode="json", exclude_none=True)
+        for g in load_preset("paper_example").motion.segments
+    ]
+    program[1]["angle_deg"] = 50.0  # 340 deg: unfinished
+    stored = {storage.WORKING_KEY: kept, storage.PROGRAM_KEY: json.dumps(program)}
+    writes: dict[str, str] = {}
+    s, answer, t = _slow_browser(app, monkeypatch, stored, writes)
+    try:
+        s.ui.controls["cam.speed_rpm"].value = -5.0  # invalid
+        answer.set()
+        s._restorer.join(10)
+        assert s.error is not None and s.ui.controls["cam.speed_rpm"].value == -5.0
+        assert "unfinished program in its segment table is not kept" in s.ui.files_md.content
+    finally:
+        t.close()
+
+
+def test_a_long_name_kept_twice_takes_a_number_within_the_limit():
+    """A review: "last visit: NAME" for a name near the 60-character limit came back
+    from shortening without its " (2)", so a second last visit was saved over the
+    first. The number fits inside the limit; the same design keeps its name."""
+    from app import storage
+    from app.session import _free_name
+
+    one, two = load_preset("paper_example"), load_preset("valve_lift_roller")
+    long = "ab " * 30
+    first = _free_name({}, f"last visit: {long}", one)
+    saved = storage.with_saved({}, first, one)
+    second = _free_name(saved, f"last visit: {long}", two)
+    assert second != first and second.endswith(" (2)")
+    assert len(first) <= storage.MAX_NAME and len(second) <= storage.MAX_NAME
+    assert _free_name(saved, f"last visit: {long}", one) == first
+
+
 def test_a_slider_edit_waiting_on_the_restore_wins(app, monkeypatch):
     """A review: the restore decided that the user had not edited yet while a slider
     edit waited on its lock, then set the kept design after letting go of the lock:

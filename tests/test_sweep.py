@@ -253,6 +253,21 @@ def test_the_parts_folder_holds_only_the_sweeps_own_files(tmp_path):
         sweep.run(spec, out, verify=False, progress=None)
     assert not out.exists() and list(elsewhere.iterdir()) == []
     parts.unlink()
+    # a link inside it, even under a sweep's own name, is written through by a run (a
+    # review: a victim file became the label), and a file of the user's that looks
+    # like a temporary one is the user's
+    parts.mkdir()
+    victim = tmp_path / "elsewhere" / "victim.json"
+    victim.write_text("mine")
+    (parts / "sweep.json").symlink_to(victim)
+    with pytest.raises(FileError, match=r"not a sweep's \(sweep.json\)"):
+        sweep.run(spec, out, verify=False, progress=None)
+    assert victim.read_text() == "mine"
+    (parts / "sweep.json").unlink()
+    (parts / ".my draft.tmp").write_text("mine")
+    with pytest.raises(FileError, match=r"not a sweep's \(.my draft.tmp\)"):
+        sweep.run(spec, out, verify=False, progress=None)
+    (parts / ".my draft.tmp").unlink()
     assert sweep.run(spec, out, verify=False, progress=None) == spec.size
     assert sorted(p.name for p in tmp_path.iterdir()) == ["elsewhere", "r.parquet"]
 
