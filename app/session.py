@@ -17,6 +17,7 @@ import contextlib
 import json
 import logging
 import math
+import secrets
 import threading
 import time
 
@@ -156,6 +157,7 @@ class Session:
         self.station_faces: list[list[str]] = []  # the faces touching just after each
         self.store = storage.BrowserStore(client)
         self.saved: dict[str, str] = {}  # name -> design JSON, kept in the browser
+        self._tab_id = secrets.token_hex(8)  # (storage.PAIR_KEY)
         # (name, design): a Save of that design under that kept name replaces it
         self._replace_armed: tuple[str, Design] | None = None
         self._persist = False  # on once the browser's stored design has been read
@@ -791,7 +793,8 @@ class Session:
         typed_text = stored[storage.PROGRAM_KEY]
         typed = storage.parse_program(typed_text)
         view = storage.parse_view(stored[storage.VIEW_KEY])
-        steps = storage.parse_history(stored[storage.HISTORY_KEY])  # Undo's and Redo's
+        # Undo's and Redo's steps, if the tab that wrote the working design wrote them
+        steps = storage.history_of(stored[storage.HISTORY_KEY], stored[storage.PAIR_KEY])
         aside = stored[storage.UNREADABLE_KEY]  # set aside by an earlier visit?
         if self.closed.is_set():
             return
@@ -993,6 +996,7 @@ class Session:
     def _save_working(self) -> None:
         if self._persist and self.error is None:
             self.store.write(storage.WORKING_KEY, design_to_json(self.design))
+            self.store.write(storage.PAIR_KEY, self._tab_id)
             self._pair_program()
         self._save_history()
 
@@ -1011,7 +1015,8 @@ class Session:
             return
         if self.history.version != self._steps_written:
             self.store.write(
-                storage.HISTORY_KEY, storage.history_text(self.history.past, self.history.future)
+                storage.HISTORY_KEY,
+                storage.history_text(self.history.past, self.history.future, self._tab_id),
             )
             self._steps_written = self.history.version
 

@@ -44,6 +44,11 @@ VIEW_KEY = "camdesigner.view"
 # the designs Undo and Redo go to (app.history: the last KEPT each way), so that a
 # reload keeps a designer's steps back as well as the design
 HISTORY_KEY = "camdesigner.history"
+# the tab (a random id) that wrote the working design last, written with it: a reload
+# takes the Undo steps only if the same tab wrote them (the browser's tabs share both
+# keys, and a tab that rewrote the design without a step of its own had left another
+# tab's steps beside it: Undo after a reload led into that tab's designs, a review)
+PAIR_KEY = "camdesigner.pair"
 KEYS = (  # all read at once
     WORKING_KEY,
     SAVED_KEY,
@@ -52,6 +57,7 @@ KEYS = (  # all read at once
     VIEW_KEY,
     UNREADABLE_KEY,
     HISTORY_KEY,
+    PAIR_KEY,
 )
 MAX_HISTORY_CHARS = 2_000_000  # of its stored text: 40 designs of 50 kB (one is ~3 kB)
 MAX_SETUP_BYTES = 4096  # characters of the stored text
@@ -241,14 +247,31 @@ def _refuse(name: str):
     raise ValueError(name)
 
 
-def history_text(past: list[Design], future: list[Design]) -> str:
-    """The steps of an app.history.History to keep: the last KEPT each way."""
+def history_text(past: list[Design], future: list[Design], tab: str = "") -> str:
+    """The steps of an app.history.History to keep: the last KEPT each way, and the
+    ``tab`` that wrote them (PAIR_KEY)."""
     from .history import KEPT
 
     def texts(designs: list[Design]) -> list[str]:
         return [design_to_json(d) for d in designs[-KEPT:]]
 
-    return json.dumps({"past": texts(past), "future": texts(future)})
+    return json.dumps({"past": texts(past), "future": texts(future), "tab": tab})
+
+
+def history_of(text: str | None, pair: str | None) -> tuple[list[Design], list[Design]]:
+    """parse_history of ``text``, or no steps if they are another tab's than the one
+    that wrote the working design (``pair``: PAIR_KEY's value); steps or a design kept
+    without a tab (an earlier version's) are taken as they are."""
+    tab = None
+    if text and len(text) <= MAX_HISTORY_CHARS:
+        try:
+            raw = json.loads(text)
+        except (ValueError, RecursionError):
+            raw = None
+        tab = raw.get("tab") if isinstance(raw, dict) else None
+    if isinstance(tab, str) and tab and isinstance(pair, str) and pair and tab != pair:
+        return [], []
+    return parse_history(text)
 
 
 def parse_history(text: str | None) -> tuple[list[Design], list[Design]]:

@@ -1734,8 +1734,9 @@ def test_explore_drops_a_sweep_of_another_program_published_meanwhile(tab, monke
 
     def publish_while_a_preset_loads(self, png):
         if not loader:  # the user loads an indexer (a program of segments) right now
-            loader.append(threading.Thread(target=s.load_preset, args=("double_index",)))
-            loader[0].start()
+            t = threading.Thread(target=s.load_preset, args=("double_index",))
+            t.start()
+            loader.append(t)  # (started first: the test joins it once it is listed)
             # its fields offered meanwhile (the old code: at once; now that waits for
             # this publish to end, and then drops what was published)
             wait_for(lambda: e._fields != old_fields, 2)
@@ -3378,6 +3379,37 @@ def test_explore_says_when_the_design_is_outside_its_ranges(tab):
     e.run_btn.value = True  # while it draws runs nothing)
     done = lambda: "on the Pareto front" in e.progress.content and "⚠" not in e.progress.content  # noqa: E731
     assert wait_for(done, 120.0), e.progress.content
+
+
+def test_a_reload_takes_only_the_steps_of_the_tab_that_wrote_the_design(app, monkeypatch):
+    """A review: tabs of one browser share the working design and the Undo steps, and a
+    tab that rewrote the design without a step of its own (the preset on screen clicked
+    again) left the other tab's steps beside it: after a reload, Undo led into that
+    tab's designs. Each tab's writes say which tab made them (storage.PAIR_KEY); a
+    reload takes steps only from the tab that wrote the design, and carries them on
+    as its own."""
+    from app import history
+    from app.layout import HISTORY_BUTTONS
+
+    monkeypatch.setattr(history, "SETTLE_S", 0.0)  # each change a step
+    shared: dict[str, str] = {}
+    with restored_tab(app, monkeypatch, shared, shared) as a:
+        with restored_tab(app, monkeypatch, shared, shared) as b:
+            a.ui.controls["cam.base_radius_mm"].value = 90.0
+            a.ui.controls["cam.base_radius_mm"].value = 95.0
+            b.load_preset("paper_example")  # on screen already: no step of B's
+    with restored_tab(app, monkeypatch, shared, shared) as c:
+        assert c.design == load_preset("paper_example")  # B's design, the last written
+        assert c.history.past == [] and c.history.future == []  # A's steps are A's
+    with restored_tab(app, monkeypatch, shared, shared) as d:
+        d.ui.controls["cam.base_radius_mm"].value = 85.0  # D's own step
+    for _ in range(2):  # the steps come back, and a reloaded tab keeps them as its own
+        with restored_tab(app, monkeypatch, shared, shared) as e:
+            assert e.design.cam.base_radius_mm == 85.0
+            e.travel(HISTORY_BUTTONS[0])
+            assert e.design.cam.base_radius_mm == 80.0
+            e.travel(HISTORY_BUTTONS[1])
+            assert e.design.cam.base_radius_mm == 85.0
 
 
 def test_undo_and_redo_survive_a_reload(app, monkeypatch):
