@@ -3072,6 +3072,13 @@ def test_a_table_edit_waiting_on_the_restore_still_wins(tab):
     assert s.design.motion.segments[0].lift_mm == 12.0
 
 
+def _kept_r_b_70() -> str:
+    """What a browser kept from a last visit: the paper's example at r_b 70 mm."""
+    data = load_preset("paper_example").model_dump()
+    data["cam"]["base_radius_mm"] = 70.0
+    return design_to_json(Design.model_validate(data))
+
+
 def _slow_browser(app, monkeypatch, stored: dict, writes: dict):
     """A new tab whose browser answers its storage reads only when the returned event
     is set (a busy browser can take up to 20 s): (session, event, fake tab)."""
@@ -3098,9 +3105,7 @@ def test_an_edit_made_while_the_browser_reads_is_not_wiped(app, monkeypatch, edi
     kept is saved beside it (the next valid change replaces the working design)."""
     from app import storage
 
-    data = load_preset("paper_example").model_dump()
-    data["cam"]["base_radius_mm"] = 70.0
-    kept = design_to_json(Design.model_validate(data))
+    kept = _kept_r_b_70()
     writes: dict[str, str] = {}
     s, answer, t = _slow_browser(app, monkeypatch, {storage.WORKING_KEY: kept}, writes)
     try:
@@ -3137,9 +3142,7 @@ def test_a_click_that_opens_nothing_does_not_cancel_the_restore(app, monkeypatch
     design opened, counts."""
     from app import storage
 
-    data = load_preset("paper_example").model_dump()
-    data["cam"]["base_radius_mm"] = 70.0
-    kept = design_to_json(Design.model_validate(data))
+    kept = _kept_r_b_70()
     writes: dict[str, str] = {}
     s, answer, t = _slow_browser(app, monkeypatch, {storage.WORKING_KEY: kept}, writes)
     try:
@@ -3161,9 +3164,7 @@ def test_an_invalid_edit_before_the_restore_says_the_kept_program_goes(app, monk
     kept as "last visit"; a program that makes no design cannot be)."""
     from app import storage
 
-    data = load_preset("paper_example").model_dump()
-    data["cam"]["base_radius_mm"] = 70.0
-    kept = design_to_json(Design.model_validate(data))
+    kept = _kept_r_b_70()
     program = [
         g.model_dump(mode="json", exclude_none=True)
         for g in load_preset("paper_example").motion.segments
@@ -3206,9 +3207,7 @@ def test_a_slider_edit_waiting_on_the_restore_wins(app, monkeypatch):
     from app import storage
     from app.session import Session
 
-    data = load_preset("paper_example").model_dump()
-    data["cam"]["base_radius_mm"] = 70.0
-    kept = design_to_json(Design.model_validate(data))
+    kept = _kept_r_b_70()
     user: list[threading.Thread] = []
     real = Session._show_saved
 
