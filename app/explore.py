@@ -292,8 +292,10 @@ class ExplorePanel:
         with self._lock:  # (with _show's check and publish: one or the other first)
             self._fields = fields
             running = self._thread is not None and self._thread.is_alive()
-            shown = self._ran is not None and fields_of(Design.model_validate(self._ran.base))
-        if not running or shown != fields:  # a sweep of another program's fields: gone
+            stale = (
+                self._ran is not None and fields_of(Design.model_validate(self._ran.base)) != fields
+            )
+        if not running or stale:  # a sweep of another program's fields: gone
             self._clear()  # (a user's review loaded another preset and still had its
         if not running:  # map, loadable; a review found one published meanwhile)
             self.progress.content = ""

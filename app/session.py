@@ -147,7 +147,7 @@ class Session:
         self.camera_view = "Front"  # a preset of scene.CAMERA_VIEWS
         self.panel_px = NARROW_PANEL_PX  # the control panel's width (set_wide_panel)
         self._framed_size = _size(self.analysis)  # the cam's size the camera last framed
-        self._diagram_of = ""  # _diagram_key of the stations diagram on screen
+        self._diagram_of: Design | None = None  # the design of the stations diagram shown
         self._held = 0.0  # seconds the animation still stays at a station
         self._resumed = False  # the stop at a station has just ended
         self._seen: tuple | None = None  # the last camera message: (pose, width, height)
@@ -550,7 +550,7 @@ class Session:
             self._enable_for_kind(design)
             ui.segments.show(design.motion.segments)
             self._show_station_buttons(a)
-            if ui.stations_img is not None and _diagram_key(design) != self._diagram_of:
+            if ui.stations_img is not None and design != self._diagram_of:
                 ui.stations_img.remove()  # of another design: the button draws it again
                 ui.stations_img = None
                 ui.stations_fig_md.content = ""
@@ -794,7 +794,7 @@ class Session:
         typed = storage.parse_program(typed_text)
         view = storage.parse_view(stored[storage.VIEW_KEY])
         # Undo's and Redo's steps, if the tab that wrote the working design wrote them
-        steps = storage.history_of(stored[storage.HISTORY_KEY], stored[storage.PAIR_KEY])
+        steps = storage.parse_history(stored[storage.HISTORY_KEY], stored[storage.PAIR_KEY])
         aside = stored[storage.UNREADABLE_KEY]  # set aside by an earlier visit?
         if self.closed.is_set():
             return
@@ -1098,11 +1098,11 @@ class Session:
             self._say(f"Saved **{esc(name)}** in this browser{replaced_note}.")
 
     def open_saved(self, name: str) -> None:
-        mine = self._take_ticket("replace")
         text = self.saved.get(name) if isinstance(name, str) else None
-        design = storage.parse_working(text)
-        if design is None and text is None:
+        if text is None:  # (no turn taken: a click on nothing replaces no file opening)
             return self._say("✖ Choose a saved design first.")
+        mine = self._take_ticket("replace")
+        design = storage.parse_working(text)
         if design is None:  # kept, but not a design this version opens: say why
             why = storage.working_error(text) or "not a design"
             return self._say(f"✖ Could not open **{esc(name)}**: {esc(_short(why))}.")
@@ -1289,7 +1289,7 @@ class Session:
             return  # one at a time (a review's 60 clicks drew 60 diagrams at once)
         try:
             with self.lock:
-                a, key = self.analysis, _diagram_key(self.design)
+                a, drawn = self.analysis, self.design
             # a user saw nothing happen for 18 s (the picture came in below the fold)
             say.content = "… Drawing the stations diagram: it appears below this line."
             try:
@@ -1299,10 +1299,10 @@ class Session:
                 say.content = "✖ The diagram could not be drawn (in the server's log)."
                 return
             with self.lock:
-                if _diagram_key(self.design) != key:  # the design changed meanwhile
+                if self.design != drawn:  # the design changed meanwhile
                     say.content = "The design changed while drawing: click again."
                     return
-                self._diagram_of = key
+                self._diagram_of = drawn
                 say.content = (
                     f"The stations of *{esc(self.design.name)}* are below "
                     "(the image's ⤢ shows it full size, 1200 px wide: to project)."
@@ -1464,12 +1464,6 @@ def _nothing_to(label: str, counts: str) -> str:
     else:
         why = "Nothing to redo: Redo steps forward again after an Undo."
     return f"{why} {counts}." if counts else why
-
-
-def _diagram_key(design: Design) -> str:
-    """Everything the stations diagram shows depends on: the whole design (its
-    geometry, and the loads and stresses its captions print)."""
-    return design.model_dump_json()
 
 
 def _free_name(saved: dict[str, str], wanted: str, design: Design) -> str:

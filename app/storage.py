@@ -258,27 +258,13 @@ def history_text(past: list[Design], future: list[Design], tab: str = "") -> str
     return json.dumps({"past": texts(past), "future": texts(future), "tab": tab})
 
 
-def history_of(text: str | None, pair: str | None) -> tuple[list[Design], list[Design]]:
-    """parse_history of ``text``, or no steps if they are another tab's than the one
-    that wrote the working design (``pair``: PAIR_KEY's value); steps or a design kept
-    without a tab (an earlier version's) are taken as they are."""
-    tab = None
-    if text and len(text) <= MAX_HISTORY_CHARS:
-        try:
-            raw = json.loads(text)
-        except (ValueError, RecursionError):
-            raw = None
-        tab = raw.get("tab") if isinstance(raw, dict) else None
-    if isinstance(tab, str) and tab and isinstance(pair, str) and pair and tab != pair:
-        return [], []
-    return parse_history(text)
-
-
-def parse_history(text: str | None) -> tuple[list[Design], list[Design]]:
+def parse_history(text: str | None, pair: str | None = None) -> tuple[list[Design], list[Design]]:
     """(past, future) from history_text's text, as untrusted as any stored design:
     at most KEPT each way, each parsed like an uploaded file; a step that is not a
     valid design is left out (the others still count); ([], []) if the text is not
-    history_text's."""
+    history_text's, or if its steps are another tab's than the one that wrote the
+    working design (``pair``: PAIR_KEY's value; steps or a design kept without a tab,
+    an earlier version's, are taken as they are)."""
     from .history import KEPT
 
     if not text or len(text) > MAX_HISTORY_CHARS:
@@ -288,6 +274,9 @@ def parse_history(text: str | None) -> tuple[list[Design], list[Design]]:
     except (ValueError, RecursionError):
         return [], []
     if not isinstance(raw, dict):
+        return [], []
+    tab = raw.get("tab")
+    if isinstance(tab, str) and tab and isinstance(pair, str) and pair and tab != pair:
         return [], []
 
     def designs(key: str) -> list[Design]:
