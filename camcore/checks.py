@@ -364,6 +364,14 @@ def _contact_stress(a) -> list[Violation]:
             f"more than {_times(top * sf / allow)} the allowable {allow / 1e6:g} MPa); "
             "fix the curvature first"
         )
+    elif _jams(a) and top >= 10 * allow:  # (the same review: "2519398.3 MPa" at a jam)
+        message = (
+            f"Hertz stress without bound at {where_text(ranges)}: the guide jams "
+            f"(self-locking, Eqs. 33-41), and toward the jam F_N grows without bound "
+            f"(at its largest found, with the safety factor {sf:g}: more than "
+            f"{_times(top * sf / allow)} the allowable {allow / 1e6:g} MPa); "
+            "fix the guide first"
+        )
     else:
         message = (
             f"Hertz stress {top / 1e6:.1f} MPa x safety factor {sf:g} = "
@@ -380,6 +388,13 @@ def _times(ratio: float) -> str:
         return "a million times"  # OverflowError had stopped report and sweep)
     p = int(math.floor(math.log10(ratio))) if ratio >= 10 else 1
     return f"{words[p - 1] if p <= len(words) else 'a million'} times"
+
+
+def _jams(a) -> bool:
+    """Whether the guide jams anywhere a face touches, on the grid or between its
+    samples (the guide_jam check of _forces)."""
+    jammed = a.in_contact.any(0) & forces.jammed(a.guide)
+    return bool(jammed.any() or a.worst.get("guide_jam"))
 
 
 def _near_cusp(a, bad: np.ndarray, worst, top: float, allow: float) -> float | None:

@@ -214,21 +214,24 @@ def jams(loc, on: np.ndarray) -> np.ndarray:
     return on.any(axis=0) & jammed(loc.guide)
 
 
-def jam_worst(angles: np.ndarray) -> Worst | None:
-    """The angles [rad] between the samples where the search found the guide jammed,
-    as a Worst of value 1 whose brackets are those angles (None for none). Toward a
-    jam the forces grow without bound, so the searches of F_N, F1 and F2 zoom in on its
-    edge and meet the jam itself (an adversarial review: a jam 0.016 deg wide between
-    two samples had passed at 0.1 deg, its 9.6e10 N printed as a figure)."""
-    if not angles.size:
+def jam_worst(angles: np.ndarray, jammed_at: np.ndarray) -> Worst | None:
+    """The guide's jams [rad] among the angles the search and the grid evaluated
+    (``jammed_at`` says where the guide jams, extremes.jams), as a Worst of value 1
+    whose brackets are the jams; None for none. Toward a jam the forces grow without
+    bound, so the searches of F_N, F1 and F2 zoom in on its edge and meet the jam
+    itself (an adversarial review: a jam 0.016 deg wide between two samples had passed
+    at 0.1 deg, its 9.6e10 N printed as a figure). Jammed angles with no free one
+    evaluated between them are one jam: by a fixed gap instead, the search's points
+    at a jam's edge, 0.0125 deg apart on a 0.2 deg grid, had each stood as a jam of its
+    own beside the grid's run (a physics review: "43.309-43.325, 43.337, 43.35,
+    43.363 deg (+8 more)" for one jam of 43.3-58.1 deg)."""
+    at, first = np.unique(np.mod(angles, 2 * np.pi), return_index=True)
+    bad = jammed_at[first]
+    if not bad.any():
         return None
-    at = np.unique(np.mod(angles, 2 * np.pi))
-    cut = np.flatnonzero(np.diff(at) > JAM_GAP) + 1  # (points of one jam: one bracket)
-    runs = [(float(r[0]), float(r[-1])) for r in np.split(at, cut)]
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], bad.astype(np.int8), [0]])))
+    runs = [(float(at[i]), float(at[j - 1])) for i, j in zip(edges[::2], edges[1::2], strict=True)]
     return Worst(1.0, runs[0][0], 0, tuple((1.0, lo, hi) for lo, hi in runs))
-
-
-JAM_GAP = np.radians(0.01)  # jammed angles the search met this close: one jam
 
 
 def worst_values(a) -> dict[str, Worst | None]:
@@ -251,7 +254,8 @@ def worst_values(a) -> dict[str, Worst | None]:
         sense = np.array([s for _, s in getters])[q]
 
         codes = np.array([g.code for g in a.segments], dtype=np.int8)
-        jammed: list[np.ndarray] = []  # angles the search met where the guide jams
+        # every angle evaluated, grid and search, and whether the guide jams there
+        seen, jammed = [th], [jams(a, a.on_curve)]
 
         def f(x):  # sense * quantity at x: POINTS angles per bracket, bracket-major
             per = x.size // q.size
@@ -267,13 +271,15 @@ def worst_values(a) -> dict[str, Worst | None]:
             col = (inv.reshape(-1)[:, None] * per + np.arange(per)).ravel()
             out = np.repeat(sense, per) * vals[np.repeat(q, per), fc, col]
             on = on_curve(loc, codes)
-            jammed.append(rows[first].ravel()[jams(loc, on)])
+            seen.append(rows[first].ravel())
+            jammed.append(jams(loc, on))
             return np.where(on[fc, col], out, -np.inf)
 
         best, at = zoom(f, lo, hi)
         better = np.nan_to_num(best, nan=-np.inf) > grid
         best, at = np.where(better, best, grid), np.where(better, at, th[k])
-    out: dict[str, Worst | None] = {"guide_jam": jam_worst(np.concatenate(jammed))}
+    jam = jam_worst(np.concatenate(seen), np.concatenate(jammed))
+    out: dict[str, Worst | None] = {"guide_jam": jam}
     for j, name in enumerate(QUANTITIES):
         m = np.flatnonzero(q == j)
         if m.size == 0:

@@ -542,3 +542,28 @@ def test_a_guide_that_jams_between_two_samples_is_found():
         rows = batch.summaries([d, other])
         assert [v["code"] for v in rows[0]["violations"]] == ["guide_jam"]
         assert "guide_jam" not in [v["code"] for v in rows[1]["violations"]]
+
+
+def test_one_jam_is_one_range_at_any_resolution_and_its_stress_has_no_bound():
+    """A physics review: the paper's guide with mu = 1 jams over one stretch of the
+    rise, but at 0.2 deg the search's points at its edge (0.0125 deg apart) each stood
+    as a jam of their own ("43.309-43.325, 43.337, 43.35, 43.363 deg (+8 more)"), and
+    the contact stress toward the jam was quoted as a finite "2519398.3 MPa" beside a
+    headline that calls it unbounded. Jammed angles with no free angle evaluated between
+    them are one jam; a stress many times the allowable at a jam has no bound."""
+    data = PAPER.model_dump(mode="json")
+    data["dynamics"]["guide_friction"] = 1.0
+    spans = []
+    for res in (0.1, 0.2, 0.5, 1.0):
+        data["limits"]["resolution_deg"] = res
+        a = analyze(Design.model_validate(data), verify=False)
+        by = {v.code: v for v in a.violations}
+        ((lo, hi),) = by["guide_jam"].ranges_deg
+        spans.append((lo, hi))
+        assert by["contact_stress"].message.startswith("Hertz stress without bound")
+        assert "the guide jams" in by["contact_stress"].message
+        assert "MPa x safety factor" not in by["contact_stress"].message
+    assert 10.0 < spans[0][1] - spans[0][0]  # a stretch of the rise, not a point
+    for lo, hi in spans[1:]:  # the same jam, to the search's precision
+        assert lo == pytest.approx(spans[0][0], abs=0.01)
+        assert hi == pytest.approx(spans[0][1], abs=0.01)
