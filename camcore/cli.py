@@ -377,7 +377,7 @@ def _pareto(args) -> int:
     if args.design is not None:
         return _front_design(args.table, f, args.design)
     if args.json:
-        print(json.dumps({"figures": names, **vars(f)}, indent=1))
+        print(json.dumps({"figures": names, **vars(f)}, indent=1, allow_nan=False))
         return EXIT_VALID if f.front else EXIT_BREAKS_LIMITS
     broken = f.rows - f.valid - f.refused
     print(
@@ -393,11 +393,7 @@ def _pareto(args) -> int:
             + (f" and {more} more" if more else "")
         )
     if f.lacking:
-        from .explore import PROFILE_FIGURES
-
-        reasons = [f"rows of the batched core have no {n}" for n in names if n in PROFILE_FIGURES]
-        reasons += ["a knife edge has no contact stress"] if "stress" in names else []
-        why = f" ({'; '.join(reasons)})" if reasons else ""
+        why = f" ({'; '.join(f.lacking_why)})" if f.lacking_why else ""
         # each figure a row lacks, with how many lack it (a review had read "without a
         # value for cam_size, stress" as both missing where only the stress was)
         which = ", ".join(f"{n} missing in {k}" for n, k in f.lacking_by.items())

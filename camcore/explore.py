@@ -240,6 +240,7 @@ class TableFront:
     repeats: int  # front rows that repeat a listed design (a field its follower ignores)
     lacking: int  # valid rows without a value for a figure (not compared)
     lacking_by: dict[str, int] = field(default_factory=dict)  # figure -> rows without it
+    lacking_why: list[str] = field(default_factory=list)  # why they lack it, as known
     # per follower kind, the valid row least in the first figure (best_per_kind):
     # {"row", "grid", "value"}
     least: dict[str, dict] = field(default_factory=dict)
@@ -254,10 +255,10 @@ def table_front(path, names: list[str]) -> TableFront:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    from .files import FileError
+    from .files import FileError, regular_file
 
     try:
-        have = set(pq.read_schema(path).names)
+        have = set(pq.read_schema(regular_file(path)).names)
     except (OSError, pa.ArrowException) as exc:
         raise FileError(f"{path}: not a readable Parquet table ({exc})") from None
     if not {"valid", "error"} <= have or not any(c.startswith("grid.") for c in have):
@@ -297,6 +298,8 @@ def _table_front(path, names: list[str], have: set[str]) -> TableFront:
     }
     values = np.column_stack([FIGURES[n].of_table(cols) for n in names])
     values[~valid] = np.nan
+    reasons = _lacking_why(t, values, valid, names, grid)
+    values[np.isinf(values)] = np.nan  # (a hand-made table's: -inf had been a "least")
     idx = np.flatnonzero(pareto_mask(values))
     idx = front_order(values, idx)  # by the first figure, then the next, then row
     # the follower kind tells which grid fields a row's design ignores (distinct)
@@ -339,7 +342,41 @@ def _table_front(path, names: list[str], have: set[str]) -> TableFront:
             if (valid & ~np.isfinite(values[:, j])).any()
         },
         least=least,
+        lacking_why=reasons,
     )
+
+
+def _lacking_why(
+    t, values: np.ndarray, valid: np.ndarray, names: list[str], grid: list[str]
+) -> list[str]:
+    """Why ``valid`` rows of a table lack a figure (NaN or +-inf in ``values``, per row
+    and figure), as far as the table tells: a fast
+    sweep leaves the profile's figures out, a knife edge has no contact stress, and an
+    infinite value is no figure (a review: rollers' -inf had been blamed on knife edges)."""
+    out = []
+    missing = np.isnan(values) & valid[:, None]
+    for j, n in enumerate(names):
+        if n in PROFILE_FIGURES and missing[:, j].any():
+            out.append(f"rows of the batched core have no {n}")
+    if "stress" in names:
+        kinds = _kinds(t, grid)
+        if (
+            kinds is not None
+            and (missing[:, names.index("stress")] & (kinds == "knife_edge")).any()
+        ):
+            out.append("a knife edge has no contact stress")
+    for j, n in enumerate(names):
+        if (k := int(np.isinf(values[:, j]).sum())) > 0:
+            out.append(f"{k} {'row holds' if k == 1 else 'rows hold'} an infinite {n}")
+    return out
+
+
+def _kinds(t, grid: list[str]) -> np.ndarray | None:
+    """The follower kind of each row of table ``t``, or None if it does not say."""
+    col = "grid.follower.kind" if "grid.follower.kind" in grid else "follower"
+    if col not in t.column_names:
+        return None
+    return np.array([str(k) for k in t.column(col).to_pylist()], dtype=object)
 
 
 def _least_per_kind(t, first: np.ndarray, grid: list[str]) -> dict[str, dict]:
@@ -347,9 +384,9 @@ def _least_per_kind(t, first: np.ndarray, grid: list[str]) -> dict[str, dict]:
     row is not valid), column-wise: per follower kind in the table's order, the row
     least in it (the first of equal ones)."""
     col = "grid.follower.kind" if "grid.follower.kind" in grid else "follower"
-    if col not in t.column_names:
+    kinds = _kinds(t, grid)
+    if kinds is None:
         return {}
-    kinds = np.array([str(k) for k in t.column(col).to_pylist()], dtype=object)
     out: dict[str, dict] = {}
     for kind in dict.fromkeys(kinds):
         v = np.where(kinds == kind, first, np.nan)

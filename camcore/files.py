@@ -76,6 +76,22 @@ def read_capped(path: str | Path, max_bytes: int) -> bytes:
     return data
 
 
+def regular_file(path: str | Path) -> Path:
+    """*path*, once it is known to be a regular file (links followed), for a reader that
+    opens it itself (pyarrow); FileError otherwise: a FIFO would block the reader
+    forever (a review: ``pareto`` on a FIFO hung), a device would never end."""
+    shown = printable(str(path), 300)
+    try:
+        mode = os.stat(path).st_mode
+    except OSError as exc:
+        raise FileError(f"cannot read {shown}: {exc.strerror}") from None
+    except ValueError:  # an embedded NUL
+        raise FileError(f"cannot read {shown}: a file name holds no NUL character") from None
+    if not stat.S_ISREG(mode):
+        raise FileError(f"cannot read {shown}: not a regular file")
+    return Path(path)
+
+
 def write_atomic(path: str | Path, data: bytes) -> None:
     """Write *data* to *path* all or nothing: a temporary file, flushed, then renamed.
 
@@ -119,7 +135,15 @@ def _target(path: Path) -> Path:
     """The file a write to *path* replaces: a link's target (the link stays a link, as
     a shell's ``>`` keeps it), which must be a regular file or none. A FIFO, a device
     or a socket is refused: a rename would have put a plain file in its place (a
-    review: ``--out`` on a FIFO replaced it)."""
+    review: ``--out`` on a FIFO replaced it). So is a path that leads through /dev or
+    /proc (``/dev/stdout``, ``/dev/fd/1``): it names a process's stream, and the rename
+    had replaced the file the shell sent it to (a review: ``--json /dev/stdout >>
+    all.log`` lost the log's lines)."""
+    if _through_streams(path):
+        raise FileError(
+            f"cannot write {path}: it lies under /dev or /proc (a device or a process's "
+            "stream), not a file: give the file's own name"
+        )
     if path.is_symlink():
         path = Path(os.path.realpath(path))
     try:
@@ -133,6 +157,26 @@ def _target(path: Path) -> Path:
     if not stat.S_ISREG(mode):
         raise FileError(f"cannot write {path}: not a regular file (a FIFO, device or socket)")
     return path
+
+
+def write_target(path: str | Path) -> Path:
+    """The file a write to *path* would replace (a link's target), or FileError if it
+    cannot be one: a directory, a FIFO, a device, a stream. For a command to check its
+    output before its work (write_atomic checks it again)."""
+    return _target(Path(path))
+
+
+def _through_streams(path: Path) -> bool:
+    """Whether *path*, or a link on the way to its file, lies under /dev or /proc."""
+    streams = {"dev", "proc"}
+    here = Path(os.path.abspath(path))
+    for _ in range(40):  # (the kernel's own limit on links followed)
+        if here.parts[1:2] and here.parts[1] in streams:
+            return True
+        if not here.is_symlink():
+            return False
+        here = Path(os.path.abspath(here.parent / os.readlink(here)))
+    return False
 
 
 def _keep(path: Path, tmp: str) -> str | None:
@@ -167,7 +211,7 @@ def _stage(path: Path, data: bytes) -> str:
     if path.is_dir():
         raise FileError(f"cannot write {path}: it is a directory")
     try:
-        fd, tmp = _new_file(directory / f".{path.name}")
+        fd, tmp = _new_file(directory / _stem(path.name))
     except OSError as exc:
         raise FileError(f"cannot write {path}: {exc.strerror}") from None
     try:
@@ -182,6 +226,15 @@ def _stage(path: Path, data: bytes) -> str:
             os.unlink(tmp)
         raise FileError(f"cannot write {path}: {exc.strerror}") from None
     return tmp
+
+
+def _stem(name: str) -> str:
+    """The temporary file's stem for a target called *name*: ``.name``, or a fixed
+    ``.camcore`` where that, with the random suffix and ``.old``, would pass the 255
+    bytes a file name may have (a review: a valid 250-character name was refused as
+    "File name too long")."""
+    stem = f".{name}"
+    return stem if len(os.fsencode(stem)) + len(".123456789abc.tmp.old") <= 255 else ".camcore"
 
 
 def _new_file(stem: Path) -> tuple[int, str]:

@@ -42,7 +42,14 @@ from pathlib import Path
 import numpy as np
 
 from . import code_fingerprint, package_version
-from .files import FileError, printable, read_capped, write_atomic
+from .files import (
+    FileError,
+    printable,
+    read_capped,
+    regular_file,
+    write_atomic,
+    write_target,
+)
 from .model import (
     PROGRAM_CLASH,
     Design,
@@ -651,6 +658,9 @@ def _parts_dir(out: Path, stamp: dict) -> Path:
         raise FileError(f"--out {out}: that is a directory; give a file name")
     if not out.parent.is_dir():
         raise FileError(f"--out {out}: no directory {out.parent}")
+    target = write_target(out)  # (a FIFO, a device, a stream: before any work)
+    if not target.parent.is_dir():  # (a link to a missing directory)
+        raise FileError(f"--out {out}: no directory {target.parent}")
     parts = out.with_name(out.name + ".parts")
     label = parts / "sweep.json"
     if parts.is_symlink() or (parts.exists() and not parts.is_dir()):
@@ -962,7 +972,7 @@ def design_of_row(path: str | Path, row: int) -> Design:
     import pyarrow.parquet as pq
 
     try:
-        meta = pq.read_schema(path).metadata or {}
+        meta = pq.read_schema(regular_file(path)).metadata or {}
         rows = pq.ParquetFile(path).metadata.num_rows
     except (OSError, pa.ArrowException) as exc:
         raise FileError(f"{path}: not a readable Parquet table ({exc})") from None

@@ -394,7 +394,7 @@ def test_a_write_keeps_a_link_and_refuses_a_fifo(tmp_path):
     os.mkfifo(fifo)
     with pytest.raises(FileError, match="not a regular file"):
         write_all_atomic([(tmp_path / "first.csv", b"x"), (fifo, b"y")])
-    with pytest.raises(FileError, match="not a regular file"):
+    with pytest.raises(FileError, match="under /dev or /proc"):
         write_atomic(_link_to_null(tmp_path), b"x")
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         "latest.csv",
@@ -404,6 +404,36 @@ def test_a_write_keeps_a_link_and_refuses_a_fifo(tmp_path):
         "pipe",
         "real.csv",
     ]
+
+
+def test_a_write_refuses_a_stream_and_takes_the_longest_name(tmp_path):
+    """A CLI review: ``export --json /dev/stdout >> all.log`` lost the log's lines (the
+    link led to the file the shell appends to, and the rename replaced it), and a valid
+    250-character file name was refused (the temporary name passed 255 bytes)."""
+    log = tmp_path / "all.log"
+    log.write_bytes(b"kept\n")
+    with log.open("ab") as out:
+        run = subprocess.run(
+            [sys.executable, "-m", "camcore", "export", "--preset", "paper_example"]
+            + ["--json", "/dev/stdout"],
+            stdout=out,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+    assert run.returncode == 2 and "under /dev or /proc" in run.stderr
+    assert log.read_bytes() == b"kept\n"
+    from camcore.files import FileError, write_atomic
+
+    link = tmp_path / "out.json"
+    link.symlink_to("/proc/self/fd/1")
+    with pytest.raises(FileError, match="under /dev or /proc"):
+        write_atomic(link, b"x")
+    longest = tmp_path / ("a" * 251 + ".stl")  # 255 bytes
+    write_atomic(longest, b"solid")
+    assert longest.read_bytes() == b"solid"
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        ["all.log", longest.name, "out.json"]
+    )
 
 
 def _link_to_null(folder):
