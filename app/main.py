@@ -21,7 +21,7 @@ import viser
 
 from camcore import batch
 
-from . import uploads, viser_speedups
+from . import inbound, uploads, viser_speedups
 from .analyst import Analyst
 from .session import Session
 
@@ -85,6 +85,7 @@ class App:
         batch.KEEP_FREED = False  # (a sweep run here, without a worker, must not undo it)
         viser_speedups.install()
         uploads.install(uploads.MAX_UPLOAD_BYTES, self._upload_refused)  # before the server
+        inbound.install()  # (and the messages' and values' sizes)
         self.server = viser.ViserServer(
             host=host, port=port, label="Disk-cam designer", verbose=verbose
         )

@@ -191,6 +191,43 @@ def test_bad_websocket_messages(server):
     assert server.alive()
 
 
+def test_oversized_values_and_messages_are_refused(server):
+    """A security review: viser took messages of up to 50 MB and kept any value sent for
+    a widget (twenty 40 MB strings and two vectors of 5 million numbers took the server
+    from 163 MB to 1.4 GB). A frame over app.inbound.MAX_MESSAGE_BYTES closes the
+    sender's connection (1009); a string longer than a widget's, or a vector longer
+    than its own, is dropped before viser keeps it; other tabs never notice."""
+    from app.inbound import MAX_MESSAGE_BYTES, MAX_VALUE_CHARS
+
+    async def go():
+        good = await open_tab(server.url, "bystander")
+        gtab = Tab(good, own_values(2))
+        c = await open_tab(server.url, "hostile")
+        texts = [e for e in c.gui.values() if e.type in ("TextInput", "Dropdown")]
+        vectors = [e for e in c.gui.values() if e.type == "Vector2"]
+        assert texts and vectors
+        rss = server.rss_mb()
+        for i, el in enumerate(texts * 2):
+            await c.send(vm.GuiUpdateMessage(el.uuid, {"value": chr(65 + i % 26) * (4 << 20)}))
+        for el in vectors:
+            await c.send(vm.GuiUpdateMessage(el.uuid, {"value": [1.0] * 500_000}))
+        tab = Tab(c, own_values(3))
+        await c.set_value(tab.lift, tab.own[1])  # the hostile tab itself still works
+        await c.wait_for(lambda: lift_shown(tab.plot) == tab.own[1], 30.0, what="lift")
+        assert server.rss_mb() - rss < 60, (rss, server.rss_mb())  # (4 MB each: none kept)
+        await c.send_raw(b"\x00" * (MAX_MESSAGE_BYTES + 1))
+        with pytest.raises(ConnectionError, match="1009"):
+            await c.wait_for(lambda: False, 10.0, what="the server to drop us")
+        c.abort()  # (a close handshake on the dropped socket can fail in asyncio)
+        await good.set_value(gtab.lift, gtab.own[1])
+        await good.wait_for(lambda: lift_shown(gtab.plot) == gtab.own[1], 20.0, what="lift")
+        await good.close()
+
+    assert MAX_VALUE_CHARS < 4 << 20
+    run(go())
+    assert server.alive()
+
+
 def test_vanishing_clients(server):
     """Tabs that drop their TCP connection mid-update or mid-build: the server frees
     their sessions (no leaked threads) and keeps serving."""

@@ -282,8 +282,9 @@ class ViserClient:
 
     def abort(self) -> None:
         """Vanish: drop the TCP connection without a websocket close handshake."""
-        if self.ws is not None and self.ws.transport is not None:
-            self.ws.transport.abort()
+        transport = self.ws.transport if self.ws is not None else None
+        if transport is not None and not transport.is_closing():  # (closed: nothing to drop)
+            transport.abort()
 
     async def _stop_reader(self) -> None:
         if self._reader is not None:
