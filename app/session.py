@@ -171,6 +171,8 @@ class Session:
         self._busy = threading.Lock()  # a download being made (one at a time)
         self._drawing = threading.Lock()  # the stations diagram being drawn (one at a time)
         self._unread: dict = {}  # saved-list entries this version could not read (kept)
+        # held by the save or delete that re-reads the browser's list (outside the lock)
+        self._storage_turn = threading.Lock()
         self._aside: str | None = None  # a working design set aside as unreadable
         # the program table's segments while they do not make a valid design: another
         # control's edit keeps them (it had dropped them for the last valid program)
@@ -787,8 +789,7 @@ class Session:
         raw = stored[storage.WORKING_KEY]
         working = storage.parse_working(raw)
         saved_text = stored[storage.SAVED_KEY]
-        saved = storage.parse_saved(saved_text)
-        self._unread = storage.unread_entries(saved_text, saved)
+        saved, self._unread = storage.read_saved(saved_text)
         setup = storage.parse_setup(stored[storage.EXPLORE_KEY])
         typed_text = stored[storage.PROGRAM_KEY]
         typed = storage.parse_program(typed_text)
@@ -1049,53 +1050,73 @@ class Session:
         """Show the browser's saved list as it is now, before a save or a delete writes
         it whole: another tab of this browser may have saved or deleted meanwhile (a
         review: one tab's save erased what the other had saved). False, and nothing to
-        write, if the browser did not answer. Lock held."""
+        write, if the browser did not answer. Called with ``_storage_turn`` held and
+        the tab's lock not: the browser may take READ_TIMEOUT_S to answer, and a tab
+        that never does had held its lock that long, so its queued edits took every
+        thread of viser's pool and froze every tab (a security review: 19 s)."""
         answered, text = self.store.fresh(storage.SAVED_KEY)
-        if not answered:
-            self._say("✖ Not done: this browser's storage did not answer. Try again.")
-            return False
-        saved = storage.parse_saved(text)
-        self._unread = storage.unread_entries(text, saved)
-        self._show_saved(saved)
-        return True
+        saved, unread = storage.read_saved(text) if answered else ({}, {})
+        with self.lock:
+            if not answered:
+                self._say("✖ Not done: this browser's storage did not answer. Try again.")
+                return False
+            self._unread = unread
+            self._show_saved(saved)
+            return True
+
+    def _saving(self, what: str) -> bool:
+        """Take this tab's turn to re-read and write its saved list, or say that a save
+        or delete is under way (one waits for the browser at a time)."""
+        if self._storage_turn.acquire(blocking=False):
+            return True
+        with self.lock:
+            self._say(f"… Not {what} yet: a save or delete of this tab is waiting for the browser.")
+        return False
 
     def save_named(self, name: str) -> None:
-        with self.lock:
-            if not self._persist and not self.store.silent:  # (the first read waits 20 s)
-                return self._say(
-                    "… Not saved yet: this tab is still reading this browser's storage "
-                    "(its saved designs must not be written over unseen). Try again in a "
-                    "moment."
-                )
-            if not self._persist:  # the browser's list was never read: do not replace it
-                return self._say(
-                    "✖ Not saved: this browser's storage did not answer when the tab "
-                    "opened. Reload the page, or download the design."
-                )
-            if not self._reread_saved():
-                return
-            self._file_error_seen()
-            name = str(name).strip()
-            # another design under that name (one this version cannot open counts too):
-            # the first click says so, a second one on the same design replaces it
-            replaced = name in self.saved and (
-                storage.parse_working(self.saved[name]) != self.design
+        if not self._saving("saved"):
+            return
+        try:
+            with self.lock:
+                if not self._persist and not self.store.silent:  # (the first read waits 20 s)
+                    return self._say(
+                        "… Not saved yet: this tab is still reading this browser's storage "
+                        "(its saved designs must not be written over unseen). Try again in a "
+                        "moment."
+                    )
+                if not self._persist:  # the browser's list was never read: do not replace it
+                    return self._say(
+                        "✖ Not saved: this browser's storage did not answer when the tab "
+                        "opened. Reload the page, or download the design."
+                    )
+            if self._reread_saved():
+                with self.lock:
+                    self._save_named(name)
+        finally:
+            self._storage_turn.release()
+
+    def _save_named(self, name: str) -> None:
+        """save_named once the browser's list is read. Lock held."""
+        self._file_error_seen()
+        name = str(name).strip()
+        # another design under that name (one this version cannot open counts too):
+        # the first click says so, a second one on the same design replaces it
+        replaced = name in self.saved and (storage.parse_working(self.saved[name]) != self.design)
+        if replaced and self._replace_armed != (name, self.design):
+            self._replace_armed = (name, self.design)  # (a review: a variant went
+            return self._say(  # without a word)
+                f"⚠ This browser already keeps another design as **{esc(name)}**: "
+                "click *Save in this browser* again to replace it, or change the name."
             )
-            if replaced and self._replace_armed != (name, self.design):
-                self._replace_armed = (name, self.design)  # (a review: a variant went
-                return self._say(  # without a word)
-                    f"⚠ This browser already keeps another design as **{esc(name)}**: "
-                    "click *Save in this browser* again to replace it, or change the name."
-                )
-            self._replace_armed = None
-            try:
-                saved = storage.with_saved(self.saved, name, self.design)
-            except ValueError as exc:
-                return self._say(f"✖ Not saved: {esc(exc)}.")
-            replaced_note = " (it replaces the one kept before)" if replaced else ""
-            self._show_saved(saved, write=True)
-            self.ui.saved_dd.value = name
-            self._say(f"Saved **{esc(name)}** in this browser{replaced_note}.")
+        self._replace_armed = None
+        try:
+            saved = storage.with_saved(self.saved, name, self.design)
+        except ValueError as exc:
+            return self._say(f"✖ Not saved: {esc(exc)}.")
+        replaced_note = " (it replaces the one kept before)" if replaced else ""
+        self._show_saved(saved, write=True)
+        self.ui.saved_dd.value = name
+        self._say(f"Saved **{esc(name)}** in this browser{replaced_note}.")
 
     def open_saved(self, name: str) -> None:
         text = self.saved.get(name) if isinstance(name, str) else None
@@ -1109,15 +1130,21 @@ class Session:
         self._replace(design, name, f"Opened **{esc(name)}** from this browser.", mine)
 
     def delete_saved(self, name: str) -> None:
-        with self.lock:
-            if not isinstance(name, str) or name not in self.saved or not self._persist:
-                return self._say("✖ Choose a saved design first.")
+        if not self._saving("deleted"):
+            return
+        try:
+            with self.lock:
+                if not isinstance(name, str) or name not in self.saved or not self._persist:
+                    return self._say("✖ Choose a saved design first.")
             if not self._reread_saved():  # (then nothing is written over it)
                 return
-            if name not in self.saved:  # (another tab deleted it meanwhile)
-                return self._say("✖ Choose a saved design first.")
-            self._show_saved({k: v for k, v in self.saved.items() if k != name}, write=True)
-            self._say(f"Deleted **{esc(name)}** from this browser.")
+            with self.lock:
+                if name not in self.saved:  # (another tab deleted it meanwhile)
+                    return self._say("✖ Choose a saved design first.")
+                self._show_saved({k: v for k, v in self.saved.items() if k != name}, write=True)
+                self._say(f"Deleted **{esc(name)}** from this browser.")
+        finally:
+            self._storage_turn.release()
 
     # --- angle, stations, animation ------------------------------------------------
     def _index(self) -> int:

@@ -2440,6 +2440,49 @@ def test_two_tabs_of_one_browser_keep_each_others_saves(app, monkeypatch):
             assert not a.store.silent  # (the tab keeps what it does as before)
 
 
+def test_a_save_waits_for_the_browser_without_holding_the_tab(app, monkeypatch):
+    """A security review: a save re-read the browser's list with the tab's lock held,
+    so a client that never answered held it 20 s, and its queued edits took every
+    thread of viser's shared pool: every tab froze (19 s). The re-read waits outside
+    the lock: the tab's edits go on meanwhile, a second save or delete is told one
+    waits already, and the save, once answered, keeps the design then on screen."""
+    import json
+    import threading
+
+    from app import storage
+
+    shared: dict[str, str] = {}
+    hold, asked, answer = threading.Event(), threading.Event(), threading.Event()
+
+    def read(self, key):
+        if key == storage.SAVED_KEY and hold.is_set():
+            asked.set()
+            answer.wait(30)
+        return shared.get(key)
+
+    with restored_tab(app, monkeypatch, shared, shared, read=read) as s:
+        hold.set()
+        timer = threading.Timer(15, answer.set)  # (the old code: no deadlock, a failure)
+        timer.start()
+        save = threading.Thread(target=s.save_named, args=("kept",))
+        save.start()
+        try:
+            assert asked.wait(10)
+            s.ui.controls["cam.base_radius_mm"].value = 90.0
+            assert not answer.is_set()  # the edit did not wait for the browser
+            assert s.design.cam.base_radius_mm == 90.0
+            s.delete_saved("kept")  # (refused at once: one waits for the browser)
+            s.save_named("again")
+            assert "waiting for the browser" in s.ui.files_md.content
+        finally:
+            answer.set()
+            save.join(10)
+            timer.cancel()
+        kept = json.loads(shared[storage.SAVED_KEY])
+        assert set(kept) == {"kept"}
+        assert storage.parse_working(kept["kept"]).cam.base_radius_mm == 90.0
+
+
 def test_saving_keeps_the_entries_this_version_cannot_read(app, monkeypatch):
     """A saved list with an entry this version leaves out (a later version's, a name
     too long) keeps it when a design is saved (it had been dropped)."""
