@@ -180,6 +180,7 @@ class Session:
         # the browser's copy of it (_keep_typed): _UNREAD until the restore has read it
         self._kept_program: str | None = _UNREAD
         self._ticket_lock, self._tickets = threading.Lock(), dict.fromkeys(TICKETS, 0)
+        self._waiting: set[str] = set()  # the kinds of action with a thread waiting its turn
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
         with self.lock:
@@ -202,7 +203,7 @@ class Session:
         ui.quick_stl_btn.on_click(lambda _: self.download("stl", quick=True))
         ui.play_btn.on_click(lambda _: self.toggle_play())
         ui.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
-        ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
+        ui.angle_slider.on_update(lambda _: self._on_angle())
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
         ui.step_btns.on_click(lambda e: self.step(e.target.value))
         ui.history_btns.on_click(lambda e: self.travel(e.target.value))
@@ -246,10 +247,12 @@ class Session:
         """
         if self._syncing and self._syncer == threading.get_ident():
             return  # our own write into a control (no ticket: a waiting edit stays newest)
-        mine = self._take_ticket("controls")
+        if not self._queue("controls"):
+            return  # (the one waiting reads this change too)
         with self.lock:
-            if self._syncing or self.closed.is_set() or self._superseded("controls", mine):
-                return  # (a newer change came while this one waited its turn)
+            self._turn("controls")
+            if self._syncing or self.closed.is_set():
+                return
             self._widen_sliders()
             values = self._greyed_back(self._values())
             # an unfinished program in the table stays (with this edit) until it is valid
@@ -343,6 +346,26 @@ class Session:
             self._tickets[kind] += 1
             return self._tickets[kind]
 
+    def _queue(self, kind: str) -> bool:
+        """Take a ticket of ``kind`` (TICKETS, or "angle", "camera": those count no
+        edit), and whether this thread is to wait for the lock: False if one of this
+        tab's threads already waits its turn for the same kind of action, which reads the
+        widgets' values as they are once it holds the lock, this change with them. So a
+        burst of events parks one thread of viser's pool, which every tab shares, not one
+        per event (a security review: tabs sending 20 updates a second of a costly design
+        took all 32, and every other tab waited 17 s). ``_turn`` once the lock is held."""
+        with self._ticket_lock:
+            self._tickets[kind] = self._tickets.get(kind, 0) + 1
+            if kind in self._waiting:
+                return False
+            self._waiting.add(kind)
+            return True
+
+    def _turn(self, kind: str) -> None:
+        """The lock is held: a later action of ``kind`` waits for a turn of its own."""
+        with self._ticket_lock:
+            self._waiting.discard(kind)
+
     def _edits(self) -> int:
         """How many edits of the controls or the program table the user has begun in
         this tab (their tickets, taken before the lock is waited for), valid or not. A
@@ -405,9 +428,17 @@ class Session:
         changes had cost 37 analyses, and another tab its connection)."""
         if self._syncing and self._syncer == threading.get_ident():
             return
-        mine = self._take_ticket("segments")
+        if segs is None:  # (the table as it stands at its turn: one waiting reads all)
+            if not self._queue("segments"):
+                return
+        else:
+            mine = self._take_ticket("segments")
         with self.lock:
-            if self._syncing or self.closed.is_set() or self._superseded("segments", mine):
+            if segs is None:
+                self._turn("segments")
+            elif self._superseded("segments", mine):
+                return  # (a newer change came while this one waited its turn)
+            if self._syncing or self.closed.is_set():
                 return
             self._segments(self.ui.segments.current() if segs is None else segs)
 
@@ -1176,13 +1207,19 @@ class Session:
         if compare:
             self.ui.compare_view.marker(math.degrees(self.analysis.theta[k]))
 
-    def _on_angle(self, value: float) -> None:
-        try:
-            if not math.isfinite(float(value)):  # a client's NaN had stopped Play for good
-                return
-        except (TypeError, ValueError):
+    def _on_angle(self) -> None:
+        """The user moved the angle slider: show the mechanism at the slider's angle as
+        it is when this action's turn comes (_queue)."""
+        if not self._queue("angle"):
             return
         with self.lock:
+            self._turn("angle")
+            try:
+                value = float(self.ui.angle_slider.value)
+            except (TypeError, ValueError):
+                return
+            if not math.isfinite(value):  # a client's NaN had stopped Play for good
+                return
             if not self._syncing:
                 self._held = 0.0  # the user's own angle: no pause left to wait out
                 self._goto(float(value), slider=False)
@@ -1365,12 +1402,15 @@ class Session:
         view's size is a resize (an orbit moves the pose, and may carry a size that
         viser scaled down for the frame rate): the wide panel takes its share of the
         new width, and a preset view the user has not moved is framed again."""
-        try:
-            w, h = cam.image_width, cam.image_height
-            pose = (*map(float, cam.position), *map(float, cam.look_at))
-        except AssertionError:  # (no message yet)
+        if not self._queue("camera"):
             return
         with self.lock:
+            self._turn("camera")
+            try:  # (the camera as it is now: later messages waited for this turn)
+                w, h = cam.image_width, cam.image_height
+                pose = (*map(float, cam.position), *map(float, cam.look_at))
+            except AssertionError:  # (no message yet)
+                return
             last, self._seen = self._seen, (pose, w, h)
             if last is None or (w, h) == last[1:] or not _near(pose, last[0]):
                 return

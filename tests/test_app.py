@@ -2350,7 +2350,7 @@ def test_a_clients_nan_camera_or_angle_stops_nothing(tab):
     state = s.client.camera._state
     state.position, state.look_at = np.full(3, np.nan), np.full(3, np.nan)
     theta = s.theta_deg
-    s._on_angle(float("nan"))
+    s.ui.angle_slider.value = float("nan")  # (as a client's update sets it)
     assert s.theta_deg == theta
     s.reset_camera()  # no ValueError
     s._set_playing(True)
@@ -2438,6 +2438,35 @@ def test_two_tabs_of_one_browser_keep_each_others_saves(app, monkeypatch):
             assert shared[storage.SAVED_KEY] == before
             assert "did not answer" in a.ui.files_md.content
             assert not a.store.silent  # (the tab keeps what it does as before)
+
+
+def test_a_burst_of_edits_parks_one_thread_and_the_last_value_is_taken(tab):
+    """A security review: every update of a control parked one thread of viser's pool,
+    which all tabs share, on the tab's lock until its turn; a few tabs sending 20 a
+    second of a costly design took all 32 threads and froze every tab (17 s). One thread
+    per kind of action waits; the others return at once, and the one waiting reads the
+    controls as they are when its turn comes."""
+    import threading
+
+    s = tab
+    box = s.ui.controls["cam.base_radius_mm"]
+    returned: list[float] = []
+
+    def edit(v: float) -> None:
+        box.value = v  # (viser sets the value, then calls back in this thread)
+        returned.append(v)
+
+    threads = [threading.Thread(target=edit, args=(71.0 + i,)) for i in range(20)]
+    with s.lock:
+        for t in threads:
+            t.start()
+        assert wait_for(lambda: len(returned) >= 19, 10.0)
+        time.sleep(0.2)
+        assert len(returned) == 19  # one waits its turn
+        last = box.value
+    for t in threads:
+        t.join(10)
+    assert len(returned) == 20 and s.design.cam.base_radius_mm == last
 
 
 def test_a_save_waits_for_the_browser_without_holding_the_tab(app, monkeypatch):

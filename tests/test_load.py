@@ -246,7 +246,24 @@ def test_vanishing_clients(server):
             c.abort()
             await c.close()
 
+    async def fill_pool() -> None:
+        """Grow viser's thread pool to its 32 threads: 8 tabs' bursts at once. (A
+        burst parks one pool thread per tab now, so one round alone no longer does, and
+        the pool's later growth had read as leaked sessions.)"""
+        tabs = await asyncio.gather(*[open_tab(server.url, f"fill{i}") for i in range(8)])
+
+        async def burst(c) -> None:
+            lift = c.find(label="Lift h [mm]")
+            for v in own_values(3) * 4:
+                await c.set_value(lift, v)
+
+        await asyncio.gather(*[burst(c) for c in tabs])
+        await asyncio.sleep(2.0)
+        for c in tabs:
+            await c.close()
+
     async def go():
+        await fill_pool()
         await vanish_round(0)
         await _assert_serving(server.url, own_values(7)[1])
         return server.threads()
@@ -260,7 +277,7 @@ def test_vanishing_clients(server):
         return n
 
     run(go())
-    before = settled_threads(0, wait=3.0)  # round 0 warmed up viser's thread pool
+    before = settled_threads(0, wait=3.0)  # (fill_pool and round 0: the pool is full)
     run(vanish_round(1))
     run(_assert_serving(server.url, own_values(7)[2]))
     after = settled_threads(before + 1)
