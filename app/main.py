@@ -29,6 +29,9 @@ from .session import Session
 # message; that is expected (the session is being torn down), not worth a log line.
 warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection")
 IDLE_TRIM_S = 2.0  # after the last tab leaves
+# tabs served at once: a class of thirty twice over (each tab holds ~3.5 MB and a few
+# threads; beyond this a tab is told the server is full)
+MAX_TABS = 60
 
 
 def _load_malloc_trim():
@@ -80,6 +83,7 @@ class App:
         verbose: bool = False,
         animate: bool = True,
         processes: bool = True,
+        max_tabs: int = MAX_TABS,
     ):
         _tune_malloc()  # before the server's threads create their arenas
         batch.KEEP_FREED = False  # (a sweep run here, without a worker, must not undo it)
@@ -95,6 +99,9 @@ class App:
         self.server.scene.set_up_direction("+y")  # the follower moves along +Y
         self.sessions: dict[int, Session] = {}
         self._gone: set[int] = set()  # left while their Session was still being built
+        self._refused: set[int] = set()  # open tabs turned away: the server was full
+        self._building = 0  # Sessions being built
+        self.max_tabs = max_tabs
         self._lock = threading.Lock()
         self.animate = animate
         self.analyst = Analyst(processes)  # the physics, in worker processes (app.analyst)
@@ -108,13 +115,25 @@ class App:
     def _connect(self, client) -> None:
         # viser runs connect and disconnect callbacks on its thread pool: a tab closed
         # while its Session is built gets its disconnect first; close that Session.
+        with self._lock:
+            full = len(self.sessions) + self._building >= self.max_tabs
+            if not full:
+                self._building += 1
+            elif client.client_id in self._gone:  # (it left already)
+                self._gone.discard(client.client_id)
+            else:
+                self._refused.add(client.client_id)
+        if full:
+            return _turn_away(client, self.max_tabs)
         try:
             s = Session(client, animate=self.animate, analyst=self.analyst)
         except BaseException:
             with self._lock:
                 self._gone.discard(client.client_id)
+                self._building -= 1
             raise
         with self._lock:
+            self._building -= 1
             gone = client.client_id in self._gone
             self._gone.discard(client.client_id)
             if not gone:
@@ -132,6 +151,9 @@ class App:
 
     def _disconnect(self, client) -> None:
         with self._lock:
+            if client.client_id in self._refused:
+                self._refused.discard(client.client_id)
+                return
             s = self.sessions.pop(client.client_id, None)
             if s is None:
                 self._gone.add(client.client_id)
@@ -153,6 +175,20 @@ class App:
             s.close()
         self.server.stop()
         self.analyst.close()
+
+
+def _turn_away(client, max_tabs: int) -> None:
+    """Say to a tab opened beyond the server's ``max_tabs`` that it is full (no Session
+    is built: each costs ~3.5 MB and threads, and a security review's one client had
+    opened 60, taking the server from 51 to 711 threads)."""
+    try:
+        client.gui.add_markdown(
+            f"**This server is full:** it serves {max_tabs} tab{'s' * (max_tabs != 1)} "
+            "at once (`camdesigner --max-tabs`). Close a tab you no longer use, or reload "
+            "this page in a minute."
+        )
+    except Exception:  # (the tab left meanwhile)
+        pass
 
 
 def _port_free(host: str, port: int) -> bool:
@@ -224,7 +260,16 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument(
         "--port", type=int, default=8080, help="port (default 8080); a busy port is an error"
     )
+    p.add_argument(
+        "--max-tabs",
+        type=int,
+        default=MAX_TABS,
+        help=f"tabs served at once (default {MAX_TABS}); a tab beyond it is told the "
+        "server is full",
+    )
     args = p.parse_args(argv)
+    if not 1 <= args.max_tabs <= 1000:
+        p.error("--max-tabs: 1 to 1000")
     if argv is None:  # (the command line's server, not a test's call)
         _reexec_without_tcache()
     if not _port_free(args.host, args.port):
@@ -237,7 +282,7 @@ def main(argv: list[str] | None = None) -> None:
     # background job of a non-interactive shell inherits that).
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, _interrupt)
-    app = App(args.host, args.port)
+    app = App(args.host, args.port, max_tabs=args.max_tabs)
     if not args.host.startswith("127.") and args.host not in ("localhost", "::1"):
         print(
             f"warning: serving on {args.host}: anyone who can reach this address can use "

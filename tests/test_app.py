@@ -2440,6 +2440,43 @@ def test_two_tabs_of_one_browser_keep_each_others_saves(app, monkeypatch):
             assert not a.store.silent  # (the tab keeps what it does as before)
 
 
+def test_a_tab_beyond_the_limit_is_told_the_server_is_full():
+    """A security review: nothing refused a tab, and one client's 60 connections took
+    the server from 51 to 711 threads. Beyond ``max_tabs`` (camdesigner --max-tabs) a
+    tab gets no Session, only a line saying the server is full; once a tab closes, a
+    new one is served."""
+    import asyncio
+
+    from viser_client import ViserClient
+
+    from app.main import App
+
+    a = App(host="127.0.0.1", port=0, max_tabs=1)
+    try:
+        first = FakeTab(a.port)
+        assert wait_for(lambda: len(a.sessions) == 1)
+
+        async def turned_away() -> str:
+            c = await ViserClient(f"ws://127.0.0.1:{a.port}", "second").connect()
+            try:
+                await c.wait_for(lambda: c.find_all(contains="server is full"), 20.0, what="full")
+                return c.find(contains="server is full").text
+            finally:
+                await c.close()
+
+        said = asyncio.run(turned_away())
+        assert "it serves 1 tab at once" in said and "--max-tabs" in said
+        assert len(a.sessions) == 1
+        assert wait_for(lambda: not a._refused)  # (its leaving is no Session's)
+        first.close()
+        assert wait_for(lambda: not a.sessions)
+        third = FakeTab(a.port)
+        assert wait_for(lambda: len(a.sessions) == 1)
+        third.close()
+    finally:
+        a.stop()
+
+
 def test_a_burst_of_edits_parks_one_thread_and_the_last_value_is_taken(tab):
     """A security review: every update of a control parked one thread of viser's pool,
     which all tabs share, on the tab's lock until its turn; a few tabs sending 20 a
