@@ -77,6 +77,7 @@ from .scene import (
     label_height,
 )
 from .ticker import Debouncer, Ticker
+from .uploads import MAX_UPLOAD_BYTES
 
 FPS = 30.0
 # the design-changing actions that take turns (Session._take_ticket): the controls, the
@@ -270,7 +271,9 @@ class Session:
                 # reverted it at the next edit); no other control: a user's next edit
                 # may already sit in one
                 self._sync_controls(design, prefix="motion.")
-            self._apply(self._renamed_for_kind(design))
+            design = self._renamed_for_kind(design)
+            self._follow_name(self.design.name, design.name)
+            self._apply(design)
 
     def use_proposed_spring(self) -> None:
         """Put the spring rate the key numbers propose (machine.spring's proposal, at
@@ -503,6 +506,13 @@ class Session:
         self._save_working()
         if reset_camera:
             self.reset_camera()
+
+    def _follow_name(self, old: str, new: str) -> None:
+        """The Save box follows the design's name while it proposes the old one (a
+        review renamed a design, and Save kept it under the preset's name); a name the
+        user typed there stays. Lock held."""
+        if new != old and self.ui.save_name.value == storage.proposed_name(old):
+            self._propose_name(new)
 
     def _propose_name(self, name: str) -> None:
         """The name the Save box proposes for the design on screen. Lock held."""
@@ -737,9 +747,10 @@ class Session:
         a refusal while the tab analysed a heavy design stalled the whole server, and
         another tab's connection timed out): the line is written without it, as one
         message that can only race with another line's, never with the design."""
-        self.ui.files_md.content = (
-            f"✖ **{esc(_short(name))}** refused: {size:,} bytes, {esc(why)} (a design file "
-            "is a few kB)."
+        big = size > MAX_UPLOAD_BYTES  # (the size named only where it is the reason:
+        size_note = f"; a design file is a few kB, this one {size:,} bytes" if big else ""
+        self.ui.files_md.content = (  # a review's long file name had read as too big)
+            f"✖ **{esc(_short(name))}** refused: {esc(why)}{size_note}."
         )
 
     def download(self, kind: str, quick: bool = False) -> None:

@@ -661,6 +661,7 @@ def test_upload_guard_refuses_on_the_declared_and_the_received_size(app, tab):
     assert waited < 2.0  # (not the 10 s the lock is held)
     assert "t-big" not in gui_api._current_file_upload_states
     assert "refused" in s.ui.files_md.content and "<i>" not in s.ui.files_md.content
+    assert "this one 45,000,000 bytes" in s.ui.files_md.content
     liar = _messages.FileTransferStartUpload(
         source_component_uuid=button,
         transfer_uuid="t-liar",
@@ -2195,6 +2196,7 @@ def test_a_tab_cannot_keep_many_uploads_unfinished(app, tab):
     assert "are unfinished" in said and len(said) < 600  # the name shortened
     assert start(98, "x" * 10_000) not in gui_api._current_file_upload_states
     assert "name is too long" in s.ui.files_md.content
+    assert "few kB" not in s.ui.files_md.content  # (an app review: read as too big)
     for uid in kept:  # and transfers that declare nothing count too (a second review)
         gui_api._current_file_upload_states.pop(uid)
 
@@ -2932,6 +2934,13 @@ def test_the_name_to_keep_a_design_under_is_the_designs(tab):
     s.ui.controls["cam.base_radius_mm"].value = 70.0
     s.ui.segments.act(0, "+")
     assert s.ui.save_name.value == "my version 2"
+    s.ui.controls["name"].value = "Valve cam v3"  # (typed in the box: it stays)
+    assert s.ui.save_name.value == "my version 2"
+    # an app review: renamed on the Design tab, the design was kept under the
+    # preset's name, which the box still proposed; it follows the design's name
+    s.load_preset("valve_lift_roller")
+    s.ui.controls["name"].value = "Valve cam v2 for press 7"
+    assert s.ui.save_name.value == "Valve cam v2 for press 7"
 
 
 def test_saving_over_another_kept_design_asks_first(app, monkeypatch):
