@@ -46,6 +46,7 @@ STATION_NAMES = ("0", "1", "2", "3", "4", "5")  # the paper's six; app.session a
 # steps of the cam angle a teacher clicks through (a review: only the slider's 0.1 deg
 # arrow keys, the stations or typing an angle moved it by hand)
 STEP_DEG = {"−5°": -5.0, "−1°": -1.0, "+1°": 1.0, "+5°": 5.0}
+SPEED_MIN_DEG_S, SPEED_MAX_DEG_S = 5.0, 360.0  # the animation's play speed
 # The wide panel (Curves tab): viser's widest theme panel is 24 em = 384 px; the wide
 # one takes 62 % of the 3D view's drawing width, at most 1000 px (it stays at the right
 # edge and its charts follow). The drawing width is in device pixels (CSS pixels times
@@ -137,7 +138,9 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
     h["quick_md"] = gui.add_markdown("")  # that button's answer (sent, or why not)
     with gui.add_folder("Animation", expand_by_default=True):
         h["play_btn"] = gui.add_button("▶ Play", color="green")
-        h["speed_slider"] = gui.add_slider("Play speed [°/s]", 5, 360, 5, speed_deg_s)
+        h["speed_slider"] = gui.add_slider(
+            "Play speed [°/s]", SPEED_MIN_DEG_S, SPEED_MAX_DEG_S, 5, speed_deg_s
+        )
         h["angle_slider"] = gui.add_slider("Cam angle θ [°]", 0.0, 360.0, 0.1, 0.0)
         h["step_btns"] = gui.add_button_group("Step θ", tuple(STEP_DEG))
         h["pause_box"] = gui.add_checkbox(

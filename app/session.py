@@ -49,6 +49,8 @@ from .layout import (
     HISTORY_BUTTONS,
     NARROW_PANEL_PX,
     PAUSE_AT_STATION_S,
+    SPEED_MAX_DEG_S,
+    SPEED_MIN_DEG_S,
     STEP_DEG,
     Layout,
     build_layout,
@@ -1233,7 +1235,11 @@ class Session:
                 return
             if not self._syncing:
                 self._held = 0.0  # the user's own angle: no pause left to wait out
-                self._goto(float(value), slider=False)
+                # (the slider itself is not written while dragged: it would jitter; a
+                # typed angle beyond 0-360 is, as the angle shown: an app review's 400
+                # had stayed in the box beside 40 deg, and the browser later cut it to
+                # 360, turning the cam to 0)
+                self._goto(value, slider=not 0.0 <= value <= 360.0)
                 self._keep_view()
 
     def step(self, label: str) -> None:
@@ -1260,16 +1266,23 @@ class Session:
             self._keep_view()
 
     def _set_speed(self, value) -> None:
-        """The animation speed [deg/s]; a value that is not a finite number in the
-        slider's range (a hostile client) is ignored."""
+        """The animation speed [deg/s], brought into the slider's range, and the box
+        showing the speed taken (an app review: a typed 1000 stayed in the box while the
+        cam kept its old speed, and a typed 0 froze Play); what is not a finite number
+        (a hostile client) changes nothing, and the box shows the speed kept."""
         try:
             v = float(value)
         except (TypeError, ValueError):
-            return
-        if math.isfinite(v) and 0.0 <= v <= 360.0:
-            with self.lock:
-                self.speed = v
+            v = math.nan
+        with self.lock:
+            if self._syncing:
+                return
+            if math.isfinite(v):
+                self.speed = min(max(v, SPEED_MIN_DEG_S), SPEED_MAX_DEG_S)
                 self._keep_view()
+            if self.ui.speed_slider.value != self.speed:
+                with self._quiet():
+                    self.ui.speed_slider.value = self.speed
 
     def _set_overlay(self, name: str, on: bool) -> None:
         with self.lock:

@@ -1808,15 +1808,27 @@ def test_explore_refuses_hostile_ranges(tab):
         assert says in e.progress.content, span
 
 
-def test_hostile_animation_speed_is_ignored(tab):
+def test_a_typed_speed_or_angle_shows_what_the_animation_takes(tab):
+    """A hostile client's speed that is no finite number changes nothing; an app
+    review's typed speed of 1000 stayed in the box while the cam kept its old speed, a
+    0 froze Play, and a typed angle of 400 stayed in the box beside theta = 40 deg (the
+    browser later cut it to 360: the cam jumped to 0). A speed is brought into the
+    slider's range, and the box shows the speed and the angle taken."""
     tab.ui.speed_slider.value = 90.0
     assert tab.speed == 90.0
-    for bad in (float("nan"), float("inf"), -5.0, 1e9):
-        tab.ui.speed_slider._impl.value = bad
+    for bad in (float("nan"), float("inf")):
+        tab.ui.speed_slider._impl.value = bad  # (as viser keeps a client's value)
         tab._set_speed(bad)
-        assert tab.speed == 90.0
+        assert tab.speed == 90.0 and tab.ui.speed_slider.value == 90.0
     tab._set_speed("fast")
     assert tab.speed == 90.0
+    for typed, taken in ((1000.0, 360.0), (0.0, 5.0), (-5.0, 5.0), (45.0, 45.0)):
+        tab.ui.speed_slider.value = typed
+        assert tab.speed == taken and tab.ui.speed_slider.value == taken
+    for typed, taken in ((400.0, 40.0), (-30.0, 330.0), (1e6, 280.0), (123.4, 123.4)):
+        tab.ui.angle_slider.value = typed
+        assert tab.theta_deg == pytest.approx(taken)
+        assert tab.ui.angle_slider.value == pytest.approx(taken)
 
 
 def test_the_wear_curve_reaches_the_wear_maximum_of_the_key_numbers(tab):
@@ -2890,8 +2902,8 @@ def test_step_buttons_turn_the_cam_by_hand(tab):
     keys. The step buttons pause and turn the cam; round the turn too; a value that is
     not one of them is ignored."""
     s = tab
-    s.ui.speed_slider.value = 0.0  # playing, but no frame turns the cam (under load
-    s.toggle_play()  # a frame between the slider and the step had turned it 4.8 deg)
+    s.speed = 0.0  # playing, but no frame turns the cam (under load a frame
+    s.toggle_play()  # between the slider and the step had turned it 4.8 deg)
     assert s.playing and s.speed == 0.0
 
     def fire(label):  # a click on the button group, through its wiring
