@@ -366,7 +366,7 @@ def headline_html(s: dict) -> str:
     concave = "" if rho["concave_min"] is None else f", concave ≥ {mm(rho['concave_min'])}"
     jump, stress = s["jump_speed_rpm"], s["contact_stress_max_MPa"]["cycle"]
     if stress is None:  # (a knife edge: no Hertz stress)
-        sigma = "σ<sub>H</sub> –"
+        sigma = "σ<sub>H</sub> none: a knife edge's point has no Hertz contact"
     elif unbounded := unbounded_notes(s):  # an impulse, a cusp, a jam (report.py)
         sigma = f"σ<sub>H</sub> unbounded: {unbounded[0][0]}"
     else:
