@@ -80,9 +80,9 @@ def _design(args, unused_note: bool = True, kinds: tuple[FollowerKind, ...] = ()
     note for a follower field the design's kind does not use, if ``unused_note``).
     ``kinds``: the followers the command analyses, if others than the design's own
     (their fields left out of the file are named too)."""
-    if args.preset and args.design:
+    if args.preset is not None and args.design:  # (--preset "" too: a CLI review)
         raise DesignError("give a design file or --preset, not both")
-    if args.preset:
+    if args.preset is not None:
         design = load_preset(args.preset)
     elif args.design:
         design, text = read_design(args.design)
@@ -211,7 +211,10 @@ def _compare(args) -> int:
 
 def _outputs(args) -> dict[str, str]:
     """The requested output files by export kind, refusing a path used twice or the input."""
-    outputs = {k: p for k in EXPORT_FLAGS if (p := getattr(args, f"out_{k}", None))}
+    outputs = {k: p for k in EXPORT_FLAGS if (p := getattr(args, f"out_{k}", None)) is not None}
+    for k, p in outputs.items():
+        if not p:  # (it had been dropped without a word: a CLI review)
+            raise DesignError(f"--{k.replace('_', '-')}: an empty file name")
     if not outputs:
         flags = ", ".join(f"--{k.replace('_', '-')}" for k in EXPORT_FLAGS)
         raise DesignError(f"nothing to export: give one or more of {flags} FILE")

@@ -1032,6 +1032,10 @@ def design_from_json(text: str | bytes) -> Design:
             f"not a JSON document: {what} at line {exc.lineno}, column {exc.colno}"
         ) from None
     except (ValueError, RecursionError) as exc:
+        if "integer string conversion" in str(exc):  # (Python's advice, not the user's:
+            raise DesignError(  # a CLI review)
+                "not a design: a JSON number of more than 4300 digits (no field takes one)"
+            ) from None
         raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None
     if not isinstance(data, dict):
         raise DesignError(f"a design is a JSON object, got {type(data).__name__}")
@@ -1395,13 +1399,13 @@ def set_field(data: dict, path: str, value, what: str = "") -> None:
         raise DesignError(f"{what}{path!r}: expected FIELD.PATH, e.g. cam.base_radius_mm")
     node = data
     for i, key in enumerate(keys[:-1]):
-        node = _child(node, key, what)
+        node = _child(node, key, what, printable(".".join(keys[:i]), 120))
         if not isinstance(node, dict | list):
             head = printable(".".join(keys[: i + 1]), 120)
             raise DesignError(f"{what}{path}: {head} is not a group of fields")
     last = keys[-1]
     if isinstance(node, list):
-        _child(node, last, what)  # the index must exist
+        _child(node, last, what, printable(".".join(keys[:-1]), 120))  # the index must exist
         node[int(last)] = value
         return
     classic = keys[:-1] == ["motion"] and last in CLASSIC_KEYS  # edits a classic program
@@ -1410,7 +1414,7 @@ def set_field(data: dict, path: str, value, what: str = "") -> None:
     node[last] = value
 
 
-def _child(node, key: str, what: str = ""):
+def _child(node, key: str, what: str = "", where: str = ""):
     """node[key] for a dict, node[int(key)] for a list; None if there is none. An
     index is ASCII digits, at most 6 of them (str.isdigit took "²", which int() then
     refused with a traceback, and 5,000 digits, which int() refuses too: a review)."""
@@ -1420,5 +1424,7 @@ def _child(node, key: str, what: str = ""):
         return node[int(key)]
     if isinstance(node, list):
         shown = key if len(key) <= 20 else key[:20] + "…"  # (a 5,000-digit one: a review)
-        raise DesignError(f"{what}{shown!r} is not an index of a list of {len(node)}")
+        raise DesignError(  # (the list named: a CLI review)
+            f"{what}{shown!r} is not an index of {where or 'the list'}, a list of {len(node)}"
+        )
     return None

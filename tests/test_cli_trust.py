@@ -225,13 +225,32 @@ def test_set_overrides_fields(capsys):
         ("cam.base_radius_mm.x=1", "not a group"),
         ("nonsense", "FIELD.PATH=VALUE"),
         # an index is ASCII digits: "²" passed str.isdigit and crashed int() (a review)
-        ("motion.segments.².angle_deg=1", "is not an index of a list of 4"),
+        ("motion.segments.².angle_deg=1", "is not an index of motion.segments, a list of 4"),
+        ("motion.segments.9.angle_deg=1", "'9' is not an index of motion.segments, a list"),
         ("motion.segments." + "9" * 5000 + ".angle_deg=1", "'99999999999999999999…' is not"),
     ],
 )
 def test_set_errors_name_the_field(assignment, message):
     proc = run("report", "--preset", "paper_example", "--set", assignment)
     assert proc.returncode == 2 and message in proc.stderr, proc.stderr
+
+
+def test_an_empty_name_or_a_huge_number_is_refused_in_words(tmp_path):
+    """A CLI review: ``--stl ""`` beside ``--dxf`` was dropped without a word, as was
+    ``--preset ""`` beside a design file, and a 5000-digit number answered with Python's
+    advice (sys.set_int_max_str_digits)."""
+    dxf = tmp_path / "a.dxf"
+    proc = run("export", "--preset", "paper_example", "--stl", "", "--dxf", str(dxf))
+    assert proc.returncode == 2 and "--stl: an empty file name" in proc.stderr
+    assert not dxf.exists()
+    design = tmp_path / "d.json"
+    design.write_text('{"cam": {"base_radius_mm": 70}}')
+    proc = run("report", str(design), "--preset", "")
+    assert proc.returncode == 2 and "not both" in proc.stderr
+    design.write_text('{"cam": {"base_radius_mm": ' + "1" * 5000 + "}}")
+    proc = run("report", str(design))
+    assert proc.returncode == 2 and "more than 4300 digits" in proc.stderr
+    assert "set_int_max_str_digits" not in proc.stderr
 
 
 def test_tolerance_option_is_met(tmp_path, capsys):
