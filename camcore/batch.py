@@ -269,7 +269,7 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
         rows.append((row // B, row % B, k))
     q = np.concatenate([np.full(r[0].size, i) for i, r in enumerate(rows)])
     face, des, k = (np.concatenate([r[i] for r in rows]) for i in range(3))
-    out = {n: np.full((B, F * extremes.CANDIDATES), np.nan) for n in qs}
+    out = {n: np.full((B, F * extremes.CANDIDATES), np.nan) for n in [*qs, SEGMENT_OF_PHI]}
     if q.size == 0:
         return out
     kk = des * N + k
@@ -309,6 +309,9 @@ def _refine(bt: Batch, loc, on: np.ndarray) -> dict:
     for i, name in enumerate(qs):
         m = q == i
         out[name][des[m], slot[m]] = sense[m] * best[m]
+    # the kind of segment of each pressure-angle candidate (extremes.Worst.segments)
+    m = q == list(qs).index("pressure_angle_max")
+    out[SEGMENT_OF_PHI][des[m], slot[m]] = codes[loc.part[face[m], kk[m]]]
     out["guide_jam"] = np.where(jammed, 1.0, np.nan)[:, None]  # (extremes.jam_worst)
     return out
 
@@ -542,6 +545,16 @@ def _geometry_figures(bt: Batch) -> list[dict]:
     return out
 
 
+SEGMENT_OF_PHI = "pressure_angle_max.segment"  # _refine's key: the candidates' segment kinds
+
+
+def _phi_peak(grid: list[float | None], worst: dict, code: int) -> list[float | None]:
+    """report._pressure_angle_max_deg per design: the grid's largest pressure angle
+    [deg] on segments of kind ``code``, raised to the refined candidates' there."""
+    cands = np.where(worst[SEGMENT_OF_PHI] == code, worst["pressure_angle_max"], np.nan)
+    return _peak(grid, np.degrees(cands))
+
+
 def _peak(grid: list[float | None], cands: np.ndarray) -> list[float | None]:
     """extremes.peak per design, for a maximum: the grid's value raised to the refined
     candidates' worst (``cands`` (B, C) from _refine)."""
@@ -587,8 +600,8 @@ def _grid_figures(bt: Batch, loc, worst: dict) -> list[dict]:
     ]
     faces = [{f"face{i + 1}": spans[i][b] if i < F else None for i in range(2)} for b in range(B)]
     cols = zip(
-        _max(phi, rise),
-        _max(phi, fall),
+        _phi_peak(_max(phi, rise), worst, RISE),
+        _phi_peak(_max(phi, fall), worst, FALL),
         _range(rho * 1e3, rise),
         _range(rho * 1e3, fall),
         _min(rho * 1e3, inc & (rho > 0) & np.isfinite(rho)),  # report._radii_mm

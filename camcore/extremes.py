@@ -56,6 +56,16 @@ class Worst:
     face: int
     others: tuple[tuple[float, float, float], ...] = ()  # (value, lo, hi) of every
     # refined local extreme, with the grid angles [rad] that bracket it
+    segments: tuple[int, ...] = ()  # the kind of segment (motion.RISE ...) of each of
+    # ``others``: its grid sample's, under its face
+
+    def within(self, code: int, sense: float) -> float | None:
+        """The worst, in ``sense`` (QUANTITIES), of the refined extremes on segments of
+        kind ``code`` (RISE, FALL); None if none is there."""
+        values = [v for (v, _, _), c in zip(self.others, self.segments, strict=True) if c == code]
+        if not values:
+            return None
+        return max(values) if sense > 0 else min(values)
 
     def beyond(self, limit: float, sense: float) -> tuple[tuple[float, float], ...]:
         """Brackets [rad] of the refined extremes that pass ``limit`` (sense as above)."""
@@ -254,6 +264,7 @@ def worst_values(a) -> dict[str, Worst | None]:
         sense = np.array([s for _, s in getters])[q]
 
         codes = np.array([g.code for g in a.segments], dtype=np.int8)
+        segment = codes[a.part]  # (F, N) the kind of segment under each face
         # every angle evaluated, grid and search, and whether the guide jams there
         seen, jammed = [th], [jams(a, a.on_curve)]
 
@@ -292,6 +303,7 @@ def worst_values(a) -> dict[str, Worst | None]:
             float(at[b] % (2 * np.pi)),  # (a bracket may cross theta = 0)
             int(face[b]),
             tuple((float(s * best[i]), float(lo[i]), float(hi[i])) for i in m),
+            tuple(int(segment[face[i], k[i]]) for i in m),
         )
     return out
 

@@ -404,3 +404,27 @@ def test_an_infinite_stress_at_a_cusp_is_reported_not_raised():
     assert fast["unbounded"] == single["unbounded"] == ["life", "stress", "wear"]
     (row,) = sweep.run_chunk(base, [point], verify=False)  # a sweep without --fast
     assert row["error"] is None and not row["valid"]
+
+
+def test_the_largest_pressure_angle_is_the_one_the_check_judges():
+    """A CLI review: at 5 deg the report's largest rise pressure angle was its samples'
+    (9.52803 deg, under a limit of 9.5281) beside the violation of that limit, which
+    the search between the samples had found. The figure is the search's too, per
+    rise and fall, in the single report and the batched one alike."""
+    from camcore.model import Design
+    from camcore.motion import RISE
+
+    def design(resolution: float, limit: float = 30.0) -> Design:
+        data = load_preset("paper_example").model_dump(mode="json")
+        data["limits"].update(resolution_deg=resolution, max_pressure_angle_deg=limit)
+        return Design.model_validate(data)
+
+    fine = summary(analyze(design(0.01), verify=False))["pressure_angle_max_deg"]
+    a = analyze(design(5.0, fine["rise"] - 1e-4), verify=False)
+    on_rise = a.in_contact & (a.segment_code == RISE)
+    assert float(np.degrees(np.abs(a.pressure_angle[on_rise]).max())) < fine["rise"] - 1e-4
+    assert [v.code for v in a.violations] == ["pressure_angle"]  # the samples pass; not it
+    s = summary(a)
+    for kind in ("rise", "fall"):
+        assert s["pressure_angle_max_deg"][kind] == pytest.approx(fine[kind], abs=1e-6)
+    assert batch.summaries([a.design])[0]["pressure_angle_max_deg"] == s["pressure_angle_max_deg"]
