@@ -93,6 +93,7 @@ class App:
         self.server = viser.ViserServer(
             host=host, port=port, label="Disk-cam designer", verbose=verbose
         )
+        inbound.lane_tabs(self.server)  # (each tab's callbacks in lanes of their own)
         self.server.gui.configure_theme(
             control_width="large", show_share_button=False, brand_color=(40, 90, 160)
         )

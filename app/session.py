@@ -206,7 +206,7 @@ class Session:
         ui.quick_stl_btn.on_click(lambda _: self.download("stl", quick=True))
         ui.play_btn.on_click(lambda _: self.toggle_play())
         ui.speed_slider.on_update(lambda e: self._set_speed(e.target.value))
-        ui.angle_slider.on_update(lambda _: self._on_angle())
+        ui.angle_slider.on_update(lambda e: self._on_angle(e.target.value))
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
         ui.step_btns.on_click(lambda e: self.step(e.target.value))
         ui.history_btns.on_click(lambda e: self.travel(e.target.value))
@@ -352,13 +352,14 @@ class Session:
             return self._tickets[kind]
 
     def _queue(self, kind: str) -> bool:
-        """Take a ticket of ``kind`` (TICKETS, or "angle", "camera": those count no
-        edit), and whether this thread is to wait for the lock: False if one of this
+        """Take a ticket of ``kind`` (TICKETS, or "camera", which counts no edit),
+        and whether this thread is to wait for the lock: False if one of this
         tab's threads already waits its turn for the same kind of action, which reads the
         widgets' values as they are once it holds the lock, this change with them. So a
-        burst of events parks one thread of viser's pool, which every tab shares, not one
-        per event (a security review: tabs sending 20 updates a second of a costly design
-        took all 32, and every other tab waited 17 s). ``_turn`` once the lock is held."""
+        burst of events is one turn, not one per event (a security review: tabs sending
+        20 updates a second of a costly design had parked all 32 threads of viser's
+        shared pool, and every other tab waited 17 s; a tab's callbacks now also wait in
+        its own lane, app.inbound.TabLanes). ``_turn`` once the lock is held."""
         with self._ticket_lock:
             self._tickets[kind] = self._tickets.get(kind, 0) + 1
             if kind in self._waiting:
@@ -1220,19 +1221,18 @@ class Session:
         if compare:
             self.ui.compare_view.marker(math.degrees(self.analysis.theta[k]))
 
-    def _on_angle(self) -> None:
-        """The user moved the angle slider: show the mechanism at the slider's angle as
-        it is when this action's turn comes (_queue)."""
-        if not self._queue("angle"):
+    def _on_angle(self, value) -> None:
+        """The user moved the angle slider to ``value`` [deg]. Each event is applied
+        in turn (not coalesced: a frame, a step or a station written meanwhile would
+        replace the user's angle); a tab's events wait in its own lane
+        (app.inbound.TabLanes), not on the server's pool."""
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            return
+        if not math.isfinite(value):  # a client's NaN had stopped Play for good
             return
         with self.lock:
-            self._turn("angle")
-            try:
-                value = float(self.ui.angle_slider.value)
-            except (TypeError, ValueError):
-                return
-            if not math.isfinite(value):  # a client's NaN had stopped Play for good
-                return
             if not self._syncing:
                 self._held = 0.0  # the user's own angle: no pause left to wait out
                 # (the slider itself is not written while dragged: it would jitter; a

@@ -2364,7 +2364,7 @@ def test_a_clients_nan_camera_or_angle_stops_nothing(tab):
     state = s.client.camera._state
     state.position, state.look_at = np.full(3, np.nan), np.full(3, np.nan)
     theta = s.theta_deg
-    s.ui.angle_slider.value = float("nan")  # (as a client's update sets it)
+    s._on_angle(float("nan"))
     assert s.theta_deg == theta
     s.reset_camera()  # no ValueError
     s._set_playing(True)
@@ -2499,7 +2499,10 @@ def test_a_burst_of_edits_parks_one_thread_and_the_last_value_is_taken(tab):
     controls as they are when its turn comes."""
     import threading
 
+    from app.inbound import TabLanes
+
     s = tab
+    assert isinstance(s.client.gui._thread_executor, TabLanes)  # (a tab's own lanes)
     box = s.ui.controls["cam.base_radius_mm"]
     returned: list[float] = []
 

@@ -1049,3 +1049,47 @@ def test_the_force_curve_shades_where_the_face_is_inside_its_guide():
     inside = np.interp(c.x, np.degrees(a.theta), a.prog.S * 1e3) > 10.0 + 1e-6
     assert inside.any() and (c.shades[forces][inside] == 1.0).all()
     assert not c.shades[forces][~inside].any()
+
+
+def test_a_tabs_callbacks_run_in_two_lanes_of_the_shared_pool():
+    """A security review: each event of a tab whose lock was held parked one of viser's
+    32 pool threads (speed slider, overlay toggles, Save clicks), so one tab froze every
+    tab. app.inbound.TabLanes runs at most LANES_PER_TAB of a tab's callbacks at once,
+    in order, the rest waiting in the tab's own queue; another tab's run at once, and
+    a tab with MAX_QUEUED waiting has its next ones dropped."""
+    import threading
+    from concurrent.futures import ThreadPoolExecutor
+    from types import SimpleNamespace
+
+    from app import inbound
+
+    pool = ThreadPoolExecutor(max_workers=8)
+    lanes = inbound.TabLanes(pool)
+    gate, order, lock = threading.Event(), [], threading.Lock()
+    running, most = [0], [0]
+
+    def held(event, i):
+        with lock:
+            running[0] += 1
+            most[0] = max(most[0], running[0])
+            order.append(i)  # (started in the order submitted)
+        gate.wait(10)
+        with lock:
+            running[0] -= 1
+
+    tab1 = SimpleNamespace(client_id=1)
+    futures = [lanes.submit(held, tab1, i) for i in range(30)]
+    other = lanes.submit(lambda e: "served", SimpleNamespace(client_id=2))
+    assert other.result(5) == "served"  # while tab 1's two lanes are blocked
+    assert most[0] == inbound.LANES_PER_TAB
+    extra = [lanes.submit(held, tab1, 100 + i) for i in range(inbound.MAX_QUEUED)]
+    waiting = 30 - inbound.LANES_PER_TAB  # before the extra ones came
+    assert sum(f.done() for f in extra) == waiting  # the cap's overflow: dropped
+    gate.set()
+    for f in futures + extra:
+        f.result(10)
+    assert most[0] == inbound.LANES_PER_TAB
+    assert sorted(order[:2]) == [0, 1] and order[2:30] == list(range(2, 30))  # in turn
+    assert len(order) == inbound.LANES_PER_TAB + inbound.MAX_QUEUED
+    assert lanes.submit(lambda: "no tab").result(5) == "no tab"
+    pool.shutdown()

@@ -247,9 +247,9 @@ def test_vanishing_clients(server):
             await c.close()
 
     async def fill_pool() -> None:
-        """Grow viser's thread pool to its 32 threads: 8 tabs' bursts at once. (A
-        burst parks one pool thread per tab now, so one round alone no longer does, and
-        the pool's later growth had read as leaked sessions.)"""
+        """Grow viser's thread pool first: 8 tabs' bursts at once, two lanes each
+        (app.inbound.TabLanes), more than a round of vanishing tabs uses. (A round alone
+        no longer fills it, and the pool's later growth had read as leaked sessions.)"""
         tabs = await asyncio.gather(*[open_tab(server.url, f"fill{i}") for i in range(8)])
 
         async def burst(c) -> None:
