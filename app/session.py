@@ -486,6 +486,7 @@ class Session:
         opened from a file, a preset, a save), in place of what the box holds; None
         keeps what the user typed there (an edit, a design loaded from Explore)."""
         with self.lock:
+            old_name = self.design.name
             self.base, self.error, self.file_error = design, None, None
             self._keep_typed(None)
             self._sync_controls(design)
@@ -495,6 +496,8 @@ class Session:
                 self._apply(design, reset_camera=reset_camera)
             if save_as is not None:  # (the box had read "my cam" whatever the design)
                 self._propose_name(save_as)
+            else:  # (an Undo of a rename: a review)
+                self._follow_name(old_name, design.name)
 
     def _reshow(self, design: Design, reset_camera: bool) -> None:
         """The design on screen set again (a preset or file reloaded, an input error
@@ -1115,7 +1118,7 @@ class Session:
         if self._storage_turn.acquire(blocking=False):
             return True
         with self.lock:
-            self._say(f"… Not {what} yet: a save or delete of this tab is waiting for the browser.")
+            self._say(f"… Not {what}: this tab's last save or delete is still under way.")
         return False
 
     def save_named(self, name: str) -> None:

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 
@@ -369,6 +370,19 @@ def _fields(args) -> int:
     return EXIT_VALID
 
 
+def _nulled(value):
+    """``value`` with every float that is not finite as None: strict JSON, whatever a
+    table holds (a review: an infinite grid value in a hand-edited table crashed
+    ``pareto --json``)."""
+    if isinstance(value, dict):
+        return {k: _nulled(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_nulled(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
 def _pareto(args) -> int:
     _need_pyarrow("camcore pareto reads Parquet")
     from .explore import FIGURES, table_front
@@ -380,7 +394,8 @@ def _pareto(args) -> int:
     if args.design is not None:
         return _front_design(args.table, f, args.design)
     if args.json:
-        print(json.dumps({"figures": names, **vars(f)}, indent=1, allow_nan=False))
+        doc = _nulled({"figures": names, **vars(f)})  # (a hand-edited table's inf: null)
+        print(json.dumps(doc, indent=1, allow_nan=False))
         return EXIT_VALID if f.front else EXIT_BREAKS_LIMITS
     broken = f.rows - f.valid - f.refused
     print(

@@ -167,11 +167,13 @@ def write_target(path: str | Path) -> Path:
 
 
 def _through_streams(path: Path) -> bool:
-    """Whether *path*, or a link on the way to its file, lies under /dev or /proc."""
+    """Whether *path*, or a link on the way to its file, or the folder it is in (a
+    link to /proc/self/fd: a review), lies under /dev or /proc."""
     streams = {"dev", "proc"}
     here = Path(os.path.abspath(path))
     for _ in range(40):  # (the kernel's own limit on links followed)
-        if here.parts[1:2] and here.parts[1] in streams:
+        folder = Path(os.path.realpath(here.parent))
+        if any(p.parts[1:2] and p.parts[1] in streams for p in (here, folder)):
             return True
         if not here.is_symlink():
             return False

@@ -2556,7 +2556,7 @@ def test_a_save_waits_for_the_browser_without_holding_the_tab(app, monkeypatch):
             assert s.design.cam.base_radius_mm == 90.0
             s.delete_saved("kept")  # (refused at once: one waits for the browser)
             s.save_named("again")
-            assert "waiting for the browser" in s.ui.files_md.content
+            assert "last save or delete is still under way" in s.ui.files_md.content
         finally:
             answer.set()
             save.join(10)
@@ -2954,8 +2954,12 @@ def test_the_name_to_keep_a_design_under_is_the_designs(tab):
     # an app review: renamed on the Design tab, the design was kept under the
     # preset's name, which the box still proposed; it follows the design's name
     s.load_preset("valve_lift_roller")
+    time.sleep(0.7)  # (changes less than 0.6 s apart are one step of the history)
     s.ui.controls["name"].value = "Valve cam v2 for press 7"
     assert s.ui.save_name.value == "Valve cam v2 for press 7"
+    s.travel("↶ Undo")  # (a review of the change: Undo kept the box at the new name)
+    assert s.design.name == load_preset("valve_lift_roller").name
+    assert s.ui.save_name.value == proposed_name(s.design.name)
 
 
 def test_saving_over_another_kept_design_asks_first(app, monkeypatch):

@@ -428,11 +428,15 @@ def test_a_write_refuses_a_stream_and_takes_the_longest_name(tmp_path):
     link.symlink_to("/proc/self/fd/1")
     with pytest.raises(FileError, match="under /dev or /proc"):
         write_atomic(link, b"x")
+    fds = tmp_path / "fds"  # a folder link into /proc (a review of the change)
+    fds.symlink_to("/proc/self/fd")
+    with pytest.raises(FileError, match="under /dev or /proc"):
+        write_atomic(fds / "1", b"x")
     longest = tmp_path / ("a" * 251 + ".stl")  # 255 bytes
     write_atomic(longest, b"solid")
     assert longest.read_bytes() == b"solid"
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
-        ["all.log", longest.name, "out.json"]
+        ["all.log", "fds", longest.name, "out.json"]
     )
 
 

@@ -332,6 +332,17 @@ def test_pareto_refuses_a_fifo_and_an_infinite_figure_is_no_figure(pareto_table,
     )
     assert js.returncode == 0 and "Infinity" not in js.stdout
     json.loads(js.stdout)
+    # ... and an infinite grid value is null in the JSON (a review: it crashed, exit 3)
+    k = t.column_names.index("grid.cam.base_radius_mm")
+    radii = np.full(t.num_rows, np.inf)
+    pq.write_table(t.set_column(k, "grid.cam.base_radius_mm", pa.array(radii)), edited)
+    js = subprocess.run(
+        [sys.executable, "-m", "camcore.cli", "pareto", str(edited), "--json"],
+        capture_output=True,
+        text=True,
+    )
+    assert js.returncode == 0, js.stderr
+    assert json.loads(js.stdout)["front"][0]["grid"]["cam.base_radius_mm"] is None
     knives = tmp_path / "knives.parquet"
     grid = {"follower.kind": ["knife_edge", "single_roller"], "cam.base_radius_mm": [70]}
     spec = sweep.parse_spec(json.dumps({"grid": grid}))
