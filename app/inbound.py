@@ -1,4 +1,5 @@
-"""Bounds on what a tab sends over the websocket, besides its uploads (app.uploads).
+"""Bounds on what a tab sends over the websocket, besides its uploads (app.uploads),
+and on the server's callback threads it may hold (TabLanes, at the end).
 
 viser 1.1.1 accepts websocket messages of up to 50 MB and keeps whatever value a client
 sends for a GUI element: any string for a text box or a dropdown, a tuple of any length
@@ -15,7 +16,8 @@ two numbers. So:
   casts would crash on (a list for a number).
 
 ``install`` must run before the server is created: viser registers its handlers as
-bound methods when the server starts.
+bound methods when the server starts. ``lane_tabs`` runs once it is created, before any
+tab connects.
 """
 
 from __future__ import annotations
