@@ -390,11 +390,16 @@ def _times(ratio: float) -> str:
     return f"{words[p - 1] if p <= len(words) else 'a million'} times"
 
 
+def _jammed(a) -> np.ndarray:
+    """(N,) the samples where a face touches and no guide mode balances (forces.jammed):
+    the guide_jam check's."""
+    return a.in_contact.any(0) & forces.jammed(a.guide)
+
+
 def _jams(a) -> bool:
     """Whether the guide jams anywhere a face touches, on the grid or between its
     samples (the guide_jam check of _forces)."""
-    jammed = a.in_contact.any(0) & forces.jammed(a.guide)
-    return bool(jammed.any() or a.worst.get("guide_jam"))
+    return bool(_jammed(a).any() or a.worst.get("guide_jam"))
 
 
 def _near_cusp(a, bad: np.ndarray, worst, top: float, allow: float) -> float | None:
@@ -650,7 +655,7 @@ def _forces(a) -> list[Violation]:
                 float(lost.sum()),
             )
         )
-    bad = touching & forces.jammed(a.guide)
+    bad = _jammed(a)
     found = a.worst.get("guide_jam")  # between the samples (extremes.jam_worst)
     extra = found.beyond(0.0, 1.0) if found else ()
     if bad.any() or extra:

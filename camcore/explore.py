@@ -350,9 +350,9 @@ def _lacking_why(
     t, values: np.ndarray, valid: np.ndarray, names: list[str], grid: list[str]
 ) -> list[str]:
     """Why ``valid`` rows of a table lack a figure (NaN or +-inf in ``values``, per row
-    and figure), as far as the table tells: a fast
-    sweep leaves the profile's figures out, a knife edge has no contact stress, and an
-    infinite value is no figure (a review: rollers' -inf had been blamed on knife edges)."""
+    and figure), as far as the table tells: a fast sweep leaves the profile's figures
+    out, a knife edge has no contact stress, and an infinite value is no figure (a
+    review: rollers' -inf had been blamed on knife edges)."""
     out = []
     missing = np.isnan(values) & valid[:, None]
     for j, n in enumerate(names):
