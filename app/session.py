@@ -758,6 +758,13 @@ class Session:
         self.ui.files_md.content = (  # a review's long file name had read as too big)
             f"✖ **{esc(_short(name))}** refused: {esc(why)}{size_note}."
         )
+        # an earlier file's red box is about that file, not this one (it had stayed,
+        # under this refusal); cleared only if the lock is free at once (see above)
+        if self.lock.acquire(blocking=False):
+            try:
+                self._file_error_seen()
+            finally:
+                self.lock.release()
 
     def download(self, kind: str, quick: bool = False) -> None:
         """Send the export ``kind`` of the design on screen, or say why not: under the

@@ -330,6 +330,28 @@ def test_a_refused_file_s_box_goes_at_the_next_file_action(tab, downloads):
     assert "Could not open the file" not in s.ui.status.content
 
 
+def test_a_refused_upload_clears_an_earlier_file_s_box(app, tab):
+    """The red box of a file that could not be opened is about that file: a later
+    upload refused for its size says so under Files, and the old box goes (it had
+    stayed, naming the earlier file, above the refusal)."""
+    from viser import _messages
+
+    s = tab
+    fire_upload(s.ui.upload_btn, "bad.json", b'{"cam": {"base_radius_mm": -40}}')
+    assert "Could not open the file" in s.ui.status.content
+    big = _messages.FileTransferStartUpload(
+        source_component_uuid=s.ui.upload_btn._impl.uuid,
+        transfer_uuid="t-big2",
+        filename="big.json",
+        mime_type="application/json",
+        part_count=50,
+        size_bytes=5_000_000,
+    )
+    s.client.gui._handle_file_transfer_start(s.client.client_id, big)
+    assert "big.json** refused" in s.ui.files_md.content
+    assert "Could not open the file" not in s.ui.status.content
+
+
 def test_preset_and_downloads(tab, downloads):
     s = tab
     s.ui.preset_dd.value = "Classroom: simple harmonic rise/fall, single concave face"
