@@ -261,6 +261,24 @@ def analyze(design: Design, verify: bool = True, theta: np.ndarray | None = None
     return _analyze(design, geo, st, th, verify)
 
 
+def _sampled(loc, design, geo, segs, st, th, tol: float) -> sampling.Sampled:
+    """The profile of the evaluated grid ``loc`` sampled to the chordal tolerance
+    ``tol`` [m], each segment boundary and station (``st``) a vertex."""
+    breaks = np.mod([*(g.start for g in segs), *st], 2 * np.pi)
+    cuts = np.unique(np.clip(np.searchsorted(th, breaks), 0, th.size - 1))
+    return sampling.sample_profile(
+        loc, geo, segs, lambda x: contacts(design, geo, segs, x), np.union1d(cuts, [0]), tol
+    )
+
+
+def profile_at(a: Analysis, tol: float) -> Analysis:
+    """``a`` with its profile sampled to the chordal tolerance ``tol`` [m] instead of
+    the design's: a cutter path needs a finer one where offsetting stretches the
+    chords (camcore.toolpath). Everything else is ``a``'s."""
+    made = _sampled(a, a.design, a.geo, a.segments, a.stations, a.theta, tol)
+    return replace(a, profile=made.polyline, chord_error=made.chord_error)
+
+
 def _analyze(
     design: Design,
     geo: profile.Geometry,
@@ -273,16 +291,7 @@ def _analyze(
     program on ``th`` if the caller has it (compare shares one between followers)."""
     segs = motion.segments(design)
     loc = evaluate(design, geo, segs, th, prog)
-    breaks = np.mod([*(g.start for g in segs), *st], 2 * np.pi)
-    cuts = np.unique(np.clip(np.searchsorted(th, breaks), 0, th.size - 1))
-    made = sampling.sample_profile(
-        loc,
-        geo,
-        segs,
-        lambda x: contacts(design, geo, segs, x),
-        np.union1d(cuts, [0]),
-        design.limits.export_tolerance_mm * MM,
-    )
+    made = _sampled(loc, design, geo, segs, st, th, design.limits.export_tolerance_mm * MM)
     result = Analysis(
         **vars(loc),
         design=design,

@@ -15,7 +15,8 @@ found with a k-d tree).
 Chordal accuracy. The profile's chords lie within its measured chord error e of the
 exact cam; offsetting by d scales a chord's sagitta on a convex stretch of radius rho
 by (rho + d) / rho, so the path lies within e (1 + d kappa_max) of the exact offset
-(kappa_max the largest convex curvature of the polyline). The G-code writes its
+(kappa_max the largest convex curvature of the polyline); where that passes the
+export tolerance, the path offsets a profile sampled finer (for_cutter). The G-code writes its
 coordinates to DECIMALS places, which moves a vertex by up to ROUNDING_MM more; the
 header states the sum, rounded up (a maker's review measured the written file 0.04 um
 beyond the bound that left the rounding out).
@@ -41,6 +42,8 @@ SPIN_UP_S = 2  # the dwell after M3 [s] (G4 P in seconds on LinuxCNC, grbl, Mach
 DECIMALS = 4  # of the X, Y words [mm]: 0.1 um, what controllers take
 ROUNDING_MM = 0.5 * 10.0**-DECIMALS * math.sqrt(2)  # the most a rounded vertex moves
 MAX_MOVES = 1_000_000  # lines of cutting moves in one file (~20 MB)
+FINEST_MM = 1e-5  # the finest profile sampled for a cutter path (the finest export
+# tolerance a design may ask for, camcore.model.Limits)
 
 
 class GougeError(ExportError):
@@ -108,9 +111,32 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
     Analysis) and its chordal bound [m]; GougeError where the cutter does not fit.
 
     cutter_diameter [m]: default the design's cam.cutter_diameter_mm."""
+    path, bound, _ = _cut(a, cutter_diameter)
+    return path, bound
+
+
+def for_cutter(a, D: float):
+    """``a``, or ``a`` with its profile sampled finer (camcore.analysis.profile_at), so
+    that the path of a cutter of diameter ``D`` [m] holds the export tolerance: its
+    chordal bound e (1 + d kappa_max) exceeds the profile's e (a review: a 500 mm cutter
+    on a 3 mm cam ran 2.5 mm inside the exact offset at a 0.1 mm tolerance). The profile
+    is sampled no finer than FINEST_MM: a bound still over the tolerance is stated."""
+    tol = a.design.limits.export_tolerance_mm * MM
+    grow = 1.0 + 0.5 * D * max(float(discrete_curvature(a.profile.points).max()), 0.0)
+    if a.chord_error * grow <= tol:
+        return a
+    from .analysis import profile_at  # (analysis is the heavier module: only when needed)
+
+    return profile_at(a, max(FINEST_MM * MM, tol / grow))
+
+
+def _cut(a, cutter_diameter: float | None) -> tuple[np.ndarray, float, np.ndarray]:
+    """cutter_path's path and bound, and the profile vertices [m] it offsets (finer
+    than ``a``'s where the cutter needs it: for_cutter)."""
     require_star_shaped(a)  # a self-crossing profile is no part, whatever the cutter
     D = a.design.cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
     d = 0.5 * D
+    a = for_cutter(a, D)
     pts = a.profile.points
     path = pts + d * vertex_normals(pts)
     gap = distance_to_polyline(path, pts, d)
@@ -129,7 +155,7 @@ def cutter_path(a, cutter_diameter: float | None = None) -> tuple[np.ndarray, fl
             f"({2 * to_mm(_tightest_concave(a)):.4g} mm) always fits"
         )
     kappa = max(float(discrete_curvature(pts).max()), 0.0)
-    return path, a.chord_error * (1.0 + d * kappa)
+    return path, a.chord_error * (1.0 + d * kappa), pts
 
 
 def _tightest_concave(a) -> float:
@@ -290,11 +316,11 @@ def gcode(a, cutter_diameter: float | None = None) -> str:
     feed, plunge = _plain(cam.feed_mm_per_min), _plain(cam.plunge_mm_per_min)
     check_passes(cam)
     D = cam.cutter_diameter_mm * MM if cutter_diameter is None else cutter_diameter
-    path, bound = cutter_path(a, D)
+    path, bound, pts = _cut(a, D)
     check_size(cam, path.shape[0] + 2)
     stated = round_up(to_mm(bound) + ROUNDING_MM)
     path = to_mm(path[::-1])  # clockwise
-    cam_r = to_mm(np.hypot(*a.profile.points.T))[::-1]  # the cam's radius at each vertex
+    cam_r = to_mm(np.hypot(*pts.T))[::-1]  # the cam's radius at each vertex
     # start at the path's outermost point and plunge D further out along its ray: the
     # cam and the blank (up to the cam's largest radius + D) lie inside that radius
     radius = np.hypot(path[:, 0], path[:, 1])
