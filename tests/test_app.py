@@ -277,7 +277,7 @@ def test_archard_k_is_entered_in_its_own_scale(tab):
     s.ui.controls["cam.width_mm"].value = 20.0  # another edit: k is not re-rounded
     assert s.design.wear.coefficient_mm3_per_N_m == 1e-8
     k.value = 2.0
-    assert s.design.wear.coefficient_mm3_per_N_m == pytest.approx(2e-9, rel=1e-15)
+    assert s.design.wear.coefficient_mm3_per_N_m == pytest.approx(2e-9, rel=1e-15, abs=0)
     assert "| wear depth max (Archard) | 0.0000 " not in s.ui.summary_md.content
     k.value = 0.0
     assert "| wear depth max (Archard) | 0.0000 " in s.ui.summary_md.content  # (can fail)

@@ -315,10 +315,61 @@ def test_rollers_roll_and_passes_add_up_along_the_profile():
     assert depth.max() <= h[0].max() + h[1].max() + 1e-30
     # the curve of the total at the touched point (the app's wear plot) reaches the
     # reported peak, and is never below a single pass where that face touches
-    total = wear.total_at_contacts(a, bins=360)
+    total = wear.total_at_contacts(a)
     assert total.max() == depth.max()
     assert np.all(total >= np.where(a.in_contact, h, 0.0).max(axis=0))
     assert np.all(total[~a.in_contact.any(axis=0)] == 0.0)
+
+
+def _archard_in_time(design, resolution_deg, sigma):
+    """Peak wear depth per cycle [m] by a model independent of camcore.wear's: run the
+    cam through a cycle and let each face, at each step dt, wear k F_N v_s dt / w_cam
+    (Archard's volume over the cam's width) spread along the cam around its contact
+    point as a Gaussian of width sigma [m]; add everything up at every contact point.
+    No passes, no travel speed u, no pairing of faces: only where each face is when."""
+    from scipy.spatial import cKDTree
+
+    from camcore.forces import tangential_slip
+    from camcore.model import omega_rad_s
+
+    d = design.model_copy(
+        update={"limits": design.limits.model_copy(update={"resolution_deg": resolution_deg})}
+    )
+    a = analyze(d, verify=False)
+    w = omega_rad_s(d)
+    dt = np.gradient(a.theta) / w
+    v_s = np.abs(tangential_slip(a.point_world, a.normal, a.prog.V)) * w
+    k = d.wear.coefficient_mm3_per_N_m * 1e-9
+    on = a.in_contact
+    points = a.point_body[on]
+    worn = (k * np.maximum(a.FN, 0.0) * v_s * dt[None, :] / (d.cam.width_mm * MM))[on]
+    tree = cKDTree(points)
+    depth = np.zeros(len(points))
+    for i, near in enumerate(tree.query_ball_point(points, 4 * sigma)):
+        r = np.linalg.norm(points[near] - points[i], axis=1)
+        depth[i] = worn[near] @ np.exp(-0.5 * (r / sigma) ** 2) / (np.sqrt(2 * np.pi) * sigma)
+    return depth.max()
+
+
+@pytest.mark.parametrize(
+    "preset, kind",
+    [
+        ("classroom_harmonic", "double_concave"),  # the faces meet where the rise ends
+        ("paper_example", "double_concave"),
+        ("paper_example", "knife_edge"),
+    ],
+)
+def test_the_wear_peak_agrees_with_archard_run_in_time(preset, kind):
+    """The reported peak wear (camcore.wear.along_profile, per pass, at the design's
+    0.1 deg) against the time-stepped model above at 0.02 deg. A review found a double
+    follower's peak 21 % high when each face's largest pass per bin of the cam was added
+    to the other's: near the end of classroom_harmonic's rise, the two came from
+    different cam points."""
+    from camcore import wear
+
+    d = load_preset(preset).with_kind(kind)
+    reported = wear.along_profile(analyze(d, verify=False))[1].max()
+    assert reported == pytest.approx(_archard_in_time(d, 0.02, 0.1e-3), rel=2e-3, abs=0)
 
 
 def test_pitting_life_follows_the_stress_life_curve():
