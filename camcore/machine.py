@@ -183,10 +183,9 @@ def shaft(a) -> Shaft:
     flywheel sizing, e.g. Shigley, *Mechanical Engineering Design*, flywheels)."""
     w = omega_rad_s(a.design)
     T = a.torque.sum(axis=0)
-    # cumulative trapezoid over the closed cycle: the grid's 0 comes back at 2 pi
     th = np.append(a.theta, a.theta[0] + 2 * np.pi)
-    Tc = np.append(T, T[0])
-    cum = np.concatenate([[0.0], np.cumsum(0.5 * (Tc[1:] + Tc[:-1]) * np.diff(th))])
+    cuts = np.array([g.start for g in a.segments])
+    cum = cycle_work(a.theta[None], T[None], np.ones((1, T.size), bool), cuts)[0]
     cum += impulse_work(a.design, th)
     T_mean = cum[-1] / (2 * np.pi)
     energy = cum - T_mean * (th - th[0])
@@ -197,6 +196,39 @@ def shaft(a) -> Shaft:
     c_w2 = a.design.dynamics.speed_fluctuation * w**2
     inertia = delta_E / c_w2 if c_w2 > 0 else np.inf  # a crawling cam: no flywheel helps
     return Shaft(T, drive, brake, drive * w, float(T_mean) * w, delta_E, inertia)
+
+
+def cycle_work(theta: np.ndarray, T: np.ndarray, real: np.ndarray, cuts) -> np.ndarray:
+    """The work of the torque T [N m] from the first angle on, (B, N + 1) [J]: trapezoids
+    over each grid of ``theta`` (B, N) [rad] closed at 2 pi on (``real``: False on a
+    padding, which repeats a grid's last angle).
+
+    The torque can step where the motion program's segments meet (``cuts`` [rad]: V or
+    A jumps), and a grid's sample there holds one side's value. So the trapezoids on
+    either side of such a sample use the value extrapolated from their own side (the
+    two samples before, or after), unless a neighbour is on a cut too. Without this the
+    trapezoid lost half a step's strip per jump: a frictionless constant-velocity
+    rise's mean power was 0.026 W at 0.1 deg, not 0 (a review)."""
+    B, N = T.shape
+    n = real.sum(axis=1)  # each grid's real samples
+    cut = real & (np.abs(theta[..., None] - np.mod(cuts, 2 * np.pi)) < 1e-12).any(axis=-1)
+    left, right = T.copy(), T.copy()  # T just before, and just after, each sample
+    b, i = np.nonzero(cut)
+    for side, out in ((-1, left), (1, right)):
+        j1, j2 = (i + side) % n[b], (i + 2 * side) % n[b]
+        ok = ~cut[b, j1] & ~cut[b, j2] & (n[b] > 2)
+        t0 = theta[b, i]
+        # the neighbours' angles on their side of t0 (a grid wraps at 2 pi)
+        t1 = theta[b, j1] + 2 * np.pi * side * ((j1 - i) * side < 0)
+        t2 = theta[b, j2] + 2 * np.pi * side * ((j2 - i) * side < 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ext = T[b, j1] + (T[b, j1] - T[b, j2]) * (t0 - t1) / (t1 - t2)
+        out[b[ok], i[ok]] = ext[ok]
+    right = np.where(real, right, right[np.arange(B), n - 1][:, None])  # (the padding)
+    th = np.concatenate([theta, theta[:, :1] + 2 * np.pi], axis=1)
+    ends = np.concatenate([left[:, 1:], left[:, :1]], axis=1)  # each step's far end
+    steps = 0.5 * (right + ends) * np.diff(th, axis=1)
+    return np.concatenate([np.zeros((B, 1)), np.cumsum(steps, axis=1)], axis=1)
 
 
 def impulse_work(design: Design, th: np.ndarray) -> np.ndarray:
