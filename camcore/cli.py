@@ -11,7 +11,8 @@ Exit status (the same for every command, so scripts can rely on it):
   error``.
 
 ``sweep`` exits 0 when its table is written (each row has its own verdict), 130
-when interrupted (the same command resumes) and 2 on bad input. ``pareto`` exits 0
+when interrupted, by Ctrl-C or by a Dask cluster that lost a chunk for good (the same
+command resumes), and 2 on bad input. ``pareto`` exits 0
 when it finds a front, 1 when no valid design has the figures, 2 on bad input.
 """
 
@@ -633,6 +634,7 @@ def main(argv: list[str] | None = None) -> int:
     from .export import ExportError
     from .files import FileError
     from .model import format_validation_error
+    from .sweep import ClusterLost
 
     args = _parser().parse_args(argv)
     try:
@@ -646,6 +648,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"camcore: error: {_shown(format_validation_error(exc))}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
+        return 130
+    except ClusterLost as exc:  # not ours, nor the input's: the kept chunks resume
+        print(f"camcore: interrupted: {_shown(str(exc))}", file=sys.stderr)
         return 130
     except BrokenPipeError:
         return 0

@@ -1003,6 +1003,24 @@ def _check_tree(node, path: str = "", depth: int = 1) -> None:
             _check_tree(value, f"{path}.{i}", depth + 1)
 
 
+def json_document(text: str | bytes):
+    """``text`` parsed as JSON, strictly (a key twice, NaN and Infinity refused), or a
+    DesignError that says where and why in words, never Python's own advice."""
+    try:
+        return json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
+    except json.JSONDecodeError as exc:  # where the file stops being JSON, in words
+        what = exc.msg.lower().removesuffix(" at")  # ("unterminated string starting at")
+        raise DesignError(
+            f"not a JSON document: {what} at line {exc.lineno}, column {exc.colno}"
+        ) from None
+    except (ValueError, RecursionError) as exc:
+        if "integer string conversion" in str(exc):  # (Python's advice, not the user's:
+            raise DesignError(  # a CLI review)
+                "a JSON number of more than 4300 digits (no field takes one)"
+            ) from None
+        raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None
+
+
 def design_from_json(text: str | bytes) -> Design:
     """Parse a design JSON document strictly, turning every failure into a one-line DesignError.
 
@@ -1024,19 +1042,7 @@ def design_from_json(text: str | bytes) -> Design:
             ) from None
     if not text.strip():
         raise DesignError("the file is empty: a design is a JSON text file")
-    try:
-        data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
-    except json.JSONDecodeError as exc:  # where the file stops being JSON, in words
-        what = exc.msg.lower().removesuffix(" at")  # ("unterminated string starting at")
-        raise DesignError(
-            f"not a JSON document: {what} at line {exc.lineno}, column {exc.colno}"
-        ) from None
-    except (ValueError, RecursionError) as exc:
-        if "integer string conversion" in str(exc):  # (Python's advice, not the user's:
-            raise DesignError(  # a CLI review)
-                "not a design: a JSON number of more than 4300 digits (no field takes one)"
-            ) from None
-        raise DesignError(f"not a JSON document: {str(exc)[:200]}") from None
+    data = json_document(text)
     if not isinstance(data, dict):
         raise DesignError(f"a design is a JSON object, got {type(data).__name__}")
     _check_tree(data)

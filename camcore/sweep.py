@@ -74,6 +74,10 @@ MAX_VALUES = 100_000  # values per grid axis
 MAX_AXES = 300  # grid fields: more than a design has (63 and 4 a segment, 48 segments)
 DEFAULT_CHUNK = 32
 MAX_CHUNK = 512  # designs per chunk: the batched core holds ~2 MB a design (0.1 deg grid)
+# grid samples the batched core takes at once (MAX_CHUNK designs at 0.1 deg, ~1 GB): a
+# chunk of finer designs goes through it in parts (a review: 32 designs at 0.01 deg held
+# 680 MB, ten times the designs' share at 0.1 deg)
+BATCH_SAMPLES = MAX_CHUNK * 3601
 SPEC_METADATA = "camcore.sweep"  # the table's key-value metadata: its SPEC (Spec.document)
 VERSION_METADATA = "camcore.version"
 CODE_METADATA = "camcore.code"  # camcore.code_fingerprint of the code that made the rows
@@ -251,12 +255,12 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     folder of the spec's file, where a base ``{"file": NAME}`` is read from (the command
     line's; a spec from anywhere else names no file: a designer's review had pasted a
     whole design into the spec)."""
-    from .model import _check_tree, _non_finite, _object_pairs
+    from .model import _check_tree, json_document
 
     try:
-        data = json.loads(text, object_pairs_hook=_object_pairs, parse_constant=_non_finite)
-    except (ValueError, RecursionError) as exc:
-        raise DesignError(f"sweep spec: not a JSON document: {str(exc)[:200]}") from None
+        data = json_document(text)
+    except DesignError as exc:
+        raise DesignError(f"sweep spec: {exc}") from None
     if not isinstance(data, dict) or set(data) - {"base", "grid", "balance"} or "grid" not in data:
         raise DesignError('sweep spec: an object with "grid" and optionally "base", "balance"')
     _check_tree(data)
@@ -288,6 +292,8 @@ def parse_spec(text: str | bytes, base_dir: str | Path | None = None) -> Spec:
     if size > MAX_DESIGNS:
         many = f"{size}" if size < 10**15 else "over 10^15"
         raise DesignError(f"grid: {many} designs; at most {MAX_DESIGNS} per sweep")
+    if "schema_version" in grid:  # (a review's range of it gave a table of non-designs)
+        raise DesignError("grid.schema_version: the design file's format, not a parameter")
     axes = tuple((str(path), axis_values(path, raw)) for path, raw in grid.items())
     _one_field_each([p for p, _ in axes])
     base_dict = json.loads(design.model_dump_json())
@@ -570,12 +576,27 @@ def _fast_rows(points: list[dict], made: list[Design | str]) -> list[dict]:
     for (*_, ok), members in groups.items():
         designs = [d for _, d in members]
         if ok:
-            sums = batch.summaries(designs)
+            sums = [s for part in _parts_of(designs) for s in batch.summaries(part)]
         else:
             sums = [{**summary(analyze(d, verify=False)), "profile_checked": True} for d in designs]
         for (i, _), s in zip(members, sums, strict=True):
             rows[i] = {**rows[i], **flatten(s), "valid": s["valid"], "error": None}
     return rows
+
+
+def _parts_of(designs: list[Design]) -> list[list[Design]]:
+    """``designs`` in order, in parts of at most BATCH_SAMPLES grid samples (each
+    design's 360 / resolution + 1; at least one design a part)."""
+    parts: list[list[Design]] = [[]]
+    held = 0
+    for d in designs:
+        n = int(360.0 / d.limits.resolution_deg) + 1
+        if parts[-1] and held + n > BATCH_SAMPLES:
+            parts.append([])
+            held = 0
+        parts[-1].append(d)
+        held += n
+    return parts
 
 
 def _table(rows: list[dict]):
@@ -819,6 +840,10 @@ def _compute(
                     keep(i, run_chunk(spec.base, spec.chunk(i, chunk), how[0], how[1], memo))
             else:
                 _run_dask(client, spec, chunk, todo, how, keep)
+        except ClusterLost as exc:
+            raise ClusterLost(
+                f"{exc}; {done} of {total} designs are kept in {parts}: the same command resumes"
+            ) from None
         except KeyboardInterrupt:
             if progress and done:
                 sys.stderr.write(
@@ -952,16 +977,40 @@ def _run_dask(client, spec, chunk, todo, how, keep) -> None:
     from dask.distributed import as_completed
 
     same_code_on_workers(client)
-    # the base goes out wrapped in a list: a dict would be scattered key by key under
-    # its own keys ("cam", "name", ...), shared with any other sweep on that cluster
-    [base] = client.scatter([spec.base], broadcast=True)
+    # The base design (a few kB) goes inside each task, not scattered: a scattered value
+    # lives only on workers, and two workers killed 0.2 s apart lost every copy, which
+    # ended the run as an internal error (a review). A task's own arguments survive on
+    # the scheduler, so Dask reruns a lost worker's chunks elsewhere.
     code = code_fingerprint()
     futures = {
-        client.submit(checked_chunk, code, base, spec.chunk(i, chunk), *how, pure=False): i
+        client.submit(checked_chunk, code, spec.base, spec.chunk(i, chunk), *how, pure=False): i
         for i in todo
     }
     for fut in as_completed(futures):
-        keep(futures[fut], fut.result())
+        keep(futures[fut], chunk_result(fut, futures[fut]))
+
+
+class ClusterLost(RuntimeError):
+    """The Dask cluster lost a chunk for good (its workers kept dying, or the scheduler
+    went away): the chunks already kept stay, and the same command resumes."""
+
+
+def chunk_result(fut, i: int) -> list[dict]:
+    """The rows of chunk ``i``'s Dask future; ClusterLost where the cluster, not our
+    code, failed it: a KilledWorker (Dask gave up after its workers died running it
+    again and again), a cancelled future (the scheduler restarted or left) or a closed
+    connection."""
+    from concurrent.futures import CancelledError
+
+    from dask.distributed import KilledWorker
+    from distributed.comm.core import CommClosedError
+
+    try:
+        return fut.result()
+    except (KilledWorker, CancelledError, CommClosedError, OSError) as exc:
+        raise ClusterLost(
+            f"the Dask cluster lost chunk {i} ({type(exc).__name__}: {str(exc)[:160]})"
+        ) from None
 
 
 def design_of_row(path: str | Path, row: int) -> Design:
