@@ -377,6 +377,7 @@ FOLDERS: tuple[tuple[str, bool, tuple[Spec, ...]], ...] = (
 )
 
 SPECS: tuple[Spec, ...] = tuple(s for _, _, specs in FOLDERS for s in specs)
+SPEC_BY_PATH: dict[str, Spec] = {s.path: s for s in SPECS}
 NONE_AS_ZERO = frozenset(s.path for s in SPECS if s.zero_is_none)
 SCALES = {s.path: s.scale for s in SPECS if s.scale != 1.0}
 # a dropdown's word -> the design's value (a value itself is taken as it is)

@@ -99,6 +99,9 @@ UNFINISHED_NOTE = (
 # Background work (the verified analysis and the comparison: ~0.1 s each) waits until a
 # tab has been still this long, and runs for one tab at a time across the server.
 SETTLE_S = 0.6
+# how soon after a value typed beyond a slider's end the same end arriving is taken for
+# the browser's clamp (Session._note_arrival) [s]: a Tab follows a keystroke within it
+CLAMP_WINDOW_S = 1.0
 BACKGROUND = threading.BoundedSemaphore(1)
 # Re-analyses of all tabs run one at a time. Many threads each making many short numpy
 # calls (each releases and retakes the GIL) convoy: with 30 tabs at once every call
@@ -184,6 +187,10 @@ class Session:
         self._kept_program: str | None = _UNREAD
         self._ticket_lock, self._tickets = threading.Lock(), dict.fromkeys(TICKETS, 0)
         self._waiting: set[str] = set()  # the kinds of action with a thread waiting its turn
+        # each slider's last value as it arrived, and when; a browser clamp to undo
+        # (value, time.monotonic(), the slider's min and max then)
+        self._arrived: dict[str, tuple[float, float, float, float]] = {}
+        self._unclamp: dict[str, tuple[float, float]] = {}  # (typed, clamped)
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
         with self.lock:
@@ -210,8 +217,8 @@ class Session:
         ui.stations_btn.on_click(lambda e: self.goto_station(e.target.value))
         ui.step_btns.on_click(lambda e: self.step(e.target.value))
         ui.history_btns.on_click(lambda e: self.travel(e.target.value))
-        for h in ui.controls.values():
-            h.on_update(lambda _e: self.on_control())
+        for path, h in ui.controls.items():
+            h.on_update(lambda _e, p=path: self.on_control(p))
         ui.segments.on_change, ui.segments.lock = self.on_segments, self.lock
         for name, cb in ui.overlay_boxes.items():
             cb.on_update(lambda e, n=name: self._set_overlay(n, e.target.value))
@@ -241,8 +248,9 @@ class Session:
         )
 
     # --- design changes -------------------------------------------------------------
-    def on_control(self) -> None:
-        """Any design control changed: rebuild the design from all controls.
+    def on_control(self, path: str | None = None) -> None:
+        """Any design control changed (``path``: which): rebuild the design from all
+        controls.
 
         Changes coalesce: each callback takes a ticket, and only the newest ticket
         redraws (it reads every control's latest value), so a burst of slider events
@@ -250,12 +258,15 @@ class Session:
         """
         if self._syncing and self._syncer == threading.get_ident():
             return  # our own write into a control (no ticket: a waiting edit stays newest)
+        if path is not None:
+            self._note_arrival(path)
         if not self._queue("controls"):
             return  # (the one waiting reads this change too)
         with self.lock:
             self._turn("controls")
             if self._syncing or self.closed.is_set():
                 return
+            self._undo_clamps()
             self._widen_sliders()
             values = self._greyed_back(self._values())
             # an unfinished program in the table stays (with this edit) until it is valid
@@ -523,6 +534,41 @@ class Session:
     def _propose_name(self, name: str) -> None:
         """The name the Save box proposes for the design on screen. Lock held."""
         self.ui.save_name.value = storage.proposed_name(name)
+
+    def _note_arrival(self, path: str) -> None:
+        """Note a slider's value as it arrives, before any wait for the lock (a later
+        edit may supersede this one's turn). A value on the slider's own end that comes
+        within CLAMP_WINDOW_S of one typed beyond that end is the browser's number box
+        cutting it back as it loses focus, before the widened range (_widen_sliders)
+        reached it: a review typed a lift of 70 on a 60 mm slider and tabbed away at
+        once, and the 60 mm cam was drawn without a word (2 tries of 4). Marked to undo;
+        a value typed on purpose passes through others on the way ("6", then "60")."""
+        spec, h = controls.SPEC_BY_PATH.get(path), self.ui.controls[path]
+        if spec is None or spec.widget != "slider" or not isinstance(h.value, int | float):
+            return
+        v, lo, hi = h.value, h.min, h.max  # (the range the browser has, or soon will)
+        now = time.monotonic()
+        with self._ticket_lock:
+            before = self._arrived.get(path)
+            self._arrived[path] = (float(v), now, lo, hi)
+            if before is None or now - before[1] > CLAMP_WINDOW_S:
+                return
+            typed, _, lo, hi = before  # the range when the value beyond it was typed
+            if (v == hi and typed > hi) or (v == lo and typed < lo):
+                self._unclamp[path] = (typed, float(v))
+            else:
+                self._unclamp.pop(path, None)
+
+    def _undo_clamps(self) -> None:
+        """Put back the values the browser cut back (_note_arrival), into the controls
+        and so into the tab's boxes. Lock held."""
+        with self._ticket_lock:
+            undo, self._unclamp = self._unclamp, {}
+        with self._quiet():
+            for path, (typed, clamped) in undo.items():
+                h = self.ui.controls[path]
+                if h.value == clamped:  # (not changed again since)
+                    h.value = typed
 
     def _widen_sliders(self) -> None:
         """A value typed into a slider's box beyond its range widens the range: the

@@ -267,6 +267,41 @@ def test_a_value_typed_beyond_a_slider_widens_it(tab):
     assert s.error is None and lift.max == 60
 
 
+def test_the_browser_s_clamp_of_a_value_typed_beyond_a_slider_is_undone(tab):
+    """The box beside a slider cuts a value beyond the slider's range back to its end
+    when it loses focus, and sends that; if the Tab comes before the widened range
+    reached the browser, the end arrives just after the value typed (a review: a lift
+    of 70 on the 60 mm slider drew a 60 mm cam without a word, 2 tries of 4; an r_f of
+    -10 became -20 with a red box naming -20). That end is undone; a value passing
+    through others on the way, or coming later, is the user's."""
+    s = tab
+    lift = s.ui.controls["motion.lift_mm"]
+    lift.value = 70.0  # the slider ends at 60
+    lift.value = 60.0  # the browser's clamp, at once
+    assert s.design.motion.lift_mm == 70.0 and lift.value == 70.0 and lift.max >= 70.0
+    face = s.ui.controls["follower.face_radius_mm"]
+    face.value = -10.0  # above the slider's -20
+    face.value = -20.0
+    assert face.value == -10.0 and s.error is not None
+    assert "|r_f| = 10 mm" in s.error
+    face.value = -250.0
+    # typed on purpose: 70, then 6 and 60 (each keystroke arrives)
+    lift.value = 70.0
+    lift.value = 6.0
+    lift.value = 60.0
+    assert s.design.motion.lift_mm == 60.0 and lift.value == 60.0
+    # the end, later than a Tab comes
+    lift.value = 70.0
+    s._arrived["motion.lift_mm"] = (70.0, time.monotonic() - 5.0, 0.0, 60.0)
+    lift.value = 60.0
+    assert s.design.motion.lift_mm == 60.0
+    # the browser clamps to the range it has: a slider widened to 70 cuts 90 to 70
+    lift.value = 70.0
+    lift.value = 90.0
+    lift.value = 70.0
+    assert s.design.motion.lift_mm == 90.0 and lift.max >= 90.0
+
+
 def test_archard_k_is_entered_in_its_own_scale(tab):
     """Archard's k (~1e-8 mm^3/(N m)) is below what the browser's number box keeps (7
     decimals: it became 0, switching wear off): the control is in 1e-9 mm^3/(N m). The

@@ -388,6 +388,18 @@ def test_trust_in_the_browser(tmp_path):
             page.wait_for_timeout(1500)  # the browser's redraw of every control
             assert session.design.motion.lift_mm == 70.0
             assert _field(page, "Lift h").input_value() == "70"
+            # beyond the range again, and away at once: the box may clamp to 70 before
+            # the widened range arrives; the server undoes that clamp (a review's 70 on
+            # the 60 mm slider, 2 tries of 4, had drawn a 60 mm cam)
+            for typed in ("75", "80"):
+                _field(page, "Lift h").fill(typed)
+                _field(page, "Lift h").press("Tab")
+                page.wait_for_timeout(1500)
+                assert session.design.motion.lift_mm == float(typed)
+                assert _field(page, "Lift h").input_value() == typed
+            _field(page, "Lift h").fill("70")
+            _field(page, "Lift h").press("Enter")
+            _wait(lambda: session.design.motion.lift_mm == 70.0)
             # the status box stays in sight while the panel scrolls to a lower control
             top = _box(page, "#cam-status")
             lift_y = _field(page, "Lift h").bounding_box()["y"]
