@@ -92,6 +92,7 @@ class Layout:
     angle_slider: Any
     pause_box: Any
     stations_btn: Any
+    stations_md: Any  # the stations' angles
     step_btns: Any
     where_md: Any
     # Design tab
@@ -150,6 +151,9 @@ def build_layout(gui, base: Design, first, speed_deg_s: float) -> Layout:
             "changes: time to say what happens there",
         )
         h["stations_btn"] = gui.add_button_group("Go to station", STATION_NAMES)
+        # each station's angle, in sight (as the buttons' hint it covered the step
+        # buttons and the angle box at every station click: an app review at 1280x720)
+        h["stations_md"] = gui.add_markdown("")
         h["where_md"] = gui.add_markdown("")
     tabs = gui.add_tab_group()
     with tabs.add_tab("Design"):

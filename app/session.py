@@ -713,13 +713,15 @@ class Session:
         names = tuple(str(i) for i in range(len(a.stations)))
         if tuple(self.ui.stations_btn.options) != names:
             self.ui.stations_btn.options = names
-        # each station's angle in the label's hint (a teacher's review: the buttons
-        # said nothing of where they go)
-        hint = "the cam angle of each station: " + ", ".join(
-            f"{i}: {math.degrees(t):.1f}°" for i, t in enumerate(a.stations)
+        # each station's angle (a teacher's review: the buttons said nothing of where
+        # they go), under them, not as their hint (it covered the step buttons)
+        text = (
+            '<div style="font-size: 0.7em; line-height: 1.2; margin-top: -0.6em">at θ = '
+            + " · ".join(f"{i}: {math.degrees(t):.1f}°" for i, t in enumerate(a.stations))
+            + "</div>"
         )
-        if self.ui.stations_btn.hint != hint:
-            self.ui.stations_btn.hint = hint
+        if self.ui.stations_md.content != text:
+            self.ui.stations_md.content = text
 
     # --- background: the verified analysis and the comparison ------------------------
     def refine(self) -> None:

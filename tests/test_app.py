@@ -1037,8 +1037,9 @@ def test_segment_table_edits_the_program(tab):
     s.load_preset("double_index")
     assert len(s.ui.segments.rows) == 8
     assert s.ui.stations_btn.options == tuple(str(i) for i in range(12))
-    hint = s.ui.stations_btn.hint  # each button's angle (a teacher's review)
-    assert hint.count("°") == 12 and f"11: {np.degrees(s.analysis.stations[11]):.1f}°" in hint
+    said = s.ui.stations_md.content  # each button's angle (a teacher's review)
+    assert said.count("°") == 12 and f"11: {np.degrees(s.analysis.stations[11]):.1f}°" in said
+    assert s.ui.stations_btn.hint is None  # (a hint covered the step buttons)
     s.goto_station("11")
     assert abs(s.theta_deg - 350.0) < 0.6
     s.goto_station("12")  # no such station: ignored
