@@ -502,9 +502,21 @@ def _reference_layers(doc, a, p: np.ndarray, xyb: list[tuple[float, float, float
     msp.add_line((0.0, 0.3 * r_min), (0.0, top), dxfattribs={"layer": "DATUM"})
     notes = (datum_note(a), file_label(a, edited=False), edited_note(a.design))
     for text, y in zip(filter(None, notes), (0.35, 0.29, 0.23), strict=False):
-        msp.add_text(text, height=0.04 * r_min, dxfattribs={"layer": "DATUM"}).set_placement(
-            (0.02 * r_min, y * r_min)
-        )
+        note = msp.add_text(text, height=0.04 * r_min, dxfattribs={"layer": "DATUM"})
+        note.set_placement((0.02 * r_min, y * r_min))
+        _fit_inside(note, 0.9 * r_min)
+
+
+def _fit_inside(note, right: float) -> None:
+    """Shrink the TEXT ``note`` to end by x = ``right`` [mm] (inside the cam): a note of
+    the file's 110 characters had run 2.5 cam radii past the cam, and a viewer's zoom
+    to extents showed mostly text (an export review)."""
+    from ezdxf import bbox
+
+    box = bbox.extents([note])
+    if box.has_data and box.extmax.x > right:
+        left = note.dxf.insert.x
+        note.dxf.height *= (right - left) / (box.extmax.x - left)
 
 
 FACE_MARGIN_MM = 2.0  # the follower drawing's face reaches this beyond the contact [mm]
