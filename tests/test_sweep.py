@@ -517,6 +517,13 @@ def test_dask_local_cluster_gives_the_same_rows(tmp_path):
     assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
 
 
+def _run_on(cluster, spec, out, progress=None) -> None:
+    """``spec`` swept on an existing Dask cluster (as --scheduler does), a chunk a design."""
+    sweep.run(
+        spec, out, chunk=1, verify=False, scheduler=cluster.scheduler_address, progress=progress
+    )
+
+
 def test_a_sweep_outlives_its_dask_workers_dying(tmp_path):
     """A review killed both workers of a cluster 0.2 s apart: the base design, scattered
     to the workers alone, was lost with them and the run ended as an internal error.
@@ -544,14 +551,7 @@ def test_a_sweep_outlives_its_dask_workers_dying(tmp_path):
                     time.sleep(0.2)
             done.set()
 
-        sweep.run(
-            spec,
-            tmp_path / "dask.parquet",
-            chunk=1,
-            verify=False,
-            scheduler=cluster.scheduler_address,
-            progress=kill_after_first_chunk,
-        )
+        _run_on(cluster, spec, tmp_path / "dask.parquet", kill_after_first_chunk)
         assert done.is_set() and {n.pid for n in cluster.workers.values()}.isdisjoint(pids)
     assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
 
@@ -678,14 +678,7 @@ def test_sweeps_sharing_a_cluster_keep_their_own_base(tmp_path):
     ):
         paper = sweep.parse_spec(json.dumps(SPEC)).base
         held = other.scatter(paper, broadcast=True)  # as another sweep's base was  # noqa: F841
-        sweep.run(
-            spec,
-            tmp_path / "dask.parquet",
-            chunk=1,
-            verify=False,
-            scheduler=cluster.scheduler_address,
-            progress=None,
-        )
+        _run_on(cluster, spec, tmp_path / "dask.parquet")
     assert rows_of(tmp_path / "dask.parquet") == rows_of(tmp_path / "local.parquet")
 
 
