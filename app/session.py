@@ -188,8 +188,9 @@ class Session:
         self._ticket_lock, self._tickets = threading.Lock(), dict.fromkeys(TICKETS, 0)
         self._waiting: set[str] = set()  # the kinds of action with a thread waiting its turn
         # each slider's last value as it arrived, and when; a browser clamp to undo
-        # (value, time.monotonic(), the slider's min and max then)
-        self._arrived: dict[str, tuple[float, float, float, float]] = {}
+        # each slider's latest values as they arrived: (value, time.monotonic(), the
+        # slider's min and max then)
+        self._arrived: dict[str, list[tuple[float, float, float, float]]] = {}
         self._unclamp: dict[str, tuple[float, float]] = {}  # (typed, clamped)
         self.ticker = Ticker(self._tick, FPS, name=f"cam-animate-{id(self)}")
         self.refiner = Debouncer(self.refine, SETTLE_S, BACKGROUND, name=f"cam-refine-{id(self)}")
@@ -266,7 +267,7 @@ class Session:
             self._turn("controls")
             if self._syncing or self.closed.is_set():
                 return
-            self._undo_clamps()
+            undone = self._undo_clamps()
             self._widen_sliders()
             values = self._greyed_back(self._values())
             # an unfinished program in the table stays (with this edit) until it is valid
@@ -275,6 +276,7 @@ class Session:
                 self._show_error(err)
                 self.ui.low_dwell_md.content = low_dwell_text(values)  # e.g. "negative"
                 self._keep_edit_beside_program(values)
+                self._tell_undone(undone)
                 return
             self.error = self.file_error = None
             if self._typed_program is not None:  # the table's program, valid at last:
@@ -287,6 +289,13 @@ class Session:
             design = self._renamed_for_kind(design)
             self._follow_name(self.design.name, design.name)
             self._apply(design)
+            self._tell_undone(undone)
+
+    def _tell_undone(self, undone: list[str]) -> None:
+        """Say, under the quick download button at the top (after the redraw, which
+        clears it), which clamps _undo_clamps took back. Lock held."""
+        if undone:
+            self.ui.quick_md.content = "ℹ " + " ".join(undone)
 
     def use_proposed_spring(self) -> None:
         """Put the spring rate the key numbers propose (machine.spring's proposal, at
@@ -541,34 +550,51 @@ class Session:
         within CLAMP_WINDOW_S of one typed beyond that end is the browser's number box
         cutting it back as it loses focus, before the widened range (_widen_sliders)
         reached it: a review typed a lift of 70 on a 60 mm slider and tabbed away at
-        once, and the 60 mm cam was drawn without a word (2 tries of 4). Marked to undo;
-        a value typed on purpose passes through others on the way ("6", then "60")."""
+        once, and the 60 mm cam was drawn without a word (2 tries of 4). Marked to undo,
+        and the undo is said (_tell_undone): a user who went back to the end at once (a
+        typo's 600 taken back to 60, a review) reads to type it again. Both cases look
+        alike from here, and the other choice would leave the clamp silent whenever the
+        slider's end is the last value typed beyond it (a widened range ends there). A
+        value typed on purpose passes through others ("6", "60")."""
         spec, h = controls.SPEC_BY_PATH.get(path), self.ui.controls[path]
         if spec is None or spec.widget != "slider" or not isinstance(h.value, int | float):
             return
-        v, lo, hi = h.value, h.min, h.max  # (the range the browser has, or soon will)
-        now = time.monotonic()
+        v, now = float(h.value), time.monotonic()
         with self._ticket_lock:
-            before = self._arrived.get(path)
-            self._arrived[path] = (float(v), now, lo, hi)
-            if before is None or now - before[1] > CLAMP_WINDOW_S:
+            seen = self._arrived.get(path, [])
+            self._arrived[path] = [*seen[-7:], (v, now, h.min, h.max)]
+            # the arrivals within the window, each with the range it met: the browser
+            # clamps to one of those (the newest may not have reached it yet)
+            recent = [x for x in seen if now - x[1] <= CLAMP_WINDOW_S]
+            if not recent or recent[-1] is not seen[-1]:
                 return
-            typed, _, lo, hi = before  # the range when the value beyond it was typed
-            if (v == hi and typed > hi) or (v == lo and typed < lo):
-                self._unclamp[path] = (typed, float(v))
+            typed = recent[-1][0]
+            beyond = (typed > v and v in {x[3] for x in recent}) or (
+                typed < v and v in {x[2] for x in recent}
+            )
+            if beyond:
+                self._unclamp[path] = (typed, v)
             else:
                 self._unclamp.pop(path, None)
 
-    def _undo_clamps(self) -> None:
+    def _undo_clamps(self) -> list[str]:
         """Put back the values the browser cut back (_note_arrival), into the controls
-        and so into the tab's boxes. Lock held."""
+        and so into the tab's boxes; returns a sentence for each, to show. Lock held."""
         with self._ticket_lock:
             undo, self._unclamp = self._unclamp, {}
+        said = []
         with self._quiet():
             for path, (typed, clamped) in undo.items():
                 h = self.ui.controls[path]
                 if h.value == clamped:  # (not changed again since)
                     h.value = typed
+                    said.append(
+                        f"{controls.SPEC_BY_PATH[path].label}: {typed:g} stands. The "
+                        f"{clamped:g} that came just after it, as the box lost focus, "
+                        "was taken for the browser cutting it back to the slider's end; "
+                        f"to have {clamped:g}, type it again."
+                    )
+        return said
 
     def _widen_sliders(self) -> None:
         """A value typed into a slider's box beyond its range widens the range: the

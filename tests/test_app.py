@@ -279,6 +279,7 @@ def test_the_browser_s_clamp_of_a_value_typed_beyond_a_slider_is_undone(tab):
     lift.value = 70.0  # the slider ends at 60
     lift.value = 60.0  # the browser's clamp, at once
     assert s.design.motion.lift_mm == 70.0 and lift.value == 70.0 and lift.max >= 70.0
+    assert "Lift h [mm]: 70 stands" in s.ui.quick_md.content
     face = s.ui.controls["follower.face_radius_mm"]
     face.value = -10.0  # above the slider's -20
     face.value = -20.0
@@ -292,9 +293,18 @@ def test_the_browser_s_clamp_of_a_value_typed_beyond_a_slider_is_undone(tab):
     assert s.design.motion.lift_mm == 60.0 and lift.value == 60.0
     # the end, later than a Tab comes
     lift.value = 70.0
-    s._arrived["motion.lift_mm"] = (70.0, time.monotonic() - 5.0, 0.0, 60.0)
+    s._arrived["motion.lift_mm"] = [(70.0, time.monotonic() - 5.0, 0.0, 60.0)]
     lift.value = 60.0
     assert s.design.motion.lift_mm == 60.0
+    # back to the end at once, on purpose (a typo's 600 taken back to 60): taken for a
+    # clamp too (from here the two look alike), and said, and typing it again works
+    for v in (6.0, 60.0, 600.0, 60.0):
+        lift.value = v
+    assert lift.value == 600.0 and "to have 60, type it again" in s.ui.quick_md.content
+    for v in (6.0, 60.0):
+        lift.value = v
+    assert s.design.motion.lift_mm == 60.0 and s.error is None
+    assert s.ui.quick_md.content == ""
     # the browser clamps to the range it has: a slider widened to 70 cuts 90 to 70
     lift.value = 70.0
     lift.value = 90.0
