@@ -358,7 +358,7 @@ def _shaft(bt: Batch, T: np.ndarray, worst: dict) -> list[dict]:
     d0 = bt.designs[0]
     w = omega_rad_s(d0)
     th = np.concatenate([bt.theta, bt.theta[:, :1] + 2 * np.pi], axis=1)
-    cum = machine.cycle_work(bt.theta, T, bt.real, np.array([g.start for g in bt.segs]))
+    cum = machine.cycle_work(bt.theta, T, bt.real, machine.steps_of(bt.segs))
     cum += machine.impulse_work(d0, th)  # (one program for the batch)
     T_mean = cum[:, -1] / (2 * np.pi)
     energy = cum - T_mean[:, None] * (th - th[:, :1])

@@ -586,11 +586,15 @@ def _fast_rows(points: list[dict], made: list[Design | str]) -> list[dict]:
 
 def _parts_of(designs: list[Design]) -> list[list[Design]]:
     """``designs`` in order, in parts of at most BATCH_SAMPLES grid samples (each
-    design's 360 / resolution + 1; at least one design a part)."""
+    design's grid without its stations, a few samples fewer; at least one design a
+    part). Not 360 / resolution: a short rise has MIN_MOTION_STEPS samples whatever
+    the resolution (a review: 48 rises of 7.5 deg at 0.1 deg have 5,760)."""
+    from . import motion
+
     parts: list[list[Design]] = [[]]
     held = 0
     for d in designs:
-        n = int(360.0 / d.limits.resolution_deg) + 1
+        n = motion.theta_grid(d).size
         if parts[-1] and held + n > BATCH_SAMPLES:
             parts.append([])
             held = 0
@@ -999,7 +1003,7 @@ def chunk_result(fut, i: int) -> list[dict]:
     """The rows of chunk ``i``'s Dask future; ClusterLost where the cluster, not our
     code, failed it: a KilledWorker (Dask gave up after its workers died running it
     again and again), a cancelled future (the scheduler restarted or left) or a closed
-    connection."""
+    connection to it."""
     from concurrent.futures import CancelledError
 
     from dask.distributed import KilledWorker
@@ -1007,7 +1011,8 @@ def chunk_result(fut, i: int) -> list[dict]:
 
     try:
         return fut.result()
-    except (KilledWorker, CancelledError, CommClosedError, OSError) as exc:
+    # (not any OSError: one our code raises on a worker is ours, not the cluster's)
+    except (KilledWorker, CancelledError, CommClosedError) as exc:
         raise ClusterLost(
             f"the Dask cluster lost chunk {i} ({type(exc).__name__}: {str(exc)[:160]})"
         ) from None

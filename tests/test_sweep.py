@@ -843,6 +843,23 @@ def test_a_fast_chunk_of_fine_designs_goes_through_the_core_in_parts(monkeypatch
     monkeypatch.setattr(sweep, "BATCH_SAMPLES", 2 * 7201)  # two designs at 0.05 deg
     assert sweep.fast_rows(spec.base, points) == whole
     assert seen == [2, 2, 1]
+    # a grid is counted as it is made: a short rise keeps its least samples however
+    # fine the grid (a review: 48 rises of 7.5 deg at 0.1 deg hold 5,760, not 3,601)
+    from camcore import motion
+    from camcore.model import Design, load_preset
+
+    data = load_preset("paper_example").model_dump(mode="json")
+    data["motion"] = {
+        "segments": [{"kind": "rise", "angle_deg": 7.5, "lift_mm": 0.1, "law": "cycloidal"}]
+        + [{"kind": "fall", "angle_deg": 7.5, "lift_mm": 0.1, "law": "cycloidal"}]
+        + [{"kind": "rise", "angle_deg": 7.5, "lift_mm": 0.1, "law": "cycloidal"}] * 23
+        + [{"kind": "fall", "angle_deg": 7.5, "lift_mm": 0.1, "law": "cycloidal"}] * 23
+    }
+    short = Design.model_validate(data)
+    n = motion.theta_grid(short).size
+    assert n >= 48 * motion.MIN_MOTION_STEPS > 3601
+    monkeypatch.setattr(sweep, "BATCH_SAMPLES", 2 * n)
+    assert [len(p) for p in sweep._parts_of([short] * 5)] == [2, 2, 1]
 
 
 def test_cli_fast_sweep(tmp_path):
