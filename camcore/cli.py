@@ -625,6 +625,8 @@ def _parser() -> argparse.ArgumentParser:
         "> best.json, then camcore report/export best.json",
     )
     f.set_defaults(run=_pareto)
+    for sp in sub.choices.values():  # (main names an unknown option's command)
+        sp.set_defaults(command_parser=sp)
     return p
 
 
@@ -636,7 +638,10 @@ def main(argv: list[str] | None = None) -> int:
     from .model import format_validation_error
     from .sweep import ClusterLost
 
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # the command's own usage and name, not the top level's (a README review)
+        args.command_parser.error(f"unrecognized arguments: {' '.join(extra)}")
     try:
         # extreme designs overflow intermediate terms; results are checked finite
         with np.errstate(all="ignore"):

@@ -600,3 +600,21 @@ def test_compare_text_says_unbounded_where_the_report_does(capsys):
     folded = {r["follower"]: r["unbounded_figures"] for r in rows}
     assert folded["double_concave"] == ["life", "stress", "wear"] and folded["single_roller"] == []
     assert "unbounded" not in next(ln for ln in out.splitlines() if "single_roller" in ln)
+
+
+@pytest.mark.parametrize(
+    "argv, said",
+    [
+        (["report", "--preset", "paper_example", "--bogus"], "unrecognized arguments: --bogus"),
+        (["report", "--preset"], "argument --preset: expected one argument"),
+    ],
+)
+def test_an_unreadable_command_line_names_its_command(argv, said, capsys):
+    """README, exit status: an unknown option or a missing value prints the command's
+    usage lines, then "camcore CMD: error: ..." (a README review: an unknown option
+    had printed the top level's usage and "camcore: error")."""
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    err = capsys.readouterr().err
+    assert stop.value.code == 2
+    assert err.startswith("usage: camcore report ") and f"camcore report: error: {said}" in err
