@@ -173,9 +173,10 @@ def _field_name(path: str) -> str:
     """An error's field as the panel labels it, its path beside it ("Roller radius r_c
     [mm] <code>follower.roller_radius_mm</code>"); the path alone where no control shows
     it. Escaped: the path comes from the validation of what a client sent."""
-    from .controls import SPECS
+    from .controls import SPEC_BY_PATH
 
-    label = next((spec.label for spec in SPECS if spec.path == path), None)
+    spec = SPEC_BY_PATH.get(path)
+    label = spec.label if spec is not None else None
     if label is None and re.fullmatch(SEGMENT_FIELD, path):
         label = in_words(path)
     code = f"<code>{html.escape(path)}</code>"

@@ -187,7 +187,6 @@ class Session:
         self._kept_program: str | None = _UNREAD
         self._ticket_lock, self._tickets = threading.Lock(), dict.fromkeys(TICKETS, 0)
         self._waiting: set[str] = set()  # the kinds of action with a thread waiting its turn
-        # each slider's last value as it arrived, and when; a browser clamp to undo
         # each slider's latest values as they arrived: (value, time.monotonic(), the
         # slider's min and max then)
         self._arrived: dict[str, list[tuple[float, float, float, float]]] = {}

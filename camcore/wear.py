@@ -102,8 +102,8 @@ def total_at_contacts(a) -> np.ndarray:
     ``along_profile``'s, so a curve of it reaches the reported peak."""
     if _rolls(a.geo):
         return np.zeros(a.theta.size)
-    loc, origin, theta = _one_sided(a)
-    per_angle = np.where(loc.in_contact, _totals(a, loc, theta), 0.0).max(axis=0)
+    loc, origin, totals = _worn(a)
+    per_angle = np.where(loc.in_contact, totals, 0.0).max(axis=0)
     out = np.zeros(a.theta.size)
     np.maximum.at(out, origin, per_angle)
     return out
@@ -116,8 +116,8 @@ def along_profile(a, bins: int = 720) -> tuple[np.ndarray, np.ndarray]:
     edges = np.linspace(0.0, 2 * np.pi, bins + 1)
     if _rolls(a.geo):
         return 0.5 * (edges[1:] + edges[:-1]), np.zeros(bins)
-    loc, _, theta = _one_sided(a)
-    h, on = _totals(a, loc, theta), loc.in_contact
+    loc, _, h = _worn(a)
+    on = loc.in_contact
     where = np.minimum(np.searchsorted(edges, _polar(loc), side="right") - 1, bins - 1)
     out = np.zeros(bins)
     np.maximum.at(out, where[on], h[on])
@@ -130,6 +130,16 @@ def along_profile(a, bins: int = 720) -> tuple[np.ndarray, np.ndarray]:
 # the one-sided pair's own spread, far below a grid step.
 SIDE_EPS = 1e-10
 INSIDE = 1e-7
+
+
+def _worn(a):
+    """(_one_sided's local, its index into a's grid, _totals there), computed once per
+    analysis: the report, the app's wear plot and its band on the cam each ask."""
+    kept = vars(a).get("_worn")
+    if kept is None:
+        loc, origin, theta = _one_sided(a)
+        kept = vars(a)["_worn"] = (loc, origin, _totals(a, loc, theta))
+    return kept
 
 
 def _one_sided(a):
